@@ -1,0 +1,41 @@
+# SPDX-License-Identifier: MIT
+# stepramp: the two commands are `make demo` and `make test` (a plain `make` runs the regression).
+# Each sets up what it needs (.venv with pinned packages, GHDL) through scripts/bootstrap.sh.
+
+SHELL := /bin/bash
+VENV  := .venv
+PY    := $(VENV)/bin/python
+JOBS  ?= auto
+VHDL  := $(wildcard hdl/*.vhd)
+# The LLVM back end runs simulations about twice as fast; use it when it is installed.
+export GHDL_BACKEND ?= $(if $(wildcard /usr/bin/ghdl-llvm),llvm,mcode)
+
+.DEFAULT_GOAL := test
+.PHONY: setup test lint synth-check demo waves clean help
+
+help:
+	@echo "make test         lint, synthesis check and the whole regression (pytest -n $(JOBS))"
+	@echo "make demo         simulate the AVR446 demo move on the RTL, write build/demo/"
+	@echo "make lint         ruff check, ruff format --check, vsg"
+	@echo "make synth-check  every RTL file under --std=93c and --std=08, ghdl synth of each top, no latch"
+	@echo "make clean        remove build/ (keeps .venv)"
+
+setup:
+	@scripts/bootstrap.sh $(VENV)
+
+lint: setup
+	$(VENV)/bin/ruff check sw tb scripts
+	$(VENV)/bin/ruff format --check sw tb scripts
+	$(VENV)/bin/vsg -c vsg.yaml -f $(VHDL) -ap -of summary
+
+synth-check: setup
+	$(PY) -m stepramp.rtlcheck --out build/synth_check
+
+test: lint
+	$(PY) -m pytest -n $(JOBS) -q
+
+demo: setup
+	$(PY) -m stepramp.demo --out build/demo
+
+clean:
+	rm -rf build .pytest_cache

@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
+# Make sure what the regression needs is here: python3 with venv, GHDL, then the .venv with pinned packages.
+# Installs Debian packages only when they are missing and we are root; otherwise stops with what to install.
+set -euo pipefail
+venv=${1:-.venv}
+
+need_apt=()
+python3 -c 'import ensurepip, venv' 2>/dev/null || need_apt+=(python3-venv)
+command -v ghdl >/dev/null 2>&1 || need_apt+=(ghdl)
+
+if [ ${#need_apt[@]} -gt 0 ]; then
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+    echo "bootstrap: installing Debian packages: ${need_apt[*]}"
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get update -q >/dev/null
+    apt-get install -y -q "${need_apt[@]}" >/dev/null
+  else
+    echo "bootstrap: missing ${need_apt[*]}." >&2
+    echo "  Install them first, e.g.: sudo apt-get install ${need_apt[*]}" >&2
+    echo "  (GHDL 2.0 or newer with its VPI library; Debian 12's 'ghdl' package is what this project is tested with.)" >&2
+    exit 1
+  fi
+fi
+
+if [ ! -f "$venv/.stamp" ] || [ pyproject.toml -nt "$venv/.stamp" ]; then
+  echo "bootstrap: creating $venv and installing the pinned Python packages"
+  python3 -m venv "$venv"
+  "$venv/bin/pip" install -q --disable-pip-version-check -e '.[dev]'
+  touch "$venv/.stamp"
+fi

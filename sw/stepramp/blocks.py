@@ -1,0 +1,93 @@
+# SPDX-License-Identifier: MIT
+"""Reference models of the core's arithmetic blocks: priority encoder, divider, base timer.
+
+These follow the documented behaviour of each block (docs/stepramp_divider.md and friends), not the RTL's
+structure: the divider's results come from Python's own integer division, and its latency from the
+documented formula.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+
+
+def msb(value: int) -> int:
+    """Index of the most significant '1' of a non-negative integer; 0 for 0."""
+    if value < 0:
+        raise ValueError(f"msb of a negative number: {value}")
+    return max(value.bit_length() - 1, 0)
+
+
+def prio_enc(value: int, width: int) -> tuple[int, bool]:
+    """Priority encoder: (index of the most significant '1', zero flag) of a width-bit value."""
+    if not 0 <= value < (1 << width):
+        raise ValueError(f"{value} does not fit in {width} bits")
+    return msb(value), value == 0
+
+
+@dataclass(frozen=True)
+class Division:
+    """Result of one division as the divider reports it."""
+
+    quotient: int
+    remainder: int
+    div_zero: bool
+    latency: int  # clock edges from the one that samples start to the one that raises done
+
+
+def divider_latency(numerator: int, denominator: int) -> int:
+    """Documented latency: 1 when D = 0 or N < D, else 1 + msb(N) - msb(D) + 1."""
+    if denominator == 0 or numerator < denominator:
+        return 1
+    return 1 + msb(numerator) - msb(denominator) + 1
+
+
+def divide(numerator: int, denominator: int, width: int) -> Division:
+    """What the divider answers for numerator / denominator at a given width."""
+    limit = 1 << width
+    if not (0 <= numerator < limit and 0 <= denominator < limit):
+        raise ValueError(f"operands {numerator}, {denominator} do not fit in {width} bits")
+    latency = divider_latency(numerator, denominator)
+    if denominator == 0:
+        return Division(limit - 1, numerator, True, latency)
+    q, r = divmod(numerator, denominator)
+    return Division(q, r, False, latency)
+
+
+def timer_ticks(prescale_at: Iterable[tuple[int, int]], restart: int, cycles: int) -> list[int]:
+    """Edges after which the base timer's tick is '1', for edges restart+1 .. restart+cycles.
+
+    prescale_at lists (edge, prescale) pairs: the prescale input value from that edge on (the first pair's
+    edge must be <= restart). A new value takes effect at the next tick; prescale 0 behaves as 1.
+    Ticks follow at restart + P, then every P' edges where P' is the value seen when the tick happens.
+    """
+    schedule = sorted(prescale_at)
+    if not schedule or schedule[0][0] > restart:
+        raise ValueError("prescale must be defined at the restart edge")
+
+    def prescale(edge: int) -> int:
+        value = schedule[0][1]
+        for at, p in schedule:
+            if at <= edge:
+                value = p
+        return max(value, 1)
+
+    ticks: list[int] = []
+    next_tick = restart + prescale(restart)
+    while next_tick <= restart + cycles:
+        ticks.append(next_tick)
+        next_tick += prescale(next_tick)
+    return ticks
+
+
+def iter_msb_pairs(width: int) -> Iterator[tuple[int, int]]:
+    """Corner operand pairs for a width-bit divider: 0, 1, max, powers of two, all-ones, N = D, N < D."""
+    top = (1 << width) - 1
+    specials = {0, 1, 2, 3, top, top - 1, top >> 1, (top >> 1) + 1}
+    for b in range(width):
+        specials.update({1 << b, (1 << b) - 1, (1 << b) + 1, top ^ (1 << b)})
+    values = sorted(v for v in specials if 0 <= v <= top)
+    for n in values:
+        for d in values:
+            yield n, d

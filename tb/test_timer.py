@@ -1,0 +1,80 @@
+# SPDX-License-Identifier: MIT
+"""stepramp_timer: tick spacing for several PRESCALE values, a PRESCALE change while running, and restart.
+
+The tick is sampled once per clock (these runs are a few thousand cycles long) and every edge after which it
+is '1' is compared with the model's list.
+"""
+
+from __future__ import annotations
+
+from cocotb.triggers import FallingEdge, RisingEdge
+
+from stepramp.blocks import timer_ticks
+from stepramp.hdl import run_cocotb
+from tbutil import build_dir, cocotb, now_cycles, start_clock_and_reset
+
+
+async def record_ticks(dut, cycles: int, changes: dict[int, int] | None = None) -> tuple[int, list[int]]:
+    """Pulse restart, then watch `cycles` edges; changes maps an edge offset to a new prescale value.
+
+    Returns the restart edge and the edges after which tick was '1'.
+    """
+    changes = changes or {}
+    await FallingEdge(dut.clk)
+    dut.restart.value = 1
+    await RisingEdge(dut.clk)
+    restart_edge = now_cycles()
+    await FallingEdge(dut.clk)
+    dut.restart.value = 0
+    ticks: list[int] = []
+    for offset in range(1, cycles + 1):
+        if offset in changes:
+            dut.prescale.value = changes[offset]  # sampled from edge restart + offset on
+        await RisingEdge(dut.clk)
+        await FallingEdge(dut.clk)
+        if int(dut.tick.value) == 1:
+            ticks.append(restart_edge + offset)
+    return restart_edge, ticks
+
+
+@cocotb.test()
+async def timer_spacing(dut) -> None:
+    """For each PRESCALE: ticks at restart + P, + 2P, ... and nowhere else."""
+    dut.restart.value = 0
+    dut.prescale.value = 1
+    await start_clock_and_reset(dut)
+    for prescale in (1, 2, 3, 7, 16, 100, 0):
+        dut.prescale.value = prescale
+        restart, ticks = await record_ticks(dut, 400)
+        expected = timer_ticks([(restart, prescale)], restart, 400)
+        assert ticks == expected, f"prescale {prescale}: ticks {ticks[:10]}..., expected {expected[:10]}..."
+        assert len(ticks) == 400 // max(prescale, 1)
+
+
+@cocotb.test()
+async def timer_prescale_change(dut) -> None:
+    """A new PRESCALE takes effect at the next tick: the running period ends with the old value."""
+    dut.restart.value = 0
+    dut.prescale.value = 10
+    await start_clock_and_reset(dut)
+    for change_at, old, new in ((25, 10, 3), (31, 3, 17), (5, 1, 4), (40, 8, 1)):
+        dut.prescale.value = old
+        restart, ticks = await record_ticks(dut, 200, {change_at: new})
+        expected = timer_ticks([(restart, old), (restart + change_at, new)], restart, 200)
+        assert ticks == expected, f"{old}->{new} at +{change_at}: {ticks[:12]} vs {expected[:12]}"
+
+
+@cocotb.test()
+async def timer_restart_realigns(dut) -> None:
+    """A restart in the middle of a period drops that period: the next tick is P clocks after the restart."""
+    dut.restart.value = 0
+    dut.prescale.value = 9
+    await start_clock_and_reset(dut)
+    for skew in range(12):
+        await record_ticks(dut, skew)  # leave the counter somewhere inside a period
+        restart, ticks = await record_ticks(dut, 60)
+        assert ticks == [restart + 9 * k for k in range(1, 7)], f"skew {skew}: {ticks}"
+
+
+def test_timer() -> None:
+    run_cocotb("stepramp_timer", "test_timer", build_dir("timer"), parameters={"G_WIDTH": 16})
