@@ -18,9 +18,7 @@ async def prio_enc_against_model(dut) -> None:
     if width <= 16:
         values = range(1 << width)
     else:
-        values = sorted(
-            {0, (1 << width) - 1} | {1 << b for b in range(width)} | {(1 << b) - 1 for b in range(width)}
-        )
+        values = sorted({0, (1 << width) - 1} | {1 << b for b in range(width)} | {(1 << b) - 1 for b in range(width)})
     failures: list[str] = []
     for value in values:
         dut.din.value = value
@@ -35,6 +33,4 @@ async def prio_enc_against_model(dut) -> None:
 
 @pytest.mark.parametrize("width", [16, 32])
 def test_prio_enc(width: int) -> None:
-    run_cocotb(
-        "stepramp_prio_enc", "test_prio_enc", build_dir(f"prio_enc_w{width}"), parameters={"G_WIDTH": width}
-    )
+    run_cocotb("stepramp_prio_enc", "test_prio_enc", build_dir(f"prio_enc_w{width}"), parameters={"G_WIDTH": width})

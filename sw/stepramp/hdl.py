@@ -49,10 +49,12 @@ def run_cocotb(
     waves: Path | None = None,
     extra_env: Mapping[str, str] | None = None,
     testcase: str | Sequence[str] | None = None,
+    log_file: Path | None = None,
 ) -> Path:
     """Build the RTL up to toplevel and run a cocotb test module against it with GHDL.
 
     One build directory per call, so that tests can run in parallel. waves: a .ghw or .fst path to write.
+    log_file: send the build and simulation output there instead of stdout.
     Returns the results file; under pytest a failing test raises SystemExit.
     """
     from cocotb_tools.runner import get_runner  # imported late: the model does not need cocotb
@@ -65,6 +67,7 @@ def run_cocotb(
         build_args=["--std=08"],
         build_dir=build_dir,
         always=True,
+        log_file=log_file,
     )
     plusargs = ["--ieee-asserts=disable-at-0"]
     if waves is not None:
@@ -80,4 +83,5 @@ def run_cocotb(
         test_dir=build_dir,
         extra_env=dict(extra_env or {}),
         testcase=testcase,
+        log_file=log_file,
     )

@@ -81,9 +81,7 @@ def synth(top: str, generics: dict[str, int], workdir: Path, out_dir: Path) -> l
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--out", type=Path, default=Path("build/synth_check"))
     parser.add_argument("tops", nargs="*", default=list(SYNTH_TOPS))
     args = parser.parse_args(argv)

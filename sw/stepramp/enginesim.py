@@ -1,0 +1,81 @@
+# SPDX-License-Identifier: MIT
+"""Run moves on the RTL engine (GHDL through cocotb's runner) and return what it did, move by move."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from stepramp.hdl import run_cocotb
+from stepramp.model import edges as model_edges
+from stepramp.plan import Plan
+
+#: Engine states as the RTL encodes them on its `state` port.
+STATE_NAMES = ("STOP", "ACCEL", "RUN", "DECEL")
+
+
+@dataclass(frozen=True)
+class SimResult:
+    """What the RTL did for one move."""
+
+    edges: list[int]
+    states: list[str]
+    done: bool
+    error: int | None = None
+    err_code: int | None = None
+    final_position: int | None = None
+    step_count: int | None = None
+    done_edge: int | None = None
+    busy_after: int | None = None
+    state_after: str | None = None
+
+
+def timeout_cycles(plan: Plan) -> int:
+    """A generous cycle budget for one move: the model's last edge plus slack (a hang fails after this)."""
+    expected = model_edges(plan)
+    return (expected[-1] if expected else 0) + 2000 + 4 * plan.prescale
+
+
+def simulate(
+    plans: Sequence[Plan],
+    build_dir: Path,
+    waves: Path | None = None,
+    budgets: Sequence[int] | None = None,
+    log_file: Path | None = None,
+) -> list[SimResult]:
+    """Play the moves back to back in one simulation; one SimResult per move (fewer if the engine hung).
+
+    Under pytest a hang (or any failure inside the simulation) raises SystemExit from the runner.
+    """
+    build_dir = build_dir.resolve()
+    build_dir.mkdir(parents=True, exist_ok=True)
+    request = build_dir / "request.json"
+    result_file = build_dir / "result.json"
+    result_file.unlink(missing_ok=True)
+    moves = [
+        {"registers": dataclasses.asdict(plan), "timeout_cycles": budgets[i] if budgets else timeout_cycles(plan)}
+        for i, plan in enumerate(plans)
+    ]
+    request.write_text(json.dumps({"moves": moves}))
+    run_cocotb(
+        "stepramp_engine",
+        "stepramp.enginetb",
+        build_dir,
+        waves=waves,
+        extra_env={"STEPRAMP_SIM_REQUEST": str(request), "STEPRAMP_SIM_RESULT": str(result_file)},
+        log_file=log_file,
+    )
+    if not result_file.exists():
+        raise RuntimeError(f"the simulation wrote no result; see the log in {build_dir}")
+    raw: list[dict[str, Any]] = json.loads(result_file.read_text())["results"]
+    out = []
+    for r in raw:
+        r["states"] = [STATE_NAMES[s] for s in r["states"]]
+        if "state_after" in r:
+            r["state_after"] = STATE_NAMES[r["state_after"]]
+        out.append(SimResult(**r))
+    return out

@@ -1,0 +1,120 @@
+# SPDX-License-Identifier: MIT
+"""The ideal continuous trapezoid / triangle: the judge of the driver, the model and the RTL.
+
+Written plainly with square roots (docs/algorithm.md, "The ideal trajectory"). Times are in ticks
+(``f_tick = f_clk / prescale``), positions in steps. An ``N``-step move covers ``L = N - 1`` steps and
+pulse ``k`` is emitted when the trajectory reaches position ``k`` (pulse 0 at ``t = 0``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+
+def step_angle(spr: float) -> float:
+    """Step angle alpha = 2*pi/spr in rad."""
+    return 2.0 * math.pi / spr
+
+
+def c0(accel: float, spr: float, fclk: float, prescale: int = 1) -> float:
+    """First interval of an acceleration from rest, in ticks: f_tick * sqrt(2 * alpha / accel)."""
+    return fclk / prescale * math.sqrt(2.0 * step_angle(spr) / accel)
+
+
+def cd0(decel: float, spr: float, fclk: float, prescale: int = 1) -> float:
+    """Last interval of a deceleration to rest, in ticks: f_tick * sqrt(2 * alpha / decel)."""
+    return c0(decel, spr, fclk, prescale)
+
+
+@dataclass(frozen=True)
+class IdealMove:
+    """A rest-to-rest move of ``length`` steps; a, d in steps/s^2, v and v_peak in steps/s."""
+
+    length: int
+    a: float
+    d: float
+    v: float
+    f_tick: float
+    x_a: float
+    x_d: float
+    v_peak: float
+    triangle: bool
+
+    @property
+    def t_a(self) -> float:
+        """End of the acceleration, in s."""
+        return self.v_peak / self.a
+
+    @property
+    def t_d(self) -> float:
+        """Start of the deceleration, in s."""
+        return self.t_a + (self.x_d - self.x_a) / self.v_peak if self.length > 0 else 0.0
+
+    @property
+    def t_end(self) -> float:
+        """Duration of the move, in s."""
+        return self.t_d + self.v_peak / self.d if self.length > 0 else 0.0
+
+    def time_at(self, x: float) -> float:
+        """Time (ticks) at which the trajectory reaches position x (0 <= x <= length)."""
+        if self.length <= 0 or x <= 0.0:
+            return 0.0
+        if x <= self.x_a:
+            t = math.sqrt(2.0 * x / self.a)
+        elif x <= self.x_d:
+            t = self.t_a + (x - self.x_a) / self.v_peak
+        else:
+            t = self.t_end - math.sqrt(2.0 * max(self.length - x, 0.0) / self.d)
+        return t * self.f_tick
+
+    def speed_at(self, x: float) -> float:
+        """Speed (steps/s) at position x."""
+        if self.length <= 0:
+            return 0.0
+        if x <= self.x_a:
+            return math.sqrt(2.0 * self.a * max(x, 0.0))
+        if x <= self.x_d:
+            return self.v_peak
+        return math.sqrt(2.0 * self.d * max(self.length - x, 0.0))
+
+    def pulse_times(self) -> list[float]:
+        """Ideal pulse times t_k (ticks), k = 0 .. length."""
+        return [self.time_at(float(k)) for k in range(self.length + 1)]
+
+    def intervals(self) -> list[float]:
+        """Ideal intervals t_i - t_{i-1} (ticks), i = 1 .. length."""
+        t = self.pulse_times()
+        return [t[i] - t[i - 1] for i in range(1, len(t))]
+
+
+def ideal_move(
+    steps: int, accel: float, decel: float, speed: float, spr: float, fclk: float, prescale: int = 1
+) -> IdealMove:
+    """The ideal trajectory of a move given in physical units (sign of steps ignored)."""
+    alpha = step_angle(spr)
+    a, d, v = accel / alpha, decel / alpha, speed / alpha
+    length = max(abs(steps) - 1, 0)
+    n_a = v * v / (2.0 * a)
+    n_d = v * v / (2.0 * d)
+    if n_a + n_d <= length:
+        x_a, x_d, v_peak, triangle = n_a, length - n_d, v, False
+    else:
+        x_p = length * d / (a + d)
+        x_a, x_d, v_peak, triangle = x_p, x_p, math.sqrt(2.0 * a * x_p), True
+    return IdealMove(length, a, d, v, fclk / prescale, x_a, x_d, v_peak, triangle)
+
+
+def pulse_times(
+    steps: int, accel: float, decel: float, speed: float, spr: float, fclk: float, prescale: int = 1
+) -> list[float]:
+    """Ideal pulse times t_k in ticks for k = 0 .. N-1 (empty for N = 0)."""
+    if steps == 0:
+        return []
+    return ideal_move(steps, accel, decel, speed, spr, fclk, prescale).pulse_times()
+
+
+def peak_speed(steps: int, accel: float, decel: float, speed: float, spr: float) -> float:
+    """Highest speed of the move in rad/s: the requested speed, or the triangle's peak."""
+    move = ideal_move(steps, accel, decel, speed, spr, 1.0)
+    return move.v_peak * step_angle(spr)

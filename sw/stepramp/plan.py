@@ -1,0 +1,279 @@
+# SPDX-License-Identifier: MIT
+"""Driver setup math: a move in physical units -> the engine's registers (docs/algorithm.md).
+
+Everything is computed in double precision and each register value is rounded once. The exact
+intervals are computed piecewise (accel / cruise / decel part of each one-step interval) with
+cancellation-free square-root differences, so they stay accurate for moves of up to 2^31 - 1 steps.
+"""
+
+from __future__ import annotations
+
+import math
+import operator
+from dataclasses import asdict, dataclass, fields
+from fractions import Fraction
+
+FRAC_RAMP = 16
+"""Fraction bits of the ramp values (Q32.16)."""
+FRAC_CRUISE = 32
+"""Fraction bits of the cruise period (Q32.32)."""
+MIN_INTERVAL_CLKS = 64
+"""Shortest interval, in clocks, that leaves the engine time to compute the next value."""
+SEED_FACTOR = math.gamma(0.75) / (2.0 * math.gamma(1.25))
+"""Gamma(3/4) / (2 Gamma(5/4)) = 0.67597824...: recurrence value at index 0, in units of c0."""
+MAX_STEPS = 2**31 - 1
+MAX_PRESCALE = 2**16 - 1
+
+REG_WIDTHS: dict[str, int] = {
+    "steps": 31,
+    "direction": 1,
+    "prescale": 16,
+    "c_first": 48,
+    "c_last": 48,
+    "sa": 31,
+    "c_sa": 48,
+    "sd": 31,
+    "c_sd": 48,
+    "accel_seed": 48,
+    "decel_seed": 48,
+    "cruise": 64,
+}
+"""Width in bits of each register (field of Plan)."""
+
+_LGAMMA_RATIO_0 = math.lgamma(1.25) - math.lgamma(0.75)
+_PRODUCT_LOOP_MAX = 256
+
+
+@dataclass(frozen=True)
+class Plan:
+    """The engine's inputs for one move (field by field the table of docs/algorithm.md)."""
+
+    steps: int
+    direction: int
+    prescale: int
+    c_first: int
+    c_last: int
+    sa: int
+    c_sa: int
+    sd: int
+    c_sd: int
+    accel_seed: int
+    decel_seed: int
+    cruise: int
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            width = REG_WIDTHS[f.name]
+            if not isinstance(value, int) or isinstance(value, bool) or not 0 <= value < 1 << width:
+                raise ValueError(f"Plan.{f.name} = {value!r} does not fit an unsigned {width}-bit register")
+
+    def to_dict(self) -> dict[str, int]:
+        """The registers as a plain dict (field name -> unsigned integer)."""
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class MoveInfo:
+    """Informative values of a planned move (not registers); a, d, v in steps/s^2 and steps/s."""
+
+    f_tick: float
+    length: int
+    a: float
+    d: float
+    v: float
+    x_a: float
+    x_d: float
+    v_peak: float
+    triangle: bool
+    c0: float
+    cd0: float
+    m0: int
+    min_interval: float
+    """Shortest interval of the move, f_tick / v_peak, in ticks (inf when there is no interval)."""
+
+
+def decel_product(m: int) -> float:
+    """prod_{k=1..m} (4k-1)/(4k+1) = Gamma(m+3/4) Gamma(5/4) / (Gamma(m+5/4) Gamma(3/4)).
+
+    A plain product for small m; above, the Stirling series of the log ratio arranged without the
+    cancellation of two large lgamma values (which would cost ~1e-6 relative at m ~ 1e9).
+    """
+    if m <= _PRODUCT_LOOP_MAX:
+        p = 1.0
+        for k in range(1, m + 1):
+            p *= (4 * k - 1) / (4 * k + 1)
+        return p
+    z1 = m + 0.75
+    z2 = m + 1.25
+    log_ratio = (m + 0.25) * math.log1p(-0.5 / z2) - 0.5 * math.log(z2) + 0.5
+
+    def series(z: float) -> float:
+        zi2 = 1.0 / (z * z)
+        return (1.0 / 12.0 - zi2 * (1.0 / 360.0 - zi2 / 1260.0)) / z
+
+    return math.exp(log_ratio + series(z1) - series(z2) + _LGAMMA_RATIO_0)
+
+
+def _check_positive(name: str, value: float) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError(f"{name} must be a number, got {value!r}")
+    if not math.isfinite(value) or value <= 0:
+        raise ValueError(f"{name} must be finite and > 0, got {value!r}")
+    return float(value)
+
+
+def _check_int(name: str, value: int) -> int:
+    if isinstance(value, bool):
+        raise ValueError(f"{name} must be an integer, got {value!r}")
+    try:
+        return operator.index(value)
+    except TypeError:
+        raise ValueError(f"{name} must be an integer, got {value!r}") from None
+
+
+def _to_fixed(name: str, ticks: float, frac: int, width: int) -> int:
+    """Round a delay in ticks to an unsigned fixed-point register value, or raise ValueError."""
+    value = round(ticks * (1 << frac)) if math.isfinite(ticks) else 1 << width
+    if value >= 1 << width:
+        raise ValueError(
+            f"{name} = {ticks:.6g} ticks overflows its register (integer part >= 2^{width - frac}): "
+            "delay too long; use a larger accel/decel/speed, a lower f_clk or a larger prescale"
+        )
+    return value
+
+
+class _Ramp:
+    """Piecewise exact trajectory used by the driver (distinct code from ideal.py on purpose)."""
+
+    def __init__(self, length: int, a: float, d: float, v: float, f_tick: float) -> None:
+        self.length = length
+        n_a = v * v / (2.0 * a)
+        n_d = v * v / (2.0 * d)
+        x_d = length - n_d
+        if math.isfinite(x_d) and n_a <= x_d:
+            self.triangle = False
+            self.x_a, self.x_d, self.n_d, self.v_peak = n_a, x_d, n_d, v
+        else:
+            self.triangle = True
+            x_p = length * (d / (a + d))
+            self.x_a = self.x_d = x_p
+            self.n_d = length * (a / (a + d))
+            self.v_peak = math.sqrt(2.0 * a * x_p)
+        self.k_a = f_tick * math.sqrt(2.0 / a)  # c0: ticks per unit of sqrt(position)
+        self.k_d = f_tick * math.sqrt(2.0 / d)  # cd0
+        self.k_c = f_tick / self.v_peak if self.v_peak > 0 else math.inf
+
+    def boundary(self, x: float) -> int:
+        """Index of the interval containing position x: floor(x) + 1 clamped to [1, L]."""
+        return min(max(math.floor(x) + 1, 1), self.length)
+
+    def interval(self, i: int) -> float:
+        """Exact interval i (from position i-1 to i) in ticks."""
+        p = i - 1
+        q = self.length - i
+        ov_a = min(max(self.x_a - p, 0.0), 1.0)  # part of [p, p+1] in the acceleration
+        ov_d = min(max(self.n_d - q, 0.0), 1.0)  # part of [p, p+1] in the deceleration
+        ov_c = max(1.0 - ov_a - ov_d, 0.0)
+        t = 0.0
+        if ov_a > 0.0:
+            t += self.k_a * ov_a / (math.sqrt(p + ov_a) + math.sqrt(p))
+        if ov_c > 0.0 and not self.triangle:
+            t += self.k_c * ov_c
+        if ov_d > 0.0:
+            t += self.k_d * ov_d / (math.sqrt(q + ov_d) + math.sqrt(q))
+        return t
+
+
+def _cruise(fclk: float, prescale: int, spr: float, speed: float) -> int:
+    """round(f_tick / v * 2^32), rounded once from the exact rational value of the double inputs.
+
+    (A double quotient would be off by ~1e-16 relative, which over 2^31 steps of a long period
+    exceeds the Q32.32 rounding; the exact form errs by at most 2^-33 tick per step.)
+    """
+    period = Fraction(fclk) * Fraction(2.0 * math.pi) / (prescale * Fraction(spr) * Fraction(speed))
+    value = round(period * (1 << FRAC_CRUISE))
+    if value >= 1 << REG_WIDTHS["cruise"]:
+        raise ValueError(
+            f"cruise = {float(period):.6g} ticks overflows its register (integer part >= 2^32): "
+            "delay too long; use a larger speed, a lower f_clk or a larger prescale"
+        )
+    return value
+
+
+def plan_move_info(
+    steps: int, accel: float, decel: float, speed: float, spr: float, fclk: float, prescale: int = 1
+) -> tuple[Plan, MoveInfo]:
+    """Like plan_move, also returning the informative MoveInfo."""
+    steps = _check_int("steps", steps)
+    accel = _check_positive("accel", accel)
+    decel = _check_positive("decel", decel)
+    speed = _check_positive("speed", speed)
+    spr = _check_positive("spr", spr)
+    fclk = _check_positive("fclk", fclk)
+    prescale = _check_int("prescale", prescale)
+    if not 1 <= prescale <= MAX_PRESCALE:
+        raise ValueError(f"prescale must be an integer in 1 .. {MAX_PRESCALE}, got {prescale}")
+    if abs(steps) > MAX_STEPS:
+        raise ValueError(f"|steps| must be <= 2^31 - 1 = {MAX_STEPS}, got {steps}")
+
+    n = abs(steps)
+    direction = 1 if steps < 0 else 0
+    length = n - 1
+    f_tick = fclk / prescale
+    alpha = 2.0 * math.pi / spr
+    a, d, v = accel / alpha, decel / alpha, speed / alpha
+    for name, value in (("accel", a), ("decel", d), ("speed", v), ("f_tick", f_tick)):
+        if not (math.isfinite(value) and value > 0.0):
+            raise ValueError(f"{name} in steps units is out of range ({value!r}); check spr and the units")
+
+    if length < 1:  # N = 0 or 1: no interval, nothing for the engine to compute
+        info = MoveInfo(f_tick, max(length, 0), a, d, v, 0.0, 0.0, 0.0, True, 0.0, 0.0, 0, math.inf)
+        return Plan(n, direction, prescale, 0, 0, 0, 0, 0, 0, 0, 0, 0), info
+
+    ramp = _Ramp(length, a, d, v, f_tick)
+    min_interval = ramp.k_c
+    if not math.isfinite(min_interval):
+        raise ValueError("peak speed underflows: the delays would overflow their registers")
+    if not min_interval >= 1.0:
+        raise ValueError(
+            f"interval shorter than 1 tick ({min_interval:.6g} ticks at the peak speed): "
+            "lower the speed or raise f_clk / lower the prescale"
+        )
+    if math.floor(min_interval) * prescale < MIN_INTERVAL_CLKS:
+        raise ValueError(
+            f"speed too high for the hardware to compute the next delay in time: shortest interval "
+            f"floor({min_interval:.6g}) ticks * prescale {prescale} < {MIN_INTERVAL_CLKS} clocks"
+        )
+
+    sa = ramp.boundary(ramp.x_a)
+    sd = ramp.boundary(ramp.x_d)
+    m0 = length - sd - 1
+    c0 = ramp.k_a
+    cd0 = ramp.k_d
+    q16 = FRAC_RAMP
+    w48 = REG_WIDTHS["c_first"]
+    plan = Plan(
+        steps=n,
+        direction=direction,
+        prescale=prescale,
+        c_first=_to_fixed("c_first", ramp.interval(1), q16, w48),
+        c_last=_to_fixed("c_last", ramp.interval(length), q16, w48),
+        sa=sa,
+        c_sa=_to_fixed("c_sa", ramp.interval(sa), q16, w48),
+        sd=sd,
+        c_sd=_to_fixed("c_sd", ramp.interval(sd), q16, w48),
+        accel_seed=_to_fixed("accel_seed", SEED_FACTOR * c0, q16, w48),
+        decel_seed=_to_fixed("decel_seed", SEED_FACTOR * cd0 * decel_product(m0), q16, w48) if m0 >= 1 else 0,
+        cruise=_cruise(fclk, prescale, spr, speed),
+    )
+    info = MoveInfo(f_tick, length, a, d, v, ramp.x_a, ramp.x_d, ramp.v_peak, ramp.triangle, c0, cd0, m0, min_interval)
+    return plan, info
+
+
+def plan_move(steps: int, accel: float, decel: float, speed: float, spr: float, fclk: float, prescale: int = 1) -> Plan:
+    """Plan a move: signed step count, accel/decel in rad/s^2, speed in rad/s, spr steps/rev, fclk Hz.
+
+    Raises ValueError with the reason when the move is not valid for the engine.
+    """
+    return plan_move_info(steps, accel, decel, speed, spr, fclk, prescale)[0]
