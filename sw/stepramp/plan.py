@@ -11,7 +11,6 @@ from __future__ import annotations
 import math
 import operator
 from dataclasses import asdict, dataclass, fields
-from fractions import Fraction
 
 FRAC_RAMP = 16
 """Fraction bits of the ramp values (Q32.16)."""
@@ -185,17 +184,19 @@ class _Ramp:
         return t
 
 
-def _cruise(fclk: float, prescale: int, spr: float, speed: float) -> int:
-    """round(f_tick / v * 2^32), rounded once from the exact rational value of the double inputs.
+def _cruise(f_tick: float, v: float) -> int:
+    """round(f_tick / v * 2^32): the cruise period in Q32.32, from the same doubles as every other field.
 
-    (A double quotient would be off by ~1e-16 relative, which over 2^31 steps of a long period
-    exceeds the Q32.32 rounding; the exact form errs by at most 2^-33 tick per step.)
+    32 fraction bits leave no drift from truncation (2^-33 tick per step at most). What remains is the double
+    quotient's own rounding, a few 1e-16 relative, the precision the speed was given in: over 2^31 steps it
+    stays under a tick for periods up to about 1e6 ticks (a move of 2^31 steps at such a period lasts decades).
+    Plain doubles keep the C driver bit-identical to this one.
     """
-    period = Fraction(fclk) * Fraction(2.0 * math.pi) / (prescale * Fraction(spr) * Fraction(speed))
+    period = f_tick / v
     value = round(period * (1 << FRAC_CRUISE))
     if value >= 1 << REG_WIDTHS["cruise"]:
         raise ValueError(
-            f"cruise = {float(period):.6g} ticks overflows its register (integer part >= 2^32): "
+            f"cruise = {period:.6g} ticks overflows its register (integer part >= 2^32): "
             "delay too long; use a larger speed, a lower f_clk or a larger prescale"
         )
     return value
@@ -265,7 +266,7 @@ def plan_move_info(
         c_sd=_to_fixed("c_sd", ramp.interval(sd), q16, w48),
         accel_seed=_to_fixed("accel_seed", SEED_FACTOR * c0, q16, w48),
         decel_seed=_to_fixed("decel_seed", SEED_FACTOR * cd0 * decel_product(m0), q16, w48) if m0 >= 1 else 0,
-        cruise=_cruise(fclk, prescale, spr, speed),
+        cruise=_cruise(f_tick, v),
     )
     info = MoveInfo(f_tick, length, a, d, v, ramp.x_a, ramp.x_d, ramp.v_peak, ramp.triangle, c0, cd0, m0, min_interval)
     return plan, info
