@@ -13,11 +13,13 @@ HDL_DIR = Path(os.environ.get("STEPRAMP_HDL_DIR", Path(__file__).resolve().paren
 #: Every RTL file, in dependency order.
 HDL_FILES: tuple[str, ...] = (
     "stepramp_pkg.vhd",
+    "stepramp_regs_pkg.vhd",
     "stepramp_prio_enc.vhd",
     "stepramp_divider.vhd",
     "stepramp_timer.vhd",
     "stepramp_next_delay.vhd",
     "stepramp_engine.vhd",
+    "stepramp_regfile.vhd",
 )
 
 #: Entities that are synthesised and checked for latches, with the generics they are checked at.
@@ -26,6 +28,7 @@ SYNTH_TOPS: dict[str, dict[str, int]] = {
     "stepramp_divider": {"G_WIDTH": 32},
     "stepramp_timer": {"G_WIDTH": 16},
     "stepramp_engine": {},
+    "stepramp_regfile": {},
 }
 
 

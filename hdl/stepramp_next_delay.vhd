@@ -1,0 +1,154 @@
+-- SPDX-License-Identifier: MIT
+-- stepramp_next_delay: the next-delay unit. Answers one question for the ramp engine: "what is the ramp value at
+-- this index?", given the value (and remainder) at the neighbouring index, or a seed to load.
+--
+-- This implementation runs one step of the AVR446 recurrence with remainder (docs/algorithm.md):
+--   accel (req_decel = '0'), answer index n:  num = 2 * A_{n-1} + r, den = 4n + 1, A_n     = A_{n-1} - q
+--   decel (req_decel = '1'), answer index m:  num = 2 * D_{m+1} + r, den = 4m + 3, D_m     = D_{m+1} + q
+--   (4m + 3 is the spec's 4m' - 1 written with the answer's index m = m' - 1.)
+--   seed  (req_seed = '1'):                   the answer is req_value itself with remainder 0, at once.
+-- The index is always the index of the value asked for, so that a later mode that computes a value from its index
+-- alone (c0 * (sqrt(n + 1) - sqrt(n)), isqrt) can replace the recurrence behind the same ports.
+--
+-- Timing: req is sampled at an edge e when busy = '0' (and flush = '0'). A seed is registered at e itself
+-- (ans_valid is '1' in the cycle after edge e). A recurrence step starts the divider at e; the divider raises done
+-- at e + 1 + k (k = msb(num) - msb(den) + 1, or 0 when num < den) and the answer is registered at e + 2 + k
+-- (ans_valid '1' in the cycle after that edge). With a 48-bit value, num < 2^50 and den >= 5 (accel) or >= 7
+-- (decel, index >= 1), so k <= 48. ans_* hold until the next answer. flush abandons a request in flight (it also
+-- resets the divider), so a new move never waits for an old division.
+
+library ieee;
+  use ieee.std_logic_1164.all;
+  use ieee.numeric_std.all;
+
+entity stepramp_next_delay is
+  generic (
+    G_DIV_WIDTH : positive := 50
+  );
+  port (
+    clk       : in    std_logic;
+    rst       : in    std_logic;
+    flush     : in    std_logic;
+    req       : in    std_logic;
+    req_seed  : in    std_logic;
+    req_decel : in    std_logic;
+    req_index : in    std_logic_vector(30 downto 0);
+    req_value : in    std_logic_vector(47 downto 0);
+    req_rem   : in    std_logic_vector(32 downto 0);
+    busy      : out   std_logic;
+    ans_valid : out   std_logic;
+    ans_value : out   std_logic_vector(47 downto 0);
+    ans_rem   : out   std_logic_vector(32 downto 0);
+    ans_ovf   : out   std_logic
+  );
+end entity stepramp_next_delay;
+
+architecture rtl of stepramp_next_delay is
+
+  constant C_W : positive := G_DIV_WIDTH;
+
+  signal pending     : std_logic;
+  signal decel_r     : std_logic;
+  signal value_r     : unsigned(47 downto 0);
+  signal valid_r     : std_logic;
+  signal ovf_r       : std_logic;
+  signal ans_value_r : unsigned(47 downto 0);
+  signal ans_rem_r   : unsigned(32 downto 0);
+
+  signal accept    : std_logic;
+  signal div_rst   : std_logic;
+  signal div_start : std_logic;
+  signal div_busy  : std_logic;
+  signal div_done  : std_logic;
+  signal div_zero  : std_logic;
+  signal div_num   : std_logic_vector(C_W - 1 downto 0);
+  signal div_den   : std_logic_vector(C_W - 1 downto 0);
+  signal div_q     : std_logic_vector(C_W - 1 downto 0);
+  signal div_r     : std_logic_vector(C_W - 1 downto 0);
+  -- value -/+ quotient, one bit wider than the divider so that a borrow or a carry out of 48 bits is visible.
+  signal result : unsigned(C_W downto 0);
+
+begin
+
+  -- 2 * (2^48 - 1) + remainder (< 2^33) needs 50 bits; the divider itself stops at 64.
+  assert G_DIV_WIDTH >= 50 and G_DIV_WIDTH <= 64
+    report "stepramp_next_delay: G_DIV_WIDTH must be in 50 .. 64"
+    severity failure;
+
+  accept    <= req and not pending and not div_busy and not flush;
+  div_start <= accept and not req_seed;
+  -- flush resets the divider too: a division in flight is simply dropped.
+  div_rst <= rst or flush;
+
+  -- num = 2 * value + remainder; den = 4 * index + 1 (accel) or 4 * index + 3 (decel): just wiring.
+  div_num <= std_logic_vector(resize(unsigned(req_value & '0'), C_W) + resize(unsigned(req_rem), C_W));
+  div_den <= std_logic_vector(resize(unsigned(req_index & req_decel & '1'), C_W));
+
+  result <= resize(value_r, C_W + 1) + resize(unsigned(div_q), C_W + 1) when decel_r = '1' else
+            resize(value_r, C_W + 1) - resize(unsigned(div_q), C_W + 1);
+
+  divider_inst : entity work.stepramp_divider
+    generic map (
+      G_WIDTH => C_W
+    )
+    port map (
+      clk         => clk,
+      rst         => div_rst,
+      start       => div_start,
+      numerator   => div_num,
+      denominator => div_den,
+      busy        => div_busy,
+      done        => div_done,
+      div_zero    => div_zero,
+      quotient    => div_q,
+      remainder   => div_r
+    );
+
+  ctrl_proc : process (clk) is
+  begin
+
+    if rising_edge(clk) then
+      valid_r <= '0';
+
+      if (accept = '1') then
+        decel_r <= req_decel;
+        value_r <= unsigned(req_value);
+        if (req_seed = '1') then
+          valid_r     <= '1';
+          ans_value_r <= unsigned(req_value);
+          ans_rem_r   <= (others => '0');
+          ovf_r       <= '0';
+        else
+          pending <= '1';
+        end if;
+      end if;
+
+      if (pending = '1' and div_done = '1') then
+        pending     <= '0';
+        valid_r     <= '1';
+        ans_value_r <= result(47 downto 0);
+        -- The remainder is below den < 2^33, so its upper bits are zero.
+        ans_rem_r <= unsigned(div_r(32 downto 0));
+        -- Out of the Q32.16 range (a borrow shows as the top bit): the engine stops with an error.
+        if (result(C_W downto 48) /= 0 or div_zero = '1') then
+          ovf_r <= '1';
+        else
+          ovf_r <= '0';
+        end if;
+      end if;
+
+      if (rst = '1' or flush = '1') then
+        pending <= '0';
+        valid_r <= '0';
+      end if;
+    end if;
+
+  end process ctrl_proc;
+
+  busy      <= pending or div_busy;
+  ans_valid <= valid_r;
+  ans_value <= std_logic_vector(ans_value_r);
+  ans_rem   <= std_logic_vector(ans_rem_r);
+  ans_ovf   <= ovf_r;
+
+end architecture rtl;

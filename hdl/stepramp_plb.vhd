@@ -1,0 +1,181 @@
+-- SPDX-License-Identifier: MIT
+-- stepramp_plb: the stepramp core with a native PLB-like slave interface (Xilinx IPIF signal names).
+--
+-- IPIF handshake: the master holds Bus2IP_CS (with Bus2IP_RNW, Bus2IP_Addr, Bus2IP_Data, Bus2IP_BE) until it
+-- sees IP2Bus_RdAck or IP2Bus_WrAck, one cycle long, and drops Bus2IP_CS in the cycle after the ack. This slave
+-- answers every access in exactly two cycles (the ack is registered), with IP2Bus_Error set together with the ack
+-- for an unmapped offset. Registers: docs/registers.md.
+
+library ieee;
+  use ieee.std_logic_1164.all;
+  use ieee.numeric_std.all;
+
+library work;
+  use work.stepramp_regs_pkg.all;
+
+entity stepramp_plb is
+  port (
+    clk : in    std_logic;
+    rst : in    std_logic;
+    -- IPIF slave.
+    bus2ip_addr  : in    std_logic_vector(31 downto 0);
+    bus2ip_data  : in    std_logic_vector(31 downto 0);
+    bus2ip_be    : in    std_logic_vector(3 downto 0);
+    bus2ip_cs    : in    std_logic;
+    bus2ip_rnw   : in    std_logic;
+    ip2bus_data  : out   std_logic_vector(31 downto 0);
+    ip2bus_rdack : out   std_logic;
+    ip2bus_wrack : out   std_logic;
+    ip2bus_error : out   std_logic;
+    -- Interrupt (level, active high): STATUS.DONE or STATUS.ERROR when enabled in CTRL.
+    irq : out   std_logic;
+    -- Motor outputs.
+    step : out   std_logic;
+    dir  : out   std_logic
+  );
+end entity stepramp_plb;
+
+architecture rtl of stepramp_plb is
+
+  signal access_r : std_logic; -- the access now on the bus has been passed on
+  signal rd_r     : std_logic; -- the regfile answers a read (else a write) in this cycle
+  signal wr       : std_logic;
+  signal rd       : std_logic;
+  signal ack      : std_logic;
+  signal err      : std_logic;
+  signal rdata    : std_logic_vector(31 downto 0);
+
+  signal start      : std_logic;
+  signal soft_stop  : std_logic;
+  signal hard_stop  : std_logic;
+  signal steps      : std_logic_vector(30 downto 0);
+  signal direction  : std_logic;
+  signal prescale   : std_logic_vector(15 downto 0);
+  signal c_first    : std_logic_vector(47 downto 0);
+  signal c_last     : std_logic_vector(47 downto 0);
+  signal sa         : std_logic_vector(30 downto 0);
+  signal c_sa       : std_logic_vector(47 downto 0);
+  signal sd         : std_logic_vector(30 downto 0);
+  signal c_sd       : std_logic_vector(47 downto 0);
+  signal accel_seed : std_logic_vector(47 downto 0);
+  signal decel_seed : std_logic_vector(47 downto 0);
+  signal cruise     : std_logic_vector(63 downto 0);
+  signal stop_ratio : std_logic_vector(31 downto 0);
+  signal pos_load   : std_logic;
+  signal pos_value  : std_logic_vector(31 downto 0);
+  signal busy       : std_logic;
+  signal done       : std_logic;
+  signal error      : std_logic;
+  signal err_code   : std_logic_vector(3 downto 0);
+  signal state      : std_logic_vector(1 downto 0);
+  signal dir_i      : std_logic;
+  signal position   : std_logic_vector(31 downto 0);
+  signal step_count : std_logic_vector(30 downto 0);
+  signal cur_delay  : std_logic_vector(31 downto 0);
+
+begin
+
+  -- One strobe per access: CS is still high in the cycle of the ack, so the strobe cycle blocks the next one.
+  wr <= bus2ip_cs and not bus2ip_rnw and not access_r;
+  rd <= bus2ip_cs and bus2ip_rnw and not access_r;
+
+  handshake_proc : process (clk) is
+  begin
+
+    if rising_edge(clk) then
+      access_r <= wr or rd;
+      rd_r     <= rd;
+
+      if (rst = '1') then
+        access_r <= '0';
+        rd_r     <= '0';
+      end if;
+    end if;
+
+  end process handshake_proc;
+
+  ip2bus_rdack <= ack and rd_r;
+  ip2bus_wrack <= ack and not rd_r;
+  ip2bus_error <= err;
+  ip2bus_data  <= rdata when rd_r = '1' else
+                  (others => '0');
+
+  regfile_inst : entity work.stepramp_regfile
+    port map (
+      clk            => clk,
+      rst            => rst,
+      wr             => wr,
+      rd             => rd,
+      addr           => bus2ip_addr(C_ADDR_BITS - 1 downto 0),
+      wdata          => bus2ip_data,
+      be             => bus2ip_be,
+      rdata          => rdata,
+      ack            => ack,
+      err            => err,
+      irq            => irq,
+      start          => start,
+      soft_stop      => soft_stop,
+      hard_stop      => hard_stop,
+      steps          => steps,
+      direction      => direction,
+      prescale       => prescale,
+      c_first        => c_first,
+      c_last         => c_last,
+      sa             => sa,
+      c_sa           => c_sa,
+      sd             => sd,
+      c_sd           => c_sd,
+      accel_seed     => accel_seed,
+      decel_seed     => decel_seed,
+      cruise         => cruise,
+      stop_ratio     => stop_ratio,
+      pos_load       => pos_load,
+      pos_value      => pos_value,
+      eng_busy       => busy,
+      eng_done       => done,
+      eng_error      => error,
+      eng_err_code   => err_code,
+      eng_state      => state,
+      eng_dir        => dir_i,
+      eng_position   => position,
+      eng_step_count => step_count,
+      eng_cur_delay  => cur_delay
+    );
+
+  engine_inst : entity work.stepramp_engine
+    port map (
+      clk        => clk,
+      rst        => rst,
+      start      => start,
+      soft_stop  => soft_stop,
+      hard_stop  => hard_stop,
+      steps      => steps,
+      direction  => direction,
+      prescale   => prescale,
+      c_first    => c_first,
+      c_last     => c_last,
+      sa         => sa,
+      c_sa       => c_sa,
+      sd         => sd,
+      c_sd       => c_sd,
+      accel_seed => accel_seed,
+      decel_seed => decel_seed,
+      cruise     => cruise,
+      stop_ratio => stop_ratio,
+      pos_load   => pos_load,
+      pos_value  => pos_value,
+      step       => step,
+      dir        => dir_i,
+      busy       => busy,
+      done       => done,
+      error      => error,
+      err_code   => err_code,
+      state      => state,
+      position   => position,
+      step_count => step_count,
+      cur_delay  => cur_delay
+    );
+
+  dir <= dir_i;
+
+end architecture rtl;

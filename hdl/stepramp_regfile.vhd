@@ -1,0 +1,359 @@
+-- SPDX-License-Identifier: MIT
+-- stepramp_regfile: the bus registers of the stepramp core (docs/registers.md), bus-agnostic.
+--
+-- The bus side is a pair of one-cycle strobes (wr, rd) with a byte address, write data and byte enables; the
+-- answer (ack, with err for an unmapped offset, and rdata for reads) comes one clock later, registered. The tops
+-- (stepramp_plb for the PLB-like IPIF, stepramp_axil for AXI4-Lite) turn their bus into these strobes.
+--
+-- The engine side carries the latched-at-start move registers, the command strobes and the engine's status.
+-- Motion registers are plain storage: the engine latches them at start, so writing them during a move only
+-- prepares the next move (shadowing). Sticky DONE/ERROR are set by the engine's strobes and cleared by writing 1;
+-- a set and a clear in the same cycle keep the flag set, so no event is lost.
+
+library ieee;
+  use ieee.std_logic_1164.all;
+  use ieee.numeric_std.all;
+
+library work;
+  use work.stepramp_regs_pkg.all;
+
+entity stepramp_regfile is
+  port (
+    clk : in    std_logic;
+    rst : in    std_logic;
+    -- Bus side.
+    wr    : in    std_logic;
+    rd    : in    std_logic;
+    addr  : in    std_logic_vector(C_ADDR_BITS - 1 downto 0);
+    wdata : in    std_logic_vector(31 downto 0);
+    be    : in    std_logic_vector(3 downto 0);
+    rdata : out   std_logic_vector(31 downto 0);
+    ack   : out   std_logic;
+    err   : out   std_logic;
+    irq   : out   std_logic;
+    -- Engine commands and move registers.
+    start      : out   std_logic;
+    soft_stop  : out   std_logic;
+    hard_stop  : out   std_logic;
+    steps      : out   std_logic_vector(30 downto 0);
+    direction  : out   std_logic;
+    prescale   : out   std_logic_vector(15 downto 0);
+    c_first    : out   std_logic_vector(47 downto 0);
+    c_last     : out   std_logic_vector(47 downto 0);
+    sa         : out   std_logic_vector(30 downto 0);
+    c_sa       : out   std_logic_vector(47 downto 0);
+    sd         : out   std_logic_vector(30 downto 0);
+    c_sd       : out   std_logic_vector(47 downto 0);
+    accel_seed : out   std_logic_vector(47 downto 0);
+    decel_seed : out   std_logic_vector(47 downto 0);
+    cruise     : out   std_logic_vector(63 downto 0);
+    stop_ratio : out   std_logic_vector(31 downto 0);
+    pos_load   : out   std_logic;
+    pos_value  : out   std_logic_vector(31 downto 0);
+    -- Engine status.
+    eng_busy       : in    std_logic;
+    eng_done       : in    std_logic;
+    eng_error      : in    std_logic;
+    eng_err_code   : in    std_logic_vector(3 downto 0);
+    eng_state      : in    std_logic_vector(1 downto 0);
+    eng_dir        : in    std_logic;
+    eng_position   : in    std_logic_vector(31 downto 0);
+    eng_step_count : in    std_logic_vector(30 downto 0);
+    eng_cur_delay  : in    std_logic_vector(31 downto 0)
+  );
+end entity stepramp_regfile;
+
+architecture rtl of stepramp_regfile is
+
+  -- The plain read/write words, STEPS .. STOP_RATIO, are contiguous: one register per word, indexed by word
+  -- offset. They are reached with constant indices only (loops below), so no memory is inferred.
+  constant C_FIRST_W : natural := C_REG_STEPS / 4;
+  constant C_LAST_W  : natural := C_REG_STOP_RATIO / 4;
+
+  type reg_array_t is array (C_FIRST_W to C_LAST_W) of std_logic_vector(31 downto 0);
+
+  signal mem : reg_array_t;
+
+  signal irq_done_en  : std_logic;
+  signal irq_error_en : std_logic;
+  signal done_flag    : std_logic;
+  signal error_flag   : std_logic;
+  signal err_code_r   : std_logic_vector(3 downto 0);
+  signal rdata_r      : std_logic_vector(31 downto 0);
+  signal ack_r        : std_logic;
+  signal err_r        : std_logic;
+  signal irq_r        : std_logic;
+  signal start_r      : std_logic;
+  signal soft_stop_r  : std_logic;
+  signal hard_stop_r  : std_logic;
+  signal pos_load_r   : std_logic;
+  signal pos_value_r  : std_logic_vector(31 downto 0);
+
+  -- Word index of a byte offset.
+  function word (
+    byte_offset : natural
+  ) return natural is
+  begin
+
+    return byte_offset / 4;
+
+  end function word;
+
+  -- old with the bytes selected by be replaced by new.
+  function merge (
+    old_v : std_logic_vector(31 downto 0);
+    new_v : std_logic_vector(31 downto 0);
+    be_v  : std_logic_vector(3 downto 0)
+  ) return std_logic_vector is
+
+    variable res : std_logic_vector(31 downto 0);
+
+  begin
+
+    res := old_v;
+
+    for b in 0 to 3 loop
+
+      if (be_v(b) = '1') then
+        res(8 * b + 7 downto 8 * b) := new_v(8 * b + 7 downto 8 * b);
+      end if;
+
+    end loop;
+
+    return res;
+
+  end function merge;
+
+  -- Whether a word index is a plain read/write storage register.
+  function is_storage (
+    w : natural
+  ) return boolean is
+  begin
+
+    return w >= C_FIRST_W and w <= C_LAST_W;
+
+  end function is_storage;
+
+  -- Bits of a storage register that exist (the others read 0).
+  function storage_mask (
+    w : natural
+  ) return std_logic_vector is
+  begin
+
+    if (w = word(C_REG_PRESCALE)) then
+      return x"0000FFFF";
+    elsif (w = word(C_REG_C_FIRST_HI) or w = word(C_REG_C_LAST_HI) or w = word(C_REG_C_SA_HI) or
+           w = word(C_REG_C_SD_HI) or w = word(C_REG_ACCEL_SEED_HI) or w = word(C_REG_DECEL_SEED_HI)) then
+      return x"0000FFFF";
+    elsif (w = word(C_REG_SA) or w = word(C_REG_SD)) then
+      return x"7FFFFFFF";
+    else
+      return x"FFFFFFFF";
+    end if;
+
+  end function storage_mask;
+
+begin
+
+  bus_proc : process (clk) is
+
+    variable w        : natural range 0 to 2 ** (C_ADDR_BITS - 2) - 1;
+    variable rd_v     : std_logic_vector(31 downto 0);
+    variable mapped   : boolean;
+    variable new_ctrl : std_logic_vector(31 downto 0);
+    variable clr      : std_logic_vector(31 downto 0);
+
+  begin
+
+    if rising_edge(clk) then
+      w           := to_integer(unsigned(addr(C_ADDR_BITS - 1 downto 2)));
+      ack_r       <= '0';
+      err_r       <= '0';
+      start_r     <= '0';
+      soft_stop_r <= '0';
+      hard_stop_r <= '0';
+      pos_load_r  <= '0';
+      mapped      := is_storage(w) or w = word(C_REG_ID) or w = word(C_REG_CTRL) or
+                     w = word(C_REG_STATUS) or w = word(C_REG_POSITION) or w = word(C_REG_CUR_DELAY) or
+                     w = word(C_REG_STEP_COUNT);
+
+      -- Sticky flags: engine events (set) have priority over a W1C write in the same cycle (below).
+      clr := (others => '0');
+
+      if (wr = '1') then
+        ack_r <= '1';
+
+        if (not mapped) then
+          err_r <= '1';
+        elsif (is_storage(w)) then
+
+          for i in mem'range loop
+
+            if (i = w) then
+              mem(i) <= merge(mem(i), wdata, be) and storage_mask(i);
+            end if;
+
+          end loop;
+
+        elsif (w = word(C_REG_CTRL)) then
+          new_ctrl := merge(x"00000000", wdata, be);
+
+          if (be(1) = '1') then
+            irq_done_en  <= wdata(C_CTRL_IRQ_DONE_EN_LSB);
+            irq_error_en <= wdata(C_CTRL_IRQ_ERROR_EN_LSB);
+          end if;
+
+          if (new_ctrl(C_CTRL_START_LSB) = '1') then
+            start_r <= '1';
+          end if;
+          soft_stop_r <= new_ctrl(C_CTRL_SOFT_STOP_LSB);
+          hard_stop_r <= new_ctrl(C_CTRL_HARD_STOP_LSB);
+        elsif (w = word(C_REG_STATUS)) then
+          clr := merge(x"00000000", wdata, be);
+        elsif (w = word(C_REG_POSITION)) then
+          if (eng_busy = '1') then
+            error_flag <= '1';
+            err_code_r <= C_ERR_POS_BUSY;
+          else
+            pos_load_r  <= '1';
+            pos_value_r <= merge(eng_position, wdata, be);
+          end if;
+        end if;
+      end if;
+
+      if (rd = '1') then
+        ack_r <= '1';
+        rd_v  := (others => '0');
+
+        if (not mapped) then
+          err_r <= '1';
+        elsif (is_storage(w)) then
+
+          for i in mem'range loop
+
+            if (i = w) then
+              rd_v := mem(i);
+            end if;
+
+          end loop;
+
+        elsif (w = word(C_REG_ID)) then
+          rd_v := C_ID_VALUE;
+        elsif (w = word(C_REG_CTRL)) then
+          rd_v(C_CTRL_IRQ_DONE_EN_LSB)  := irq_done_en;
+          rd_v(C_CTRL_IRQ_ERROR_EN_LSB) := irq_error_en;
+        elsif (w = word(C_REG_STATUS)) then
+          rd_v(C_STATUS_STATE_LSB + 1 downto C_STATUS_STATE_LSB)       := eng_state;
+          rd_v(C_STATUS_BUSY_LSB)                                      := eng_busy;
+          rd_v(C_STATUS_DIR_LSB)                                       := eng_dir;
+          rd_v(C_STATUS_DONE_LSB)                                      := done_flag;
+          rd_v(C_STATUS_ERROR_LSB)                                     := error_flag;
+          rd_v(C_STATUS_ERR_CODE_LSB + 3 downto C_STATUS_ERR_CODE_LSB) := err_code_r;
+        elsif (w = word(C_REG_POSITION)) then
+          rd_v := eng_position;
+        elsif (w = word(C_REG_CUR_DELAY)) then
+          rd_v := eng_cur_delay;
+        elsif (w = word(C_REG_STEP_COUNT)) then
+          rd_v(30 downto 0) := eng_step_count;
+        end if;
+
+        rdata_r <= rd_v;
+      end if;
+
+      if (clr(C_STATUS_DONE_LSB) = '1') then
+        done_flag <= '0';
+      end if;
+
+      if (clr(C_STATUS_ERROR_LSB) = '1') then
+        error_flag <= '0';
+      end if;
+
+      -- STEPS = -2^31 has no 31-bit magnitude: reject the start here, the engine never sees it.
+      if (wr = '1' and mapped and w = word(C_REG_CTRL) and merge(x"00000000", wdata, be)(C_CTRL_START_LSB) = '1' and
+          eng_busy = '0' and mem(word(C_REG_STEPS)) = x"80000000") then
+        start_r    <= '0';
+        done_flag  <= '1';
+        error_flag <= '1';
+        err_code_r <= C_ERR_STEPS;
+      end if;
+
+      if (eng_done = '1') then
+        done_flag <= '1';
+      end if;
+
+      if (eng_error = '1') then
+        error_flag <= '1';
+        err_code_r <= eng_err_code;
+      end if;
+
+      irq_r <= (done_flag and irq_done_en) or (error_flag and irq_error_en);
+
+      if (rst = '1') then
+        ack_r        <= '0';
+        err_r        <= '0';
+        start_r      <= '0';
+        soft_stop_r  <= '0';
+        hard_stop_r  <= '0';
+        pos_load_r   <= '0';
+        irq_r        <= '0';
+        irq_done_en  <= '0';
+        irq_error_en <= '0';
+        done_flag    <= '0';
+        error_flag   <= '0';
+        err_code_r   <= C_ERR_NONE;
+        rdata_r      <= (others => '0');
+
+        for i in mem'range loop
+
+          mem(i) <= (others => '0');
+
+        end loop;
+
+        mem(word(C_REG_PRESCALE)) <= x"00000001";
+      end if;
+    end if;
+
+  end process bus_proc;
+
+  rdata <= rdata_r;
+  ack   <= ack_r;
+  err   <= err_r;
+  irq   <= irq_r;
+
+  start     <= start_r;
+  soft_stop <= soft_stop_r;
+  hard_stop <= hard_stop_r;
+  pos_load  <= pos_load_r;
+  pos_value <= pos_value_r;
+
+  -- The signed step count as magnitude and direction (-2^31 is rejected at START above).
+  steps_proc : process (mem) is
+
+    variable s : signed(31 downto 0);
+
+  begin
+
+    s         := signed(mem(word(C_REG_STEPS)));
+    direction <= s(31);
+
+    if (s(31) = '1') then
+      s := -s;
+    end if;
+
+    steps <= std_logic_vector(s(30 downto 0));
+
+  end process steps_proc;
+
+  prescale   <= mem(word(C_REG_PRESCALE))(15 downto 0);
+  c_first    <= mem(word(C_REG_C_FIRST_HI))(15 downto 0) & mem(word(C_REG_C_FIRST_LO));
+  c_last     <= mem(word(C_REG_C_LAST_HI))(15 downto 0) & mem(word(C_REG_C_LAST_LO));
+  sa         <= mem(word(C_REG_SA))(30 downto 0);
+  c_sa       <= mem(word(C_REG_C_SA_HI))(15 downto 0) & mem(word(C_REG_C_SA_LO));
+  sd         <= mem(word(C_REG_SD))(30 downto 0);
+  c_sd       <= mem(word(C_REG_C_SD_HI))(15 downto 0) & mem(word(C_REG_C_SD_LO));
+  accel_seed <= mem(word(C_REG_ACCEL_SEED_HI))(15 downto 0) & mem(word(C_REG_ACCEL_SEED_LO));
+  decel_seed <= mem(word(C_REG_DECEL_SEED_HI))(15 downto 0) & mem(word(C_REG_DECEL_SEED_LO));
+  cruise     <= mem(word(C_REG_CRUISE_HI)) & mem(word(C_REG_CRUISE_LO));
+  stop_ratio <= mem(word(C_REG_STOP_RATIO));
+
+end architecture rtl;

@@ -1,0 +1,343 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * stepramp driver: plan a move. A line-by-line port of sw/stepramp/plan.py (the reference): every double
+ * expression keeps Python's operand order, Python's round() (half to even) is rint() in the default
+ * rounding mode, math.floor is floor(), and Python's min()/max() are mirrored including their choice of
+ * operand, so the register values are identical bit for bit. Compile with -ffp-contract=off.
+ */
+#include "stepramp_plan.h"
+
+#include <math.h>
+#include <stddef.h>
+#include <stdint.h>
+
+/*
+ * CPython computes math.gamma / math.lgamma with its own Lanczos code, whose last bit differs from libm's
+ * (glibc gives 0.6759782400672848 and -0.3015527878531085). So the two constants are literals: 17
+ * significant digits of plan.SEED_FACTOR (0x1.5a19d1e3cb126p-1) and plan._LGAMMA_RATIO_0
+ * (-0x1.34ca4107630b8p-2), which read back as exactly those doubles (checked by sw/tests/test_c_plan.py).
+ */
+const double stepramp_seed_factor = 0.67597824006728469;
+const double stepramp_lgamma_ratio_0 = -0.30155278785310768;
+
+/* math.pi (the double nearest pi). M_PI is not C99. */
+#define STEPRAMP_PI 3.141592653589793
+
+#define PRODUCT_LOOP_MAX 256
+#define TWO_POW_16 65536.0
+#define TWO_POW_32 4294967296.0
+#define TWO_POW_48 281474976710656.0
+#define TWO_POW_64 18446744073709551616.0
+
+/* Python's max(a, b): a unless b > a (keeps a NaN or a -0.0 in a, unlike fmax). */
+static double py_max(double a, double b)
+{
+    return (b > a) ? b : a;
+}
+
+/* Python's min(a, b): a unless b < a. */
+static double py_min(double a, double b)
+{
+    return (b < a) ? b : a;
+}
+
+/* plan._check_positive without the type checks: finite and > 0 (false for NaN). */
+static int is_positive(double x)
+{
+    return isfinite(x) && x > 0.0;
+}
+
+double stepramp_decel_product(int64_t m)
+{
+    double z1;
+    double z2;
+    double log_ratio;
+    double zi2;
+    double s1;
+    double s2;
+
+    if (m <= PRODUCT_LOOP_MAX) {
+        double p = 1.0;
+        int64_t k;
+        for (k = 1; k <= m; k++) {
+            p *= (double)(4 * k - 1) / (double)(4 * k + 1);
+        }
+        return p;
+    }
+    z1 = (double)m + 0.75;
+    z2 = (double)m + 1.25;
+    log_ratio = ((double)m + 0.25) * log1p(-0.5 / z2) - 0.5 * log(z2) + 0.5;
+    /* series(z) = (1/12 - zi2 * (1/360 - zi2 / 1260)) / z, zi2 = 1 / (z * z) */
+    zi2 = 1.0 / (z1 * z1);
+    s1 = (1.0 / 12.0 - zi2 * (1.0 / 360.0 - zi2 / 1260.0)) / z1;
+    zi2 = 1.0 / (z2 * z2);
+    s2 = (1.0 / 12.0 - zi2 * (1.0 / 360.0 - zi2 / 1260.0)) / z2;
+    return exp(log_ratio + s1 - s2 + stepramp_lgamma_ratio_0);
+}
+
+/*
+ * plan._to_fixed: round(ticks * 2^frac) below 2^width, else STEPRAMP_EOVERFLOW. Python tests only ticks for
+ * finiteness; a finite ticks whose product overflows to inf makes Python's round() raise OverflowError
+ * (reported separately: not a ValueError); here it is the same STEPRAMP_EOVERFLOW as any too long delay.
+ */
+static stepramp_err_t to_fixed(double ticks, double scale, double limit, uint64_t *out)
+{
+    double value;
+    if (!isfinite(ticks)) {
+        return STEPRAMP_EOVERFLOW;
+    }
+    value = rint(ticks * scale);
+    if (!(value < limit)) {
+        return STEPRAMP_EOVERFLOW;
+    }
+    *out = (uint64_t)value;
+    return STEPRAMP_OK;
+}
+
+/* plan._Ramp: the piecewise exact trajectory. */
+typedef struct {
+    int64_t length;
+    int triangle;
+    double x_a;
+    double x_d;
+    double n_d;
+    double v_peak;
+    double k_a;
+    double k_d;
+    double k_c;
+} ramp_t;
+
+static void ramp_init(ramp_t *r, int64_t length, double a, double d, double v, double f_tick)
+{
+    double n_a = v * v / (2.0 * a);
+    double n_d = v * v / (2.0 * d);
+    double x_d = (double)length - n_d;
+
+    r->length = length;
+    if (isfinite(x_d) && n_a <= x_d) {
+        r->triangle = 0;
+        r->x_a = n_a;
+        r->x_d = x_d;
+        r->n_d = n_d;
+        r->v_peak = v;
+    } else {
+        double x_p = (double)length * (d / (a + d));
+        r->triangle = 1;
+        r->x_a = x_p;
+        r->x_d = x_p;
+        r->n_d = (double)length * (a / (a + d));
+        r->v_peak = sqrt(2.0 * a * x_p);
+    }
+    r->k_a = f_tick * sqrt(2.0 / a); /* c0 */
+    r->k_d = f_tick * sqrt(2.0 / d); /* cd0 */
+    r->k_c = (r->v_peak > 0.0) ? f_tick / r->v_peak : (double)INFINITY;
+}
+
+/* _Ramp.boundary: floor(x) + 1 clamped to [1, L]. x is finite and in [0, L] here; the clamp is done in
+ * doubles (exact for integers of this size) so that no value can overflow the conversion. */
+static int64_t ramp_boundary(const ramp_t *r, double x)
+{
+    double b = floor(x) + 1.0;
+    if (!(b >= 1.0)) {
+        b = 1.0;
+    }
+    if (b > (double)r->length) {
+        b = (double)r->length;
+    }
+    return (int64_t)b;
+}
+
+/* _Ramp.interval: exact interval i (from position i-1 to i) in ticks. */
+static double ramp_interval(const ramp_t *r, int64_t i)
+{
+    double p = (double)(i - 1);
+    double q = (double)(r->length - i);
+    double ov_a = py_min(py_max(r->x_a - p, 0.0), 1.0);
+    double ov_d = py_min(py_max(r->n_d - q, 0.0), 1.0);
+    double ov_c = py_max(1.0 - ov_a - ov_d, 0.0);
+    double t = 0.0;
+
+    if (ov_a > 0.0) {
+        t += r->k_a * ov_a / (sqrt(p + ov_a) + sqrt(p));
+    }
+    if (ov_c > 0.0 && !r->triangle) {
+        t += r->k_c * ov_c;
+    }
+    if (ov_d > 0.0) {
+        t += r->k_d * ov_d / (sqrt(q + ov_d) + sqrt(q));
+    }
+    return t;
+}
+
+stepramp_err_t stepramp_plan_move(stepramp_plan_t *plan, int64_t steps, double accel, double decel, double speed,
+                                  double spr, double fclk, uint32_t prescale)
+{
+    stepramp_plan_t out;
+    ramp_t ramp;
+    stepramp_err_t err;
+    int64_t n;
+    int64_t length;
+    int64_t sa;
+    int64_t sd;
+    int64_t m0;
+    double f_tick;
+    double alpha;
+    double a;
+    double d;
+    double v;
+    double min_interval;
+
+    if (plan == NULL) {
+        return STEPRAMP_ENULL;
+    }
+    /* the argument checks, in plan_move_info's order */
+    if (!is_positive(accel)) {
+        return STEPRAMP_EACCEL;
+    }
+    if (!is_positive(decel)) {
+        return STEPRAMP_EDECEL;
+    }
+    if (!is_positive(speed)) {
+        return STEPRAMP_ESPEED;
+    }
+    if (!is_positive(spr)) {
+        return STEPRAMP_ESPR;
+    }
+    if (!is_positive(fclk)) {
+        return STEPRAMP_EFCLK;
+    }
+    if (prescale < 1 || prescale > STEPRAMP_MAX_PRESCALE) {
+        return STEPRAMP_EPRESCALE;
+    }
+    if (steps > STEPRAMP_MAX_STEPS || steps < -STEPRAMP_MAX_STEPS) {
+        return STEPRAMP_ESTEPS;
+    }
+
+    n = (steps < 0) ? -steps : steps;
+    length = n - 1;
+    f_tick = fclk / (double)prescale;
+    alpha = 2.0 * STEPRAMP_PI / spr;
+    a = accel / alpha;
+    d = decel / alpha;
+    v = speed / alpha;
+    if (!is_positive(a)) {
+        return STEPRAMP_EACCEL_UNITS;
+    }
+    if (!is_positive(d)) {
+        return STEPRAMP_EDECEL_UNITS;
+    }
+    if (!is_positive(v)) {
+        return STEPRAMP_ESPEED_UNITS;
+    }
+    if (!is_positive(f_tick)) {
+        return STEPRAMP_EFTICK;
+    }
+
+    out.steps = (uint32_t)n;
+    out.direction = (steps < 0) ? 1u : 0u;
+    out.prescale = prescale;
+    out.c_first = 0;
+    out.c_last = 0;
+    out.sa = 0;
+    out.c_sa = 0;
+    out.sd = 0;
+    out.c_sd = 0;
+    out.accel_seed = 0;
+    out.decel_seed = 0;
+    out.cruise = 0;
+    if (length < 1) { /* N = 0 or 1: no interval, nothing for the engine to compute */
+        *plan = out;
+        return STEPRAMP_OK;
+    }
+
+    ramp_init(&ramp, length, a, d, v, f_tick);
+    min_interval = ramp.k_c;
+    if (!isfinite(min_interval)) {
+        return STEPRAMP_EPEAK;
+    }
+    if (!(min_interval >= 1.0)) {
+        return STEPRAMP_ETICK;
+    }
+    /* Python multiplies the exact integers; the double product is exact below 2^53 and rounds monotonically
+     * above, so the comparison with 64 has the same outcome. */
+    if (floor(min_interval) * (double)prescale < (double)STEPRAMP_MIN_INTERVAL_CLKS) {
+        return STEPRAMP_ETOOFAST;
+    }
+
+    sa = ramp_boundary(&ramp, ramp.x_a);
+    sd = ramp_boundary(&ramp, ramp.x_d);
+    m0 = length - sd - 1;
+    out.sa = (uint32_t)sa;
+    out.sd = (uint32_t)sd;
+
+    /* Plan's fields in the order Python evaluates them (the first overflow wins; all are EOVERFLOW) */
+    err = to_fixed(ramp_interval(&ramp, 1), TWO_POW_16, TWO_POW_48, &out.c_first);
+    if (err == STEPRAMP_OK) {
+        err = to_fixed(ramp_interval(&ramp, length), TWO_POW_16, TWO_POW_48, &out.c_last);
+    }
+    if (err == STEPRAMP_OK) {
+        err = to_fixed(ramp_interval(&ramp, sa), TWO_POW_16, TWO_POW_48, &out.c_sa);
+    }
+    if (err == STEPRAMP_OK) {
+        err = to_fixed(ramp_interval(&ramp, sd), TWO_POW_16, TWO_POW_48, &out.c_sd);
+    }
+    if (err == STEPRAMP_OK) {
+        err = to_fixed(stepramp_seed_factor * ramp.k_a, TWO_POW_16, TWO_POW_48, &out.accel_seed);
+    }
+    if (err == STEPRAMP_OK && m0 >= 1) {
+        err = to_fixed(stepramp_seed_factor * ramp.k_d * stepramp_decel_product(m0), TWO_POW_16, TWO_POW_48,
+                       &out.decel_seed);
+    }
+    if (err == STEPRAMP_OK) { /* plan._cruise: round(f_tick / v * 2^32) < 2^64 */
+        err = to_fixed(f_tick / v, TWO_POW_32, TWO_POW_64, &out.cruise);
+    }
+    if (err != STEPRAMP_OK) {
+        return err;
+    }
+    *plan = out;
+    return STEPRAMP_OK;
+}
+
+const char *stepramp_strerror(stepramp_err_t err)
+{
+    switch (err) {
+    case STEPRAMP_OK:
+        return "success";
+    case STEPRAMP_EACCEL:
+        return "accel must be finite and > 0";
+    case STEPRAMP_EDECEL:
+        return "decel must be finite and > 0";
+    case STEPRAMP_ESPEED:
+        return "speed must be finite and > 0";
+    case STEPRAMP_ESPR:
+        return "spr must be finite and > 0";
+    case STEPRAMP_EFCLK:
+        return "fclk must be finite and > 0";
+    case STEPRAMP_EPRESCALE:
+        return "prescale must be an integer in 1 .. 65535";
+    case STEPRAMP_ESTEPS:
+        return "|steps| must be <= 2^31 - 1";
+    case STEPRAMP_EOVERFLOW:
+        return "a delay overflows its register (integer part >= 2^32 ticks): delay too long; "
+               "use a larger accel/decel/speed, a lower f_clk or a larger prescale";
+    case STEPRAMP_ETICK:
+        return "interval shorter than 1 tick at the peak speed: lower the speed or raise f_clk / lower the prescale";
+    case STEPRAMP_ETOOFAST:
+        return "speed too high for the hardware to compute the next delay in time: "
+               "shortest interval in ticks * prescale < 64 clocks";
+    case STEPRAMP_EACCEL_UNITS:
+        return "accel in steps units is out of range; check spr and the units";
+    case STEPRAMP_EDECEL_UNITS:
+        return "decel in steps units is out of range; check spr and the units";
+    case STEPRAMP_ESPEED_UNITS:
+        return "speed in steps units is out of range; check spr and the units";
+    case STEPRAMP_EFTICK:
+        return "f_tick in steps units is out of range; check spr and the units";
+    case STEPRAMP_EPEAK:
+        return "peak speed underflows: the delays would overflow their registers";
+    case STEPRAMP_ENULL:
+        return "plan is a NULL pointer";
+    default:
+        return "unknown error";
+    }
+}

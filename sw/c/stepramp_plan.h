@@ -1,0 +1,118 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * stepramp driver: plan a move (physical units -> the engine's register values).
+ *
+ * C99 port of sw/stepramp/plan.py, bit for bit: the same double-precision expressions in the same
+ * order, the same rounding (round half to even, like Python's round()), the same checks in the same
+ * order. See docs/algorithm.md for the meaning of every field.
+ *
+ * Freestanding-friendly (MicroBlaze standalone): no malloc, no stdio; needs <math.h> (link with -lm).
+ * Build with -ffp-contract=off (no fused multiply-add) so that every double is rounded like Python's.
+ * Bit-for-bit parity also assumes the same libm results for sqrt (always correctly rounded), exp, log
+ * and log1p (only used by stepramp_decel_product for a decel ramp longer than 256 steps).
+ */
+#ifndef STEPRAMP_PLAN_H
+#define STEPRAMP_PLAN_H
+
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Fraction bits of the ramp values (Q32.16). */
+#define STEPRAMP_FRAC_RAMP 16
+/** Fraction bits of the cruise period (Q32.32). */
+#define STEPRAMP_FRAC_CRUISE 32
+/** Shortest interval, in clocks, that leaves the engine time to compute the next value. */
+#define STEPRAMP_MIN_INTERVAL_CLKS 64
+/** Largest |steps| of one move (the steps register is 31 bits wide). */
+#define STEPRAMP_MAX_STEPS INT64_C(2147483647)
+/** Largest PRESCALE (the prescale register is 16 bits wide). */
+#define STEPRAMP_MAX_PRESCALE UINT32_C(65535)
+
+/**
+ * The engine's inputs for one move: field by field Python's plan.Plan and the table of
+ * docs/algorithm.md. c_* and the seeds are Q32.16 (< 2^48), cruise is Q32.32.
+ */
+typedef struct {
+    uint32_t steps;      /**< N = |steps| (0 .. 2^31-1) */
+    uint32_t direction;  /**< 0: position counts up, 1: down (steps < 0) */
+    uint32_t prescale;   /**< base timer period in clocks (1 .. 65535) */
+    uint64_t c_first;    /**< exact interval 1, Q32.16 */
+    uint64_t c_last;     /**< exact interval L = N-1, Q32.16 */
+    uint32_t sa;         /**< accel-side boundary interval index, floor(x_a)+1 clamped to [1, L] */
+    uint64_t c_sa;       /**< exact interval sa, Q32.16 */
+    uint32_t sd;         /**< decel-side boundary interval index, floor(x_d)+1 clamped to [1, L] */
+    uint64_t c_sd;       /**< exact interval sd, Q32.16 */
+    uint64_t accel_seed; /**< accel recurrence value at index 0, Q32.16 */
+    uint64_t decel_seed; /**< decel recurrence value at index m0 = L-sd-1, Q32.16; 0 when m0 < 1 */
+    uint64_t cruise;     /**< cruise period f_tick / v, Q32.32 */
+} stepramp_plan_t;
+
+/**
+ * Result of stepramp_plan_move. Each error corresponds to one ValueError of plan.py (the comment gives
+ * the start of its message); the checks run in the same order, so both report the same first error.
+ */
+typedef enum {
+    STEPRAMP_OK = 0,       /**< success */
+    STEPRAMP_EACCEL,       /**< "accel must be finite and > 0" */
+    STEPRAMP_EDECEL,       /**< "decel must be finite and > 0" */
+    STEPRAMP_ESPEED,       /**< "speed must be finite and > 0" */
+    STEPRAMP_ESPR,         /**< "spr must be finite and > 0" */
+    STEPRAMP_EFCLK,        /**< "fclk must be finite and > 0" */
+    STEPRAMP_EPRESCALE,    /**< "prescale must be an integer in 1 .. 65535" */
+    STEPRAMP_ESTEPS,       /**< "|steps| must be <= 2^31 - 1" */
+    STEPRAMP_EOVERFLOW,    /**< "<field> = ... ticks overflows its register": a delay >= 2^32 ticks */
+    STEPRAMP_ETICK,        /**< "interval shorter than 1 tick" at the peak speed */
+    STEPRAMP_ETOOFAST,     /**< "speed too high for the hardware to compute the next delay in time" */
+    STEPRAMP_EACCEL_UNITS, /**< "accel in steps units is out of range" (0 or inf after / (2 pi / spr)) */
+    STEPRAMP_EDECEL_UNITS, /**< "decel in steps units is out of range" */
+    STEPRAMP_ESPEED_UNITS, /**< "speed in steps units is out of range" */
+    STEPRAMP_EFTICK,       /**< "f_tick in steps units is out of range" (fclk / prescale underflows) */
+    STEPRAMP_EPEAK,        /**< "peak speed underflows: the delays would overflow their registers" */
+    STEPRAMP_ENULL         /**< plan is a NULL pointer (no Python counterpart) */
+} stepramp_err_t;
+
+/**
+ * Plan a move, exactly like Python's stepramp.plan.plan_move.
+ *
+ * @param plan     output; written only on success (left untouched on error)
+ * @param steps    signed step count; its sign gives the direction; |steps| <= 2^31 - 1
+ * @param accel    acceleration, rad/s^2 (finite, > 0)
+ * @param decel    deceleration, rad/s^2 (finite, > 0)
+ * @param speed    cruise speed, rad/s (finite, > 0)
+ * @param spr      steps per revolution (finite, > 0)
+ * @param fclk     engine clock frequency, Hz (finite, > 0)
+ * @param prescale base timer period in clocks, 1 .. 65535
+ * @return STEPRAMP_OK, or the first failed check (in plan.py's order). For N = |steps| <= 1 every ramp
+ *         field and cruise are 0 and the speed limits are not checked.
+ */
+stepramp_err_t stepramp_plan_move(stepramp_plan_t *plan, int64_t steps, double accel, double decel, double speed,
+                                  double spr, double fclk, uint32_t prescale);
+
+/**
+ * The reason for an error in words, like plan.py's ValueError messages without the numbers.
+ *
+ * @return a static string; "success" for STEPRAMP_OK, "unknown error" for a value outside the enum
+ */
+const char *stepramp_strerror(stepramp_err_t err);
+
+/**
+ * prod_{k=1..m} (4k-1)/(4k+1) = Gamma(m+3/4) Gamma(5/4) / (Gamma(m+5/4) Gamma(3/4)), like plan.decel_product:
+ * the plain product for m <= 256, above it a Stirling series without cancellation (about 1e-14 relative).
+ * 1.0 for m <= 0.
+ */
+double stepramp_decel_product(int64_t m);
+
+/** Gamma(3/4) / (2 Gamma(5/4)) = 0.67597824...: the same double as plan.SEED_FACTOR. */
+extern const double stepramp_seed_factor;
+
+/** lgamma(5/4) - lgamma(3/4): the same double as plan._LGAMMA_RATIO_0 (CPython's own lgamma, not libm's). */
+extern const double stepramp_lgamma_ratio_0;
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* STEPRAMP_PLAN_H */
