@@ -1,0 +1,197 @@
+# SPDX-License-Identifier: MIT
+"""The stepramp driver: physical units in, register writes out, over any register access.
+
+The same class drives the simulated bus (cocotb, through an IPIF or AXI4-Lite master) and, on a board, the core
+mapped with /dev/mem or UIO (:class:`MmapAccess`). Register access is asynchronous so that a simulation can
+advance while the driver waits; on a board the methods simply run to completion.
+
+    drv = StepRamp(access, fclk=50e6, spr=400 * 16)
+    await drv.move(steps=3200, accel=40.0, decel=40.0, speed=20.0)
+    status = await drv.wait_done()
+"""
+
+from __future__ import annotations
+
+import mmap
+import os
+from collections.abc import Awaitable, Callable
+from dataclasses import dataclass
+from typing import Protocol
+
+from stepramp.plan import Plan, plan_move
+from stepramp.regmap import ERROR_CODES, ID_MAGIC, REGISTERS_BY_NAME, offset, split_wide
+
+STATE_NAMES = ("STOP", "ACCEL", "RUN", "DECEL")
+ERROR_NAMES = {code: name for name, (code, _) in ERROR_CODES.items()}
+
+
+class RegisterAccess(Protocol):
+    """32-bit register access at byte offsets from the core's base address."""
+
+    async def read(self, addr: int) -> int: ...
+
+    async def write(self, addr: int, value: int, strobe: int = 0xF) -> None: ...
+
+
+class StepRampError(RuntimeError):
+    """The core reported an error (STATUS.ERROR), or does not answer as a stepramp core."""
+
+
+@dataclass(frozen=True)
+class Status:
+    """STATUS decoded."""
+
+    state: str
+    busy: bool
+    direction: int
+    done: bool
+    error: bool
+    err_code: int
+
+    @property
+    def err_name(self) -> str:
+        return ERROR_NAMES.get(self.err_code, f"code {self.err_code}")
+
+    @classmethod
+    def decode(cls, raw: int) -> Status:
+        reg = REGISTERS_BY_NAME["STATUS"]
+
+        def get(name: str) -> int:
+            f = reg.field(name)
+            return (raw >> f.lsb) & ((1 << f.width) - 1)
+
+        return cls(
+            STATE_NAMES[get("STATE")],
+            bool(get("BUSY")),
+            get("DIR"),
+            bool(get("DONE")),
+            bool(get("ERROR")),
+            get("ERR_CODE"),
+        )
+
+
+def _bit(register: str, field: str) -> int:
+    return 1 << REGISTERS_BY_NAME[register].field(field).lsb
+
+
+#: The registers written for a move, from a Plan: (register, Plan field or None, word: 0 = LO/whole, 1 = HI).
+_WIDE = ("c_first", "c_last", "c_sa", "c_sd", "accel_seed", "decel_seed", "cruise")
+
+
+def plan_writes(plan: Plan) -> list[tuple[int, int]]:
+    """(offset, value) of every motion register for a plan, in address order (STEPS signed)."""
+    signed = (-plan.steps if plan.direction else plan.steps) & 0xFFFF_FFFF
+    writes = [(offset("STEPS"), signed), (offset("PRESCALE"), plan.prescale)]
+    for name in _WIDE:
+        lo, hi = split_wide(getattr(plan, name), 64 if name == "cruise" else 48)
+        writes += [(offset(f"{name.upper()}_LO"), lo), (offset(f"{name.upper()}_HI"), hi)]
+    writes += [(offset("SA"), plan.sa), (offset("SD"), plan.sd)]
+    ratio = getattr(plan, "stop_ratio", None)
+    if ratio is not None:
+        writes.append((offset("STOP_RATIO"), ratio))
+    return sorted(writes)
+
+
+class StepRamp:
+    """Driver of one stepramp core."""
+
+    def __init__(self, access: RegisterAccess, fclk: float, spr: float, prescale: int = 1) -> None:
+        self.access = access
+        self.fclk = fclk
+        self.spr = spr
+        self.prescale = prescale
+
+    async def check_id(self) -> int:
+        """Read ID; raise StepRampError if this is not a stepramp core. Returns the version (major << 8 | minor)."""
+        raw = await self.access.read(offset("ID"))
+        if raw >> 16 != ID_MAGIC:
+            raise StepRampError(f"ID register reads {raw:#010x}: not a stepramp core at this address")
+        return raw & 0xFFFF
+
+    def plan(self, steps: int, accel: float, decel: float, speed: float) -> Plan:
+        """Register values of a move in physical units (rad/s^2, rad/s); ValueError with the reason if invalid."""
+        return plan_move(steps, accel, decel, speed, self.spr, self.fclk, self.prescale)
+
+    async def program(self, plan: Plan) -> None:
+        """Write the move registers (the core latches them at START, so this is safe during a move)."""
+        for addr, value in plan_writes(plan):
+            await self.access.write(addr, value)
+
+    async def start(self) -> None:
+        """START (byte 0 of CTRL only, so the interrupt enables in byte 1 are kept)."""
+        await self.access.write(offset("CTRL"), _bit("CTRL", "START"), strobe=0x1)
+
+    async def move(self, steps: int, accel: float, decel: float, speed: float) -> Plan:
+        """Plan, program and start a move. Returns the plan."""
+        plan = self.plan(steps, accel, decel, speed)
+        await self.program(plan)
+        await self.start()
+        return plan
+
+    async def soft_stop(self) -> None:
+        """Decelerate at the programmed decel to zero, then done."""
+        await self.access.write(offset("CTRL"), _bit("CTRL", "SOFT_STOP"), strobe=0x1)
+
+    async def hard_stop(self) -> None:
+        """No further step from the next clock on."""
+        await self.access.write(offset("CTRL"), _bit("CTRL", "HARD_STOP"), strobe=0x1)
+
+    async def enable_irq(self, done: bool = True, error: bool = True) -> None:
+        value = (_bit("CTRL", "IRQ_DONE_EN") if done else 0) | (_bit("CTRL", "IRQ_ERROR_EN") if error else 0)
+        await self.access.write(offset("CTRL"), value, strobe=0x2)
+
+    async def status(self) -> Status:
+        return Status.decode(await self.access.read(offset("STATUS")))
+
+    async def clear_flags(self) -> None:
+        """Clear the sticky DONE and ERROR flags."""
+        await self.access.write(offset("STATUS"), _bit("STATUS", "DONE") | _bit("STATUS", "ERROR"), strobe=0x1)
+
+    async def position(self) -> int:
+        raw = await self.access.read(offset("POSITION"))
+        return raw - (1 << 32) if raw >> 31 else raw
+
+    async def set_position(self, value: int) -> None:
+        """Set the position counter (only while stopped: the core ignores it and flags POS_BUSY otherwise)."""
+        if not -(1 << 31) <= value < 1 << 31:
+            raise ValueError(f"position {value} does not fit 32 bits signed")
+        await self.access.write(offset("POSITION"), value & 0xFFFF_FFFF)
+
+    async def wait_done(self, idle: Callable[[], Awaitable[None]] | None = None, polls: int = 1_000_000) -> Status:
+        """Poll STATUS until DONE, clear the flags, and return the status; raise StepRampError on ERROR.
+
+        idle: awaited between polls (a simulation timer, or a sleep on a board). polls bounds the wait.
+        """
+        for _ in range(polls):
+            status = await self.status()
+            if status.done:
+                await self.clear_flags()
+                if status.error:
+                    raise StepRampError(f"the core flagged error {status.err_code} ({status.err_name})")
+                return status
+            if idle is not None:
+                await idle()
+        raise StepRampError(f"no DONE after {polls} polls")
+
+
+class MmapAccess:
+    """Register access through mmap of a device file: /dev/mem at the core's base address, or a UIO device."""
+
+    def __init__(self, path: str = "/dev/mem", base: int = 0, size: int = 4096) -> None:
+        fd = os.open(path, os.O_RDWR | os.O_SYNC)
+        try:
+            self._map = mmap.mmap(fd, size, mmap.MAP_SHARED, mmap.PROT_READ | mmap.PROT_WRITE, offset=base)
+        finally:
+            os.close(fd)
+
+    async def read(self, addr: int) -> int:
+        return int.from_bytes(self._map[addr : addr + 4], "little")
+
+    async def write(self, addr: int, value: int, strobe: int = 0xF) -> None:
+        data = value.to_bytes(4, "little")
+        for b in range(4):  # byte strobes as byte writes
+            if strobe >> b & 1:
+                self._map[addr + b : addr + b + 1] = data[b : b + 1]
+
+    def close(self) -> None:
+        self._map.close()
