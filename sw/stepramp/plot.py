@@ -39,7 +39,10 @@ def plot_move(move: dict[str, Any], png: Path, model_edges: list[int] | None = N
         t_model = [((e - FIRST_PULSE_LATENCY) / prescale) / f_tick for e in model_edges]
         ax_rate.plot(*_rates(t_model), "--", color="tab:orange", lw=1.5, label="bit-exact model")
     ax_rate.plot(*_rates(to_s), ".", color="tab:blue", ms=3, label=f"{move['tool']} ({len(to_s)} steps)")
-    for t, label in ((ideal.t_a, "end of ACCEL"), (ideal.t_d, "start of DECEL")):
+    marks = [(ideal.t_a, "ACCEL -> RUN"), (ideal.t_d, "RUN -> DECEL")]
+    if ideal.triangle:
+        marks = [(ideal.t_a, "ACCEL -> DECEL")]
+    for t, label in marks:
         ax_rate.axvline(t, color="0.8", ls=":")
         ax_rate.text(t, 0, f" {label}", rotation=90, va="bottom", fontsize=8, color="0.4")
     ax_rate.set_ylabel("step rate (steps/s)")
