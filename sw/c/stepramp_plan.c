@@ -169,10 +169,11 @@ static double ramp_interval(const ramp_t *r, int64_t i)
     return t;
 }
 
-stepramp_err_t stepramp_plan_move(stepramp_plan_t *plan, int64_t steps, double accel, double decel, double speed,
-                                  double spr, double fclk, uint32_t prescale)
+stepramp_err_t stepramp_plan_move_info(stepramp_plan_t *plan, stepramp_info_t *info, int64_t steps, double accel,
+                                       double decel, double speed, double spr, double fclk, uint32_t prescale)
 {
     stepramp_plan_t out;
+    stepramp_info_t inf;
     ramp_t ramp;
     stepramp_err_t err;
     int64_t n;
@@ -245,8 +246,31 @@ stepramp_err_t stepramp_plan_move(stepramp_plan_t *plan, int64_t steps, double a
     out.accel_seed = 0;
     out.decel_seed = 0;
     out.cruise = 0;
+    inf.f_tick = f_tick;
+    inf.length = (length > 0) ? length : 0;
+    inf.a = a;
+    inf.d = d;
+    inf.v = v;
+    inf.x_a = 0.0;
+    inf.x_d = 0.0;
+    inf.v_peak = 0.0;
+    inf.triangle = 1;
+    inf.c0 = 0.0;
+    inf.cd0 = 0.0;
+    inf.m0 = 0;
+    inf.min_interval = (double)INFINITY;
+    inf.t_first = 0.0;
+    inf.t_last = 0.0;
+    inf.t_sa = 0.0;
+    inf.t_sd = 0.0;
+    inf.t_accel_seed = 0.0;
+    inf.t_decel_seed = 0.0;
+    inf.t_cruise = 0.0;
     if (length < 1) { /* N = 0 or 1: no interval, nothing for the engine to compute */
         *plan = out;
+        if (info != NULL) {
+            *info = inf;
+        }
         return STEPRAMP_OK;
     }
 
@@ -269,33 +293,56 @@ stepramp_err_t stepramp_plan_move(stepramp_plan_t *plan, int64_t steps, double a
     m0 = length - sd - 1;
     out.sa = (uint32_t)sa;
     out.sd = (uint32_t)sd;
+    inf.x_a = ramp.x_a;
+    inf.x_d = ramp.x_d;
+    inf.v_peak = ramp.v_peak;
+    inf.triangle = ramp.triangle;
+    inf.c0 = ramp.k_a;
+    inf.cd0 = ramp.k_d;
+    inf.m0 = m0;
+    inf.min_interval = min_interval;
+    inf.t_first = ramp_interval(&ramp, 1);
+    inf.t_last = ramp_interval(&ramp, length);
+    inf.t_sa = ramp_interval(&ramp, sa);
+    inf.t_sd = ramp_interval(&ramp, sd);
+    inf.t_accel_seed = stepramp_seed_factor * ramp.k_a;
+    inf.t_decel_seed = (m0 >= 1) ? stepramp_seed_factor * ramp.k_d * stepramp_decel_product(m0) : 0.0;
+    inf.t_cruise = f_tick / v;
 
     /* Plan's fields in the order Python evaluates them (the first overflow wins; all are EOVERFLOW) */
-    err = to_fixed(ramp_interval(&ramp, 1), TWO_POW_16, TWO_POW_48, &out.c_first);
+    err = to_fixed(inf.t_first, TWO_POW_16, TWO_POW_48, &out.c_first);
     if (err == STEPRAMP_OK) {
-        err = to_fixed(ramp_interval(&ramp, length), TWO_POW_16, TWO_POW_48, &out.c_last);
+        err = to_fixed(inf.t_last, TWO_POW_16, TWO_POW_48, &out.c_last);
     }
     if (err == STEPRAMP_OK) {
-        err = to_fixed(ramp_interval(&ramp, sa), TWO_POW_16, TWO_POW_48, &out.c_sa);
+        err = to_fixed(inf.t_sa, TWO_POW_16, TWO_POW_48, &out.c_sa);
     }
     if (err == STEPRAMP_OK) {
-        err = to_fixed(ramp_interval(&ramp, sd), TWO_POW_16, TWO_POW_48, &out.c_sd);
+        err = to_fixed(inf.t_sd, TWO_POW_16, TWO_POW_48, &out.c_sd);
     }
     if (err == STEPRAMP_OK) {
-        err = to_fixed(stepramp_seed_factor * ramp.k_a, TWO_POW_16, TWO_POW_48, &out.accel_seed);
+        err = to_fixed(inf.t_accel_seed, TWO_POW_16, TWO_POW_48, &out.accel_seed);
     }
     if (err == STEPRAMP_OK && m0 >= 1) {
-        err = to_fixed(stepramp_seed_factor * ramp.k_d * stepramp_decel_product(m0), TWO_POW_16, TWO_POW_48,
-                       &out.decel_seed);
+        err = to_fixed(inf.t_decel_seed, TWO_POW_16, TWO_POW_48, &out.decel_seed);
     }
     if (err == STEPRAMP_OK) { /* plan._cruise: round(f_tick / v * 2^32) < 2^64 */
-        err = to_fixed(f_tick / v, TWO_POW_32, TWO_POW_64, &out.cruise);
+        err = to_fixed(inf.t_cruise, TWO_POW_32, TWO_POW_64, &out.cruise);
     }
     if (err != STEPRAMP_OK) {
         return err;
     }
     *plan = out;
+    if (info != NULL) {
+        *info = inf;
+    }
     return STEPRAMP_OK;
+}
+
+stepramp_err_t stepramp_plan_move(stepramp_plan_t *plan, int64_t steps, double accel, double decel, double speed,
+                                  double spr, double fclk, uint32_t prescale)
+{
+    return stepramp_plan_move_info(plan, NULL, steps, accel, decel, speed, spr, fclk, prescale);
 }
 
 const char *stepramp_strerror(stepramp_err_t err)

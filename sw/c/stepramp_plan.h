@@ -51,6 +51,35 @@ typedef struct {
 } stepramp_plan_t;
 
 /**
+ * Informative values of a planned move (not registers): Python's plan.MoveInfo field by field, then the
+ * unrounded register values (C extras, for diagnostics and the bit-for-bit parity test with Python).
+ * a, d, v are in steps/s^2 and steps/s; delays are in ticks.
+ */
+typedef struct {
+    double f_tick;       /**< fclk / prescale, ticks per second */
+    int64_t length;      /**< L = N - 1 intervals (0 for N <= 1) */
+    double a;            /**< acceleration, steps/s^2 */
+    double d;            /**< deceleration, steps/s^2 */
+    double v;            /**< cruise speed, steps/s */
+    double x_a;          /**< end of the acceleration, steps */
+    double x_d;          /**< start of the deceleration, steps */
+    double v_peak;       /**< peak speed (v, or the triangle's peak), steps/s */
+    int triangle;        /**< 1 when the move never reaches v (also for N <= 1) */
+    double c0;           /**< f_tick sqrt(2 / a) */
+    double cd0;          /**< f_tick sqrt(2 / d) */
+    int64_t m0;          /**< decel recurrence start index L - sd - 1 (0 for N <= 1) */
+    double min_interval; /**< shortest interval f_tick / v_peak, ticks (inf for N <= 1) */
+    /* C extras: the register values before rounding, in ticks (0 where the register is 0) */
+    double t_first;      /**< exact interval 1 */
+    double t_last;       /**< exact interval L */
+    double t_sa;         /**< exact interval sa */
+    double t_sd;         /**< exact interval sd */
+    double t_accel_seed; /**< SEED_FACTOR * c0 */
+    double t_decel_seed; /**< SEED_FACTOR * cd0 * decel_product(m0), 0 when m0 < 1 */
+    double t_cruise;     /**< f_tick / v */
+} stepramp_info_t;
+
+/**
  * Result of stepramp_plan_move. Each error corresponds to one ValueError of plan.py (the comment gives
  * the start of its message); the checks run in the same order, so both report the same first error.
  */
@@ -90,6 +119,14 @@ typedef enum {
  */
 stepramp_err_t stepramp_plan_move(stepramp_plan_t *plan, int64_t steps, double accel, double decel, double speed,
                                   double spr, double fclk, uint32_t prescale);
+
+/**
+ * Like stepramp_plan_move, also filling in the informative values (Python's plan_move_info).
+ *
+ * @param info output, may be NULL; like plan, written only on success
+ */
+stepramp_err_t stepramp_plan_move_info(stepramp_plan_t *plan, stepramp_info_t *info, int64_t steps, double accel,
+                                       double decel, double speed, double spr, double fclk, uint32_t prescale);
 
 /**
  * The reason for an error in words, like plan.py's ValueError messages without the numbers.

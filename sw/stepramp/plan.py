@@ -133,7 +133,8 @@ def _check_int(name: str, value: int) -> int:
 
 def _to_fixed(name: str, ticks: float, frac: int, width: int) -> int:
     """Round a delay in ticks to an unsigned fixed-point register value, or raise ValueError."""
-    value = round(ticks * (1 << frac)) if math.isfinite(ticks) else 1 << width
+    scaled = ticks * (1 << frac)  # a huge finite delay overflows to inf here
+    value = round(scaled) if math.isfinite(scaled) else 1 << width
     if value >= 1 << width:
         raise ValueError(
             f"{name} = {ticks:.6g} ticks overflows its register (integer part >= 2^{width - frac}): "
@@ -193,7 +194,8 @@ def _cruise(f_tick: float, v: float) -> int:
     Plain doubles keep the C driver bit-identical to this one.
     """
     period = f_tick / v
-    value = round(period * (1 << FRAC_CRUISE))
+    scaled = period * (1 << FRAC_CRUISE)
+    value = round(scaled) if math.isfinite(scaled) else 1 << REG_WIDTHS["cruise"]
     if value >= 1 << REG_WIDTHS["cruise"]:
         raise ValueError(
             f"cruise = {period:.6g} ticks overflows its register (integer part >= 2^32): "

@@ -1,0 +1,424 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * Host unit tests of stepramp_plan: expected values from the physics of the move (not from the code under
+ * test), every error code, the empty moves. The bit-for-bit comparison with the Python driver is done by
+ * sw/tests/test_c_plan.py. Exit status 0 when every check passes.
+ */
+#include "stepramp_plan.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+static int g_checks;
+static int g_failures;
+
+#define CHECK(cond)                                                                                                    \
+    do {                                                                                                               \
+        g_checks++;                                                                                                    \
+        if (!(cond)) {                                                                                                 \
+            g_failures++;                                                                                              \
+            printf("%s:%d: %s: check failed: %s\n", __FILE__, __LINE__, __func__, #cond);                              \
+        }                                                                                                              \
+    } while (0)
+
+#define PI 3.141592653589793
+#define Q16 65536.0
+#define Q32 4294967296.0
+
+/* |got - want| <= tol, reported with both values */
+static int near(double got, double want, double tol)
+{
+    if (fabs(got - want) <= tol) {
+        return 1;
+    }
+    printf("    got %.17g, want %.17g (tol %.3g)\n", got, want, tol);
+    return 0;
+}
+
+/* a register value (an integer, rounded once) against the exact value: half an LSB plus a relative error */
+static int rel_near(double got, double want, double rel)
+{
+    return near(got, want, 0.5 + rel * fabs(want));
+}
+
+/* a double against a double: relative error only */
+static int rel_near_d(double got, double want, double rel)
+{
+    return near(got, want, rel * fabs(want));
+}
+
+/* The move in steps units, computed independently of the library (the physics of docs/algorithm.md). */
+typedef struct {
+    double f_tick, a, d, v, c0, cd0;
+    double length;
+} phys_t;
+
+static phys_t physics(int64_t steps, double accel, double decel, double speed, double spr, double fclk,
+                      uint32_t prescale)
+{
+    phys_t p;
+    double alpha = 2.0 * PI / spr;
+    p.f_tick = fclk / prescale;
+    p.a = accel / alpha;
+    p.d = decel / alpha;
+    p.v = speed / alpha;
+    p.c0 = p.f_tick * sqrt(2.0 / p.a);
+    p.cd0 = p.f_tick * sqrt(2.0 / p.d);
+    p.length = (double)((steps < 0 ? -steps : steps) - 1);
+    return p;
+}
+
+/* prod_{k=1..m} (4k-1)/(4k+1), by the definition */
+static double naive_product(int m)
+{
+    double p = 1.0;
+    int k;
+    for (k = 1; k <= m; k++) {
+        p *= (4.0 * k - 1.0) / (4.0 * k + 1.0);
+    }
+    return p;
+}
+
+/* Gamma(m+3/4) Gamma(5/4) / (Gamma(m+5/4) Gamma(3/4)) for large m: Gamma(5/4)/Gamma(3/4) m^-1/2 (1 - 1/(4m)),
+ * next term O(1/m^2) */
+static double asymptotic_product(double m)
+{
+    return tgamma(1.25) / tgamma(0.75) / sqrt(m) * (1.0 - 0.25 / m);
+}
+
+static void test_long_symmetric_trapezoid(void)
+{
+    /* 200 steps/rev, 1 MHz: a = d = 3183 steps/s^2, v = 1592 steps/s, n_a = n_d = 397.9 steps, L = 99999 */
+    const int64_t steps = 100000;
+    const double accel = 100.0, speed = 50.0, spr = 200.0, fclk = 1e6;
+    phys_t p = physics(steps, accel, accel, speed, spr, fclk, 1);
+    double n_a = p.v * p.v / (2.0 * p.a);
+    double x_d = p.length - n_a;
+    stepramp_plan_t plan;
+    int64_t m0;
+
+    CHECK(stepramp_plan_move(&plan, steps, accel, accel, speed, spr, fclk, 1) == STEPRAMP_OK);
+    CHECK(plan.steps == 100000 && plan.direction == 0 && plan.prescale == 1);
+    /* interval 1 of a long ramp is exactly c0 = f_tick sqrt(2 / a) (AVR446's c0, without its 0.676 factor) */
+    CHECK(near((double)plan.c_first, p.c0 * Q16, 1.0));
+    CHECK(plan.c_last == plan.c_first); /* mirror image */
+    CHECK(plan.sa == (uint32_t)floor(n_a) + 1 && plan.sa == 398);
+    CHECK(plan.sd == (uint32_t)floor(x_d) + 1);
+    CHECK(near((double)plan.cruise, p.f_tick / p.v * Q32, 1.0));
+    CHECK(near((double)plan.accel_seed, 0.6759782400672847 * p.c0 * Q16, 1.0));
+    /* interval sa: the end of the ramp from sa-1 to n_a, then cruise from n_a to sa */
+    CHECK(rel_near((double)plan.c_sa,
+                   (p.c0 * (sqrt(n_a) - sqrt((double)plan.sa - 1.0)) + ((double)plan.sa - n_a) * p.f_tick / p.v) * Q16,
+                   1e-9));
+    /* interval sd: cruise from sd-1 to x_d, then the first part of the decel ramp (L - x_d = n_a to go) */
+    CHECK(rel_near((double)plan.c_sd,
+                   ((x_d - ((double)plan.sd - 1.0)) * p.f_tick / p.v +
+                    p.cd0 * (sqrt(n_a) - sqrt(p.length - (double)plan.sd))) *
+                       Q16,
+                   1e-9));
+    /* decel recurrence value at m0 = L - sd - 1, from the Gamma-function form of the product */
+    m0 = (int64_t)p.length - plan.sd - 1;
+    CHECK(m0 == 396);
+    CHECK(rel_near((double)plan.decel_seed,
+                   0.6759782400672847 * p.cd0 *
+                       exp(lgamma(m0 + 0.75) - lgamma(m0 + 1.25) + lgamma(1.25) - lgamma(0.75)) * Q16,
+                   1e-11));
+    /* the seeds decay like cd0 / sqrt(m): 0.676 Gamma(5/4)/Gamma(3/4) = 1/2 */
+    CHECK(rel_near((double)plan.decel_seed, 0.5 * p.cd0 / sqrt((double)m0) * Q16, 1e-3));
+}
+
+static void test_asymmetric_trapezoids(void)
+{
+    /* accel/decel = 10 and 1/10; steps negative: direction 1 */
+    static const double ratios[2] = {10.0, 0.1};
+    int j;
+    for (j = 0; j < 2; j++) {
+        const double accel = 200.0, decel = 200.0 / ratios[j], speed = 30.0, spr = 400.0, fclk = 5e7;
+        const uint32_t prescale = 50;
+        const int64_t steps = -20000;
+        phys_t p = physics(steps, accel, decel, speed, spr, fclk, prescale);
+        double n_a = p.v * p.v / (2.0 * p.a);
+        double n_d = p.v * p.v / (2.0 * p.d);
+        stepramp_plan_t plan;
+
+        CHECK(n_a + n_d < p.length); /* a trapezoid */
+        CHECK(stepramp_plan_move(&plan, steps, accel, decel, speed, spr, fclk, prescale) == STEPRAMP_OK);
+        CHECK(plan.steps == 20000 && plan.direction == 1 && plan.prescale == prescale);
+        CHECK(plan.sa == (uint32_t)floor(n_a) + 1);
+        CHECK(plan.sd == (uint32_t)floor(p.length - n_d) + 1);
+        CHECK(plan.sa < plan.sd);
+        CHECK(near((double)plan.c_first, p.c0 * Q16, 1.0));
+        CHECK(near((double)plan.c_last, p.cd0 * Q16, 1.0));
+        CHECK(near((double)plan.cruise, p.f_tick / p.v * Q32, 1.0));
+        CHECK(near((double)plan.accel_seed, 0.6759782400672847 * p.c0 * Q16, 1.0));
+        /* ratio of the first intervals: sqrt(decel / accel) */
+        CHECK(rel_near_d((double)plan.c_last / (double)plan.c_first, sqrt(accel / decel), 1e-6));
+    }
+}
+
+static void test_triangle(void)
+{
+    /* L = 102, decel = 3 accel: peak at x_p = 76.5, interval 77 holds the peak (76 -> 76.5 -> 77) */
+    const double accel = 100.0, decel = 300.0, speed = 1000.0, spr = 200.0, fclk = 1e6;
+    const int64_t steps = 103;
+    phys_t p = physics(steps, accel, decel, speed, spr, fclk, 1);
+    double x_p = p.length * p.d / (p.a + p.d);
+    double peak_interval;
+    stepramp_plan_t plan;
+
+    CHECK(near(x_p, 76.5, 1e-12));
+    CHECK(p.v * p.v / (2.0 * p.a) + p.v * p.v / (2.0 * p.d) > p.length); /* too short to reach v */
+    CHECK(stepramp_plan_move(&plan, steps, accel, decel, speed, spr, fclk, 1) == STEPRAMP_OK);
+    CHECK(plan.sa == 77 && plan.sd == 77);
+    CHECK(plan.c_sa == plan.c_sd);
+    peak_interval = p.c0 * (sqrt(76.5) - sqrt(76.0)) + p.cd0 * (sqrt(102.0 - 76.5) - sqrt(102.0 - 77.0));
+    CHECK(rel_near((double)plan.c_sa, peak_interval * Q16, 1e-9));
+    /* the peak interval is at least 1 / v_peak */
+    CHECK((double)plan.c_sa >= p.f_tick / sqrt(2.0 * p.a * x_p) * Q16);
+    CHECK(near((double)plan.c_first, p.c0 * Q16, 1.0));
+    CHECK(near((double)plan.c_last, p.cd0 * Q16, 1.0));
+    /* m0 = L - sd - 1 = 24: D_24 = 0.676 cd0 prod_{k=1..24} (4k-1)/(4k+1) */
+    CHECK(near((double)plan.decel_seed, 0.6759782400672847 * p.cd0 * naive_product(24) * Q16, 1.0));
+    /* cruise is unused in a triangle but still f_tick / v (here below the MIN_INTERVAL limit: not checked) */
+    CHECK(near((double)plan.cruise, p.f_tick / p.v * Q32, 1.0));
+}
+
+static void test_triangle_symmetric_even(void)
+{
+    /* a = d, L = 10: x_p = 5 exactly, on the boundary between intervals 5 and 6: sa = sd = 6 */
+    stepramp_plan_t plan;
+    phys_t p = physics(11, 500.0, 500.0, 1e3, 200.0, 1e6, 1);
+    CHECK(stepramp_plan_move(&plan, 11, 500.0, 500.0, 1e3, 200.0, 1e6, 1) == STEPRAMP_OK);
+    CHECK(plan.sa == 6 && plan.sd == 6);
+    /* interval 6 (position 5 -> 6) is all decel: cd0 (sqrt(5) - sqrt(4)) */
+    CHECK(rel_near((double)plan.c_sa, p.cd0 * (sqrt(5.0) - 2.0) * Q16, 1e-12));
+    CHECK(plan.c_first == plan.c_last);
+    CHECK(near((double)plan.decel_seed, 0.6759782400672847 * p.cd0 * naive_product(3) * Q16, 1.0));
+}
+
+static void test_empty_and_tiny_moves(void)
+{
+    stepramp_plan_t plan;
+    /* N = 0 and N = 1: every ramp field and cruise 0, the speed limits not checked (speed far too high) */
+    static const int64_t tiny[3] = {0, 1, -1};
+    int j;
+    for (j = 0; j < 3; j++) {
+        memset(&plan, 0xA5, sizeof plan);
+        CHECK(stepramp_plan_move(&plan, tiny[j], 1.0, 1.0, 1e12, 200.0, 1e6, 7) == STEPRAMP_OK);
+        CHECK(plan.steps == (uint32_t)(tiny[j] < 0 ? -tiny[j] : tiny[j]));
+        CHECK(plan.direction == (tiny[j] < 0 ? 1u : 0u));
+        CHECK(plan.prescale == 7);
+        CHECK(plan.c_first == 0 && plan.c_last == 0 && plan.sa == 0 && plan.c_sa == 0 && plan.sd == 0 &&
+              plan.c_sd == 0 && plan.accel_seed == 0 && plan.decel_seed == 0 && plan.cruise == 0);
+    }
+    /* ... but the arguments are still checked */
+    CHECK(stepramp_plan_move(&plan, 0, 0.0, 1.0, 1.0, 200.0, 1e6, 1) == STEPRAMP_EACCEL);
+    CHECK(stepramp_plan_move(&plan, 1, 1.0, 1.0, 1.0, 200.0, 1e6, 0) == STEPRAMP_EPRESCALE);
+
+    /* N = 2: one interval, it is interval 1 and interval L: c_first = c_last = c_sa = c_sd, sa = sd = 1 */
+    {
+        phys_t p = physics(2, 1000.0, 1000.0, 50.0, 200.0, 1e6, 1);
+        CHECK(stepramp_plan_move(&plan, 2, 1000.0, 1000.0, 50.0, 200.0, 1e6, 1) == STEPRAMP_OK);
+        CHECK(plan.steps == 2 && plan.sa == 1 && plan.sd == 1);
+        CHECK(plan.c_first == plan.c_last && plan.c_sa == plan.c_first && plan.c_sd == plan.c_first);
+        CHECK(plan.decel_seed == 0); /* m0 = -1 */
+        /* a triangle peaking at 1/2: accel over 1/2 step from rest, decel over the last 1/2 step to rest */
+        CHECK(rel_near((double)plan.c_first, (p.c0 * sqrt(0.5) + p.cd0 * sqrt(0.5)) * Q16, 1e-12));
+    }
+    /* N = 3: two intervals, peak at 1: sa = sd = 2, m0 = -1 */
+    CHECK(stepramp_plan_move(&plan, -3, 1000.0, 1000.0, 50.0, 200.0, 1e6, 1) == STEPRAMP_OK);
+    CHECK(plan.steps == 3 && plan.direction == 1 && plan.sa == 2 && plan.sd == 2);
+    CHECK(plan.c_first == plan.c_last && plan.c_sa == plan.c_last && plan.decel_seed == 0);
+}
+
+static void test_longest_move(void)
+{
+    stepramp_plan_t plan;
+    /* +-(2^31 - 1) steps at 25600 steps/rev: a trapezoid with ramps of ~1.6e6 steps */
+    const double spr = 25600.0, accel = 5.0, speed = 100.0, fclk = 1e8;
+    const uint32_t prescale = 100;
+    phys_t p = physics(2147483647, accel, accel, speed, spr, fclk, prescale);
+    double n_a = p.v * p.v / (2.0 * p.a);
+    double m0;
+    CHECK(stepramp_plan_move(&plan, -STEPRAMP_MAX_STEPS, accel, accel, speed, spr, fclk, prescale) == STEPRAMP_OK);
+    CHECK(plan.steps == 2147483647u && plan.direction == 1);
+    CHECK(plan.sa == (uint32_t)floor(n_a) + 1);
+    CHECK(plan.sd == (uint32_t)floor(p.length - n_a) + 1);
+    CHECK(near((double)plan.cruise, p.f_tick / p.v * Q32, 1.0));
+    m0 = p.length - plan.sd - 1;
+    CHECK(m0 > 4e6);
+    CHECK(rel_near((double)plan.decel_seed, 0.6759782400672847 * p.cd0 * asymptotic_product(m0) * Q16, 1e-11));
+    CHECK(stepramp_plan_move(&plan, STEPRAMP_MAX_STEPS, accel, accel, speed, spr, fclk, prescale) == STEPRAMP_OK);
+    CHECK(plan.steps == 2147483647u && plan.direction == 0);
+}
+
+static void test_speed_limit_boundary(void)
+{
+    stepramp_plan_t plan;
+    const double alpha = 2.0 * PI / 200.0;
+    /* f_tick / v = 64.5 ticks: floor 64 * prescale 1 = 64 clocks is allowed, 63.5 is not */
+    CHECK(stepramp_plan_move(&plan, 1000, 1e6, 1e6, alpha * 1e6 / 64.5, 200.0, 1e6, 1) == STEPRAMP_OK);
+    CHECK(stepramp_plan_move(&plan, 1000, 1e6, 1e6, alpha * 1e6 / 63.5, 200.0, 1e6, 1) == STEPRAMP_ETOOFAST);
+    /* 32.5 ticks at prescale 2: 64 clocks allowed; 31.5 ticks: 62 clocks too few */
+    CHECK(stepramp_plan_move(&plan, 1000, 1e6, 1e6, alpha * 5e5 / 32.5, 200.0, 1e6, 2) == STEPRAMP_OK);
+    CHECK(stepramp_plan_move(&plan, 1000, 1e6, 1e6, alpha * 5e5 / 31.5, 200.0, 1e6, 2) == STEPRAMP_ETOOFAST);
+    /* prescale 65535: a one-tick interval is plenty of clocks */
+    CHECK(stepramp_plan_move(&plan, 1000, 1e3, 1e3, alpha * 1e8 / 65535.0 / 1.5, 200.0, 1e8, 65535) == STEPRAMP_OK);
+    CHECK(plan.cruise >> 32 == 1);
+}
+
+static void test_every_error(void)
+{
+    static const double bad[4] = {0.0, -1.0, NAN, INFINITY};
+    const double ok_a = 1000.0, ok_v = 50.0, ok_spr = 200.0, ok_f = 1e6;
+    stepramp_plan_t plan;
+    stepramp_plan_t before;
+    int j;
+
+    memset(&plan, 0x5A, sizeof plan);
+    before = plan;
+    for (j = 0; j < 4; j++) {
+        CHECK(stepramp_plan_move(&plan, 100, bad[j], ok_a, ok_v, ok_spr, ok_f, 1) == STEPRAMP_EACCEL);
+        CHECK(stepramp_plan_move(&plan, 100, ok_a, bad[j], ok_v, ok_spr, ok_f, 1) == STEPRAMP_EDECEL);
+        CHECK(stepramp_plan_move(&plan, 100, ok_a, ok_a, bad[j], ok_spr, ok_f, 1) == STEPRAMP_ESPEED);
+        CHECK(stepramp_plan_move(&plan, 100, ok_a, ok_a, ok_v, bad[j], ok_f, 1) == STEPRAMP_ESPR);
+        CHECK(stepramp_plan_move(&plan, 100, ok_a, ok_a, ok_v, ok_spr, bad[j], 1) == STEPRAMP_EFCLK);
+    }
+    CHECK(stepramp_plan_move(&plan, 100, ok_a, ok_a, ok_v, ok_spr, ok_f, 0) == STEPRAMP_EPRESCALE);
+    CHECK(stepramp_plan_move(&plan, 100, ok_a, ok_a, ok_v, ok_spr, ok_f, 65536) == STEPRAMP_EPRESCALE);
+    CHECK(stepramp_plan_move(&plan, 100, ok_a, ok_a, ok_v, ok_spr, ok_f, UINT32_MAX) == STEPRAMP_EPRESCALE);
+    CHECK(stepramp_plan_move(&plan, INT64_C(2147483648), ok_a, ok_a, ok_v, ok_spr, ok_f, 1) == STEPRAMP_ESTEPS);
+    CHECK(stepramp_plan_move(&plan, -INT64_C(2147483648), ok_a, ok_a, ok_v, ok_spr, ok_f, 1) == STEPRAMP_ESTEPS);
+    CHECK(stepramp_plan_move(&plan, INT64_MIN, ok_a, ok_a, ok_v, ok_spr, ok_f, 1) == STEPRAMP_ESTEPS);
+    CHECK(stepramp_plan_move(&plan, INT64_MAX, ok_a, ok_a, ok_v, ok_spr, ok_f, 1) == STEPRAMP_ESTEPS);
+    /* order: the first bad argument in plan.py's order wins */
+    CHECK(stepramp_plan_move(&plan, INT64_MAX, ok_a, 0.0, -1.0, ok_spr, ok_f, 0) == STEPRAMP_EDECEL);
+    CHECK(stepramp_plan_move(&plan, INT64_MAX, ok_a, ok_a, ok_v, ok_spr, ok_f, 0) == STEPRAMP_EPRESCALE);
+    /* c0 = 1e6 * sqrt(2 * 0.0314 / 1e-12) ~ 2.5e11 ticks > 2^32 */
+    CHECK(stepramp_plan_move(&plan, 100, 1e-12, ok_a, ok_v, ok_spr, ok_f, 1) == STEPRAMP_EOVERFLOW);
+    /* cruise period ~ 6.4e9 ticks > 2^32 on a 3-step move (the ramps' intervals still fit) */
+    CHECK(stepramp_plan_move(&plan, 3, 1e-6, 1e-6, 5e-6, ok_spr, ok_f, 1) == STEPRAMP_EOVERFLOW);
+    /* a delay of 1e305 ticks: Q32.16 of it overflows the double itself (Python raises OverflowError) */
+    CHECK(stepramp_plan_move(&plan, 100, ok_a, ok_a, 1e-297, ok_spr, 1e8, 1) == STEPRAMP_EOVERFLOW);
+    /* peak 1e5 rad/s = 3.2e6 steps/s at 1e6 ticks/s */
+    CHECK(stepramp_plan_move(&plan, 100, 1e9, 1e9, 1e5, ok_spr, ok_f, 1) == STEPRAMP_ETICK);
+    CHECK(stepramp_plan_move(&plan, 100, 1e6, 1e6, 2.0 * PI / 200.0 * 1e6 / 63.5, ok_spr, ok_f, 1) ==
+          STEPRAMP_ETOOFAST);
+    /* spr = 1: alpha = 2 pi, the smallest subnormal accel becomes 0 steps/s^2; spr = 1e10 makes 1e308 infinite */
+    CHECK(stepramp_plan_move(&plan, 100, 5e-324, ok_a, ok_v, 1.0, ok_f, 1) == STEPRAMP_EACCEL_UNITS);
+    CHECK(stepramp_plan_move(&plan, 100, 1e308, ok_a, ok_v, 1e10, ok_f, 1) == STEPRAMP_EACCEL_UNITS);
+    CHECK(stepramp_plan_move(&plan, 100, ok_a, 5e-324, ok_v, 1.0, ok_f, 1) == STEPRAMP_EDECEL_UNITS);
+    CHECK(stepramp_plan_move(&plan, 100, ok_a, ok_a, 1e308, 1e10, ok_f, 1) == STEPRAMP_ESPEED_UNITS);
+    CHECK(stepramp_plan_move(&plan, 100, ok_a, ok_a, ok_v, ok_spr, 5e-324, 3) == STEPRAMP_EFTICK);
+    /* spr = 2 pi (alpha = 1): d = 5e-324 against a = 1e300 puts the peak at x_p = 0: v_peak = 0 */
+    CHECK(stepramp_plan_move(&plan, 10, 1e300, 5e-324, 1.0, 2.0 * PI, ok_f, 1) == STEPRAMP_EPEAK);
+    CHECK(memcmp(&plan, &before, sizeof plan) == 0); /* never written on error */
+    CHECK(stepramp_plan_move(NULL, 100, ok_a, ok_a, ok_v, ok_spr, ok_f, 1) == STEPRAMP_ENULL);
+}
+
+static void test_strerror(void)
+{
+    int e;
+    int k;
+    for (e = STEPRAMP_OK; e <= STEPRAMP_ENULL; e++) {
+        const char *s = stepramp_strerror((stepramp_err_t)e);
+        CHECK(s != NULL && s[0] != '\0' && strcmp(s, "unknown error") != 0);
+        for (k = STEPRAMP_OK; k < e; k++) {
+            CHECK(strcmp(s, stepramp_strerror((stepramp_err_t)k)) != 0);
+        }
+    }
+    CHECK(strcmp(stepramp_strerror((stepramp_err_t)999), "unknown error") == 0);
+    CHECK(strstr(stepramp_strerror(STEPRAMP_EOVERFLOW), "overflows its register") != NULL);
+    CHECK(strstr(stepramp_strerror(STEPRAMP_ETOOFAST), "speed too high for the hardware") != NULL);
+}
+
+static void test_decel_product_and_constants(void)
+{
+    int64_t m;
+    double prev = 1.0;
+    CHECK(stepramp_decel_product(0) == 1.0);
+    CHECK(stepramp_decel_product(-5) == 1.0);
+    CHECK(stepramp_decel_product(1) == 3.0 / 5.0);
+    CHECK(stepramp_decel_product(256) == naive_product(256));
+    /* the series takes over seamlessly at 257 */
+    CHECK(rel_near_d(stepramp_decel_product(257), naive_product(257), 1e-14));
+    CHECK(rel_near_d(stepramp_decel_product(2000), naive_product(2000), 1e-13));
+    /* against the Gamma form (lgamma differences lose digits as m grows: looser tolerance) */
+    CHECK(rel_near_d(stepramp_decel_product(1000000),
+                   exp(lgamma(1000000.75) - lgamma(1000001.25) + lgamma(1.25) - lgamma(0.75)), 1e-8));
+    m = 2147483647;
+    CHECK(rel_near_d(stepramp_decel_product(m), asymptotic_product((double)m), 1e-13));
+    CHECK(rel_near_d(stepramp_decel_product(100000), asymptotic_product(100000.0), 1e-11));
+    for (m = 250; m < 270; m++) { /* decreasing across the switch */
+        double p = stepramp_decel_product(m);
+        CHECK(p < prev);
+        prev = p;
+    }
+    CHECK(rel_near_d(stepramp_seed_factor, tgamma(0.75) / (2.0 * tgamma(1.25)), 1e-15));
+    CHECK(rel_near_d(stepramp_lgamma_ratio_0, lgamma(1.25) - lgamma(0.75), 1e-14));
+}
+
+static void test_move_info(void)
+{
+    stepramp_plan_t plan;
+    stepramp_plan_t plan2;
+    stepramp_info_t info;
+    stepramp_info_t before;
+    phys_t p = physics(103, 100.0, 300.0, 1000.0, 200.0, 1e6, 1);
+
+    /* the triangle of test_triangle: the same plan as stepramp_plan_move, and the informative values */
+    CHECK(stepramp_plan_move_info(&plan, &info, 103, 100.0, 300.0, 1000.0, 200.0, 1e6, 1) == STEPRAMP_OK);
+    CHECK(stepramp_plan_move(&plan2, 103, 100.0, 300.0, 1000.0, 200.0, 1e6, 1) == STEPRAMP_OK);
+    CHECK(memcmp(&plan, &plan2, sizeof plan) == 0);
+    CHECK(info.length == 102 && info.triangle == 1 && info.m0 == 24);
+    CHECK(info.f_tick == 1e6);
+    CHECK(rel_near_d(info.a, p.a, 1e-15) && rel_near_d(info.d, p.d, 1e-15) && rel_near_d(info.v, p.v, 1e-15));
+    CHECK(near(info.x_a, 76.5, 1e-12) && info.x_d == info.x_a);
+    CHECK(rel_near_d(info.v_peak, sqrt(2.0 * p.a * 76.5), 1e-14));
+    CHECK(rel_near_d(info.min_interval, p.f_tick / info.v_peak, 1e-15));
+    CHECK(info.c0 == p.c0 && info.cd0 == p.cd0);
+    /* each register is its unrounded value, rounded once */
+    CHECK((double)plan.c_first == rint(info.t_first * Q16) && (double)plan.c_last == rint(info.t_last * Q16));
+    CHECK((double)plan.c_sa == rint(info.t_sa * Q16) && (double)plan.c_sd == rint(info.t_sd * Q16));
+    CHECK((double)plan.accel_seed == rint(info.t_accel_seed * Q16));
+    CHECK((double)plan.decel_seed == rint(info.t_decel_seed * Q16));
+    CHECK((double)plan.cruise == rint(info.t_cruise * Q32));
+
+    /* a trapezoid: x_a = n_a, x_d = L - n_d, v_peak = v */
+    CHECK(stepramp_plan_move_info(&plan, &info, 100000, 100.0, 100.0, 50.0, 200.0, 1e6, 1) == STEPRAMP_OK);
+    CHECK(info.triangle == 0 && info.v_peak == info.v && info.length == 99999);
+    CHECK(rel_near_d(info.x_a, info.v * info.v / (2.0 * info.a), 1e-15));
+    CHECK(rel_near_d(info.x_d, 99999.0 - info.v * info.v / (2.0 * info.d), 1e-15));
+
+    /* N = 1: no interval; info like Python's MoveInfo (length 0, triangle, min_interval inf) */
+    CHECK(stepramp_plan_move_info(&plan, &info, -1, 100.0, 100.0, 50.0, 200.0, 1e6, 4) == STEPRAMP_OK);
+    CHECK(info.length == 0 && info.triangle == 1 && info.m0 == 0 && isinf(info.min_interval));
+    CHECK(info.f_tick == 250000.0 && info.x_a == 0.0 && info.c0 == 0.0 && info.t_cruise == 0.0);
+
+    /* NULL info is allowed; on error info is not written */
+    CHECK(stepramp_plan_move_info(&plan, NULL, 100, 100.0, 100.0, 50.0, 200.0, 1e6, 1) == STEPRAMP_OK);
+    memset(&info, 0x3C, sizeof info);
+    before = info;
+    CHECK(stepramp_plan_move_info(&plan, &info, 100, 1e9, 1e9, 1e5, 200.0, 1e6, 1) == STEPRAMP_ETICK);
+    CHECK(memcmp(&info, &before, sizeof info) == 0);
+    CHECK(stepramp_plan_move_info(NULL, &info, 100, 100.0, 100.0, 50.0, 200.0, 1e6, 1) == STEPRAMP_ENULL);
+}
+
+int main(void)
+{
+    test_long_symmetric_trapezoid();
+    test_asymmetric_trapezoids();
+    test_triangle();
+    test_triangle_symmetric_even();
+    test_empty_and_tiny_moves();
+    test_longest_move();
+    test_speed_limit_boundary();
+    test_every_error();
+    test_strerror();
+    test_decel_product_and_constants();
+    test_move_info();
+    printf("test_stepramp_plan: %d checks, %d failed\n", g_checks, g_failures);
+    return g_failures == 0 ? 0 : 1;
+}
