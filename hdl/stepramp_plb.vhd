@@ -45,34 +45,6 @@ architecture rtl of stepramp_plb is
   signal err      : std_logic;
   signal rdata    : std_logic_vector(31 downto 0);
 
-  signal start      : std_logic;
-  signal soft_stop  : std_logic;
-  signal hard_stop  : std_logic;
-  signal steps      : std_logic_vector(30 downto 0);
-  signal direction  : std_logic;
-  signal prescale   : std_logic_vector(15 downto 0);
-  signal c_first    : std_logic_vector(47 downto 0);
-  signal c_last     : std_logic_vector(47 downto 0);
-  signal sa         : std_logic_vector(30 downto 0);
-  signal c_sa       : std_logic_vector(47 downto 0);
-  signal sd         : std_logic_vector(30 downto 0);
-  signal c_sd       : std_logic_vector(47 downto 0);
-  signal accel_seed : std_logic_vector(47 downto 0);
-  signal decel_seed : std_logic_vector(47 downto 0);
-  signal cruise     : std_logic_vector(63 downto 0);
-  signal stop_ratio : std_logic_vector(31 downto 0);
-  signal pos_load   : std_logic;
-  signal pos_value  : std_logic_vector(31 downto 0);
-  signal busy       : std_logic;
-  signal done       : std_logic;
-  signal error      : std_logic;
-  signal err_code   : std_logic_vector(3 downto 0);
-  signal state      : std_logic_vector(1 downto 0);
-  signal dir_i      : std_logic;
-  signal position   : std_logic_vector(31 downto 0);
-  signal step_count : std_logic_vector(30 downto 0);
-  signal cur_delay  : std_logic_vector(31 downto 0);
-
 begin
 
   -- One strobe per access: CS is still high in the cycle of the ack, so the strobe cycle blocks the next one.
@@ -100,82 +72,21 @@ begin
   ip2bus_data  <= rdata when rd_r = '1' else
                   (others => '0');
 
-  regfile_inst : entity work.stepramp_regfile
+  core_inst : entity work.stepramp_core
     port map (
-      clk            => clk,
-      rst            => rst,
-      wr             => wr,
-      rd             => rd,
-      addr           => bus2ip_addr(C_ADDR_BITS - 1 downto 0),
-      wdata          => bus2ip_data,
-      be             => bus2ip_be,
-      rdata          => rdata,
-      ack            => ack,
-      err            => err,
-      irq            => irq,
-      start          => start,
-      soft_stop      => soft_stop,
-      hard_stop      => hard_stop,
-      steps          => steps,
-      direction      => direction,
-      prescale       => prescale,
-      c_first        => c_first,
-      c_last         => c_last,
-      sa             => sa,
-      c_sa           => c_sa,
-      sd             => sd,
-      c_sd           => c_sd,
-      accel_seed     => accel_seed,
-      decel_seed     => decel_seed,
-      cruise         => cruise,
-      stop_ratio     => stop_ratio,
-      pos_load       => pos_load,
-      pos_value      => pos_value,
-      eng_busy       => busy,
-      eng_done       => done,
-      eng_error      => error,
-      eng_err_code   => err_code,
-      eng_state      => state,
-      eng_dir        => dir_i,
-      eng_position   => position,
-      eng_step_count => step_count,
-      eng_cur_delay  => cur_delay
+      clk   => clk,
+      rst   => rst,
+      wr    => wr,
+      rd    => rd,
+      addr  => bus2ip_addr(C_ADDR_BITS - 1 downto 0),
+      wdata => bus2ip_data,
+      be    => bus2ip_be,
+      rdata => rdata,
+      ack   => ack,
+      err   => err,
+      irq   => irq,
+      step  => step,
+      dir   => dir
     );
-
-  engine_inst : entity work.stepramp_engine
-    port map (
-      clk        => clk,
-      rst        => rst,
-      start      => start,
-      soft_stop  => soft_stop,
-      hard_stop  => hard_stop,
-      steps      => steps,
-      direction  => direction,
-      prescale   => prescale,
-      c_first    => c_first,
-      c_last     => c_last,
-      sa         => sa,
-      c_sa       => c_sa,
-      sd         => sd,
-      c_sd       => c_sd,
-      accel_seed => accel_seed,
-      decel_seed => decel_seed,
-      cruise     => cruise,
-      stop_ratio => stop_ratio,
-      pos_load   => pos_load,
-      pos_value  => pos_value,
-      step       => step,
-      dir        => dir_i,
-      busy       => busy,
-      done       => done,
-      error      => error,
-      err_code   => err_code,
-      state      => state,
-      position   => position,
-      step_count => step_count,
-      cur_delay  => cur_delay
-    );
-
-  dir <= dir_i;
 
 end architecture rtl;

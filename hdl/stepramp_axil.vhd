@@ -1,0 +1,199 @@
+-- SPDX-License-Identifier: MIT
+-- stepramp_axil: the stepramp core with an AXI4-Lite slave (ports s_axil_*, for Vivado / MicroBlaze on AXI).
+--
+-- The write address and write data channels are accepted independently (each is held until both are there);
+-- reads and writes are independent too and may arrive together: the core's register port takes one access per
+-- clock, and when a read and a write are both ready the one that did not go last goes first (no starvation).
+-- A response is given one clock after its access and held until the master takes it (backpressure on B and R).
+-- Unmapped offsets answer SLVERR. aresetn is synchronous, active low (the core sees rst = not aresetn).
+
+library ieee;
+  use ieee.std_logic_1164.all;
+
+library work;
+  use work.stepramp_regs_pkg.all;
+
+entity stepramp_axil is
+  port (
+    aclk    : in    std_logic;
+    aresetn : in    std_logic;
+    -- AXI4-Lite slave.
+    s_axil_awaddr  : in    std_logic_vector(C_ADDR_BITS - 1 downto 0);
+    s_axil_awprot  : in    std_logic_vector(2 downto 0);
+    s_axil_awvalid : in    std_logic;
+    s_axil_awready : out   std_logic;
+    s_axil_wdata   : in    std_logic_vector(31 downto 0);
+    s_axil_wstrb   : in    std_logic_vector(3 downto 0);
+    s_axil_wvalid  : in    std_logic;
+    s_axil_wready  : out   std_logic;
+    s_axil_bresp   : out   std_logic_vector(1 downto 0);
+    s_axil_bvalid  : out   std_logic;
+    s_axil_bready  : in    std_logic;
+    s_axil_araddr  : in    std_logic_vector(C_ADDR_BITS - 1 downto 0);
+    s_axil_arprot  : in    std_logic_vector(2 downto 0);
+    s_axil_arvalid : in    std_logic;
+    s_axil_arready : out   std_logic;
+    s_axil_rdata   : out   std_logic_vector(31 downto 0);
+    s_axil_rresp   : out   std_logic_vector(1 downto 0);
+    s_axil_rvalid  : out   std_logic;
+    s_axil_rready  : in    std_logic;
+    -- Interrupt and motor outputs.
+    irq  : out   std_logic;
+    step : out   std_logic;
+    dir  : out   std_logic
+  );
+end entity stepramp_axil;
+
+architecture rtl of stepramp_axil is
+
+  constant C_OKAY   : std_logic_vector(1 downto 0) := "00";
+  constant C_SLVERR : std_logic_vector(1 downto 0) := "10";
+
+  signal rst : std_logic;
+
+  -- Held requests.
+  signal aw_full : std_logic;
+  signal w_full  : std_logic;
+  signal ar_full : std_logic;
+  signal awaddr  : std_logic_vector(C_ADDR_BITS - 1 downto 0);
+  signal araddr  : std_logic_vector(C_ADDR_BITS - 1 downto 0);
+  signal wdata   : std_logic_vector(31 downto 0);
+  signal wstrb   : std_logic_vector(3 downto 0);
+
+  -- Accesses in flight: issued this clock, answered by the core next clock.
+  signal wr          : std_logic;
+  signal rd          : std_logic;
+  signal wr_pending  : std_logic; -- a write was issued last clock
+  signal rd_pending  : std_logic; -- a read was issued last clock
+  signal last_was_rd : std_logic;
+
+  -- Responses.
+  signal bvalid : std_logic;
+  signal bresp  : std_logic_vector(1 downto 0);
+  signal rvalid : std_logic;
+  signal rresp  : std_logic_vector(1 downto 0);
+  signal rdata  : std_logic_vector(31 downto 0);
+
+  -- Core register port.
+  signal addr     : std_logic_vector(C_ADDR_BITS - 1 downto 0);
+  signal core_rd  : std_logic_vector(31 downto 0);
+  signal core_ack : std_logic;
+  signal core_err : std_logic;
+  signal wr_ready : std_logic;
+  signal rd_ready : std_logic;
+
+begin
+
+  rst <= not aresetn;
+
+  -- A write may go when its address and data are held and its response channel is free; a read likewise.
+  wr_ready <= aw_full and w_full and not bvalid and not wr_pending;
+  rd_ready <= ar_full and not rvalid and not rd_pending;
+
+  -- One access per clock; on a tie the kind that did not go last goes first.
+  wr <= wr_ready and not (rd_ready and not last_was_rd);
+  rd <= rd_ready and not wr;
+
+  addr <= awaddr when wr = '1' else
+          araddr;
+
+  axil_proc : process (aclk) is
+  begin
+
+    if rising_edge(aclk) then
+      -- Accept address and data (ready is high while the holding register is empty).
+      if (aw_full = '0' and s_axil_awvalid = '1') then
+        aw_full <= '1';
+        awaddr  <= s_axil_awaddr;
+      end if;
+
+      if (w_full = '0' and s_axil_wvalid = '1') then
+        w_full <= '1';
+        wdata  <= s_axil_wdata;
+        wstrb  <= s_axil_wstrb;
+      end if;
+
+      if (ar_full = '0' and s_axil_arvalid = '1') then
+        ar_full <= '1';
+        araddr  <= s_axil_araddr;
+      end if;
+
+      wr_pending <= wr;
+      rd_pending <= rd;
+
+      if (wr = '1') then
+        aw_full     <= '0';
+        w_full      <= '0';
+        last_was_rd <= '0';
+      end if;
+
+      if (rd = '1') then
+        ar_full     <= '0';
+        last_was_rd <= '1';
+      end if;
+
+      -- The core answers the access of the previous clock.
+      if (wr_pending = '1' and core_ack = '1') then
+        bvalid <= '1';
+        bresp  <= C_OKAY;
+
+        if (core_err = '1') then
+          bresp <= C_SLVERR;
+        end if;
+      elsif (s_axil_bready = '1') then
+        bvalid <= '0';
+      end if;
+
+      if (rd_pending = '1' and core_ack = '1') then
+        rvalid <= '1';
+        rdata  <= core_rd;
+        rresp  <= C_OKAY;
+
+        if (core_err = '1') then
+          rresp <= C_SLVERR;
+        end if;
+      elsif (s_axil_rready = '1') then
+        rvalid <= '0';
+      end if;
+
+      if (rst = '1') then
+        aw_full     <= '0';
+        w_full      <= '0';
+        ar_full     <= '0';
+        wr_pending  <= '0';
+        rd_pending  <= '0';
+        last_was_rd <= '0';
+        bvalid      <= '0';
+        rvalid      <= '0';
+      end if;
+    end if;
+
+  end process axil_proc;
+
+  s_axil_awready <= not aw_full;
+  s_axil_wready  <= not w_full;
+  s_axil_arready <= not ar_full;
+  s_axil_bvalid  <= bvalid;
+  s_axil_bresp   <= bresp;
+  s_axil_rvalid  <= rvalid;
+  s_axil_rresp   <= rresp;
+  s_axil_rdata   <= rdata;
+
+  core_inst : entity work.stepramp_core
+    port map (
+      clk   => aclk,
+      rst   => rst,
+      wr    => wr,
+      rd    => rd,
+      addr  => addr,
+      wdata => wdata,
+      be    => wstrb,
+      rdata => core_rd,
+      ack   => core_ack,
+      err   => core_err,
+      irq   => irq,
+      step  => step,
+      dir   => dir
+    );
+
+end architecture rtl;

@@ -1,0 +1,136 @@
+# SPDX-License-Identifier: MIT
+"""Testbench for the peripheral tops (stepramp_plb, stepramp_axil): clock, reset, a bus master, monitors.
+
+The bus master is tb/ipif.py's IpifMaster for the PLB-like top, or cocotbext-axi's AxiLiteMaster (wrapped to the
+driver's read/write interface) for the AXI4-Lite top; with `idle` the masters insert idle cycles and, on AXI,
+backpressure on every channel. The engine's own start edge (edge 0 of the model) is taken from the rising edge of
+the core's busy, so step edges are compared with stepramp.model whatever the bus timing.
+"""
+
+from __future__ import annotations
+
+import itertools
+import random
+from collections.abc import Iterator
+from typing import Any
+
+from cocotb.clock import Clock
+from cocotb.triggers import ClockCycles, FallingEdge, First, RisingEdge, Timer
+
+from ipif import IpifError, IpifMaster
+from stepramp.driver import Status, StepRamp
+from stepramp.plan import Plan
+from tbutil import CLK_PERIOD_NS, cocotb, now_cycles
+
+
+class AxilError(Exception):
+    """The AXI4-Lite slave answered SLVERR (or DECERR)."""
+
+
+class AxilAccess:
+    """The driver's register access over cocotbext-axi's AxiLiteMaster (strobes as runs of byte writes)."""
+
+    def __init__(self, master: Any) -> None:
+        self.master = master
+
+    async def read(self, addr: int) -> int:
+        resp = await self.master.read(addr, 4)
+        if int(resp.resp) != 0:
+            raise AxilError(f"read {addr:#x}: resp {int(resp.resp)}")
+        return int.from_bytes(resp.data, "little")
+
+    async def write(self, addr: int, value: int, strobe: int = 0xF) -> None:
+        data = (value & 0xFFFF_FFFF).to_bytes(4, "little")
+        lanes = [b for b in range(4) if strobe >> b & 1]
+        # Contiguous runs of enabled lanes, each one AXI write with the matching WSTRB.
+        runs: list[list[int]] = []
+        for b in lanes:
+            if runs and runs[-1][-1] == b - 1:
+                runs[-1].append(b)
+            else:
+                runs.append([b])
+        for run in runs:
+            resp = await self.master.write(addr + run[0], data[run[0] : run[-1] + 1])
+            if int(resp.resp) != 0:
+                raise AxilError(f"write {addr:#x}: resp {int(resp.resp)}")
+
+
+BusError = (IpifError, AxilError)
+
+
+def pauses(seed: int) -> Iterator[int]:
+    """A reproducible pause pattern: 1 = idle / not ready this cycle."""
+    rng = random.Random(seed)
+    return itertools.cycle([int(rng.random() < 0.35) for _ in range(97)])
+
+
+class PeripheralTb:
+    """One of the two tops, with its bus master, a STEP monitor and the engine-start monitor."""
+
+    def __init__(self, dut: Any, top: str, idle: bool = False, seed: int = 1) -> None:
+        self.dut = dut
+        self.top = top
+        self.idle = idle
+        self.seed = seed
+        self.clk = dut.aclk if top == "stepramp_axil" else dut.clk
+        Clock(self.clk, CLK_PERIOD_NS, unit="ns").start()
+        self.bus: Any = None
+        self.step_edges: list[int] = []
+        self.start_edges: list[int] = []
+
+    async def reset(self) -> None:
+        if self.top == "stepramp_axil":
+            self.dut.aresetn.value = 0
+            await ClockCycles(self.clk, 3)
+            from cocotbext.axi import AxiLiteBus, AxiLiteMaster
+
+            master = AxiLiteMaster(AxiLiteBus.from_prefix(self.dut, "s_axil"), self.clk, self.dut.aresetn, False)
+            if self.idle:
+                for i, ch in enumerate(
+                    (master.write_if.aw_channel, master.write_if.w_channel, master.write_if.b_channel)
+                ):
+                    ch.set_pause_generator(pauses(self.seed + i))
+                for i, ch in enumerate((master.read_if.ar_channel, master.read_if.r_channel)):
+                    ch.set_pause_generator(pauses(self.seed + 10 + i))
+            self.bus = AxilAccess(master)
+            await FallingEdge(self.clk)
+            self.dut.aresetn.value = 1
+        else:
+            self.bus = IpifMaster(self.dut, self.clk, CLK_PERIOD_NS, idle=pauses(self.seed) if self.idle else None)
+            self.dut.rst.value = 1
+            await ClockCycles(self.clk, 3)
+            await FallingEdge(self.clk)
+            self.dut.rst.value = 0
+        await ClockCycles(self.clk, 2)
+        cocotb.start_soon(self._monitor(self.dut.step, self.step_edges))
+        cocotb.start_soon(self._monitor(self.dut.core_inst.busy, self.start_edges))
+
+    @staticmethod
+    async def _monitor(signal: Any, edges: list[int]) -> None:
+        while True:
+            await RisingEdge(signal)
+            edges.append(now_cycles())
+
+    def driver(self, plan_args: dict[str, Any] | None = None) -> StepRamp:
+        args = plan_args or {"fclk": 1e6, "spr": 200.0, "prescale": 1}
+        return StepRamp(self.bus, fclk=args["fclk"], spr=args["spr"], prescale=args["prescale"])
+
+    async def irq_or(self, cycles: int) -> None:
+        """Idle between status polls: until irq rises, or at most `cycles` clocks."""
+        await First(RisingEdge(self.dut.irq), Timer(cycles * CLK_PERIOD_NS, unit="ns"))
+
+    def edges_since(self, first_step: int, first_start: int) -> list[int]:
+        """Step edges of the move whose engine start was the first one recorded at or after first_start."""
+        start = self.start_edges[first_start]
+        return [e - start for e in self.step_edges[first_step:]]
+
+    async def run_plan(self, drv: StepRamp, plan: Plan) -> tuple[list[int], Status]:
+        """Program, start, wait for done (interrupt-driven); step edges counted from the engine's start edge."""
+        await drv.program(plan)
+        n_steps, n_starts = len(self.step_edges), len(self.start_edges)
+        await drv.start()
+        status = await drv.wait_done(idle=lambda: self.irq_or(20_000))
+        return self.edges_since(n_steps, n_starts), status
+
+
+__all__ = ["AxilAccess", "AxilError", "BusError", "PeripheralTb", "pauses"]
