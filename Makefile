@@ -11,13 +11,14 @@ VHDL  := $(wildcard hdl/*.vhd)
 export GHDL_BACKEND ?= $(if $(wildcard /usr/bin/ghdl-llvm),llvm,mcode)
 
 .DEFAULT_GOAL := test
-.PHONY: setup test lint synth-check demo waves clean help
+.PHONY: setup test lint synth-check synth demo clean help
 
 help:
 	@echo "make test         lint, synthesis check and the whole regression (pytest -n $(JOBS))"
 	@echo "make demo         simulate the AVR446 demo move on the RTL, write build/demo/"
 	@echo "make lint         ruff check, ruff format --check, vsg"
 	@echo "make synth-check  every RTL file under --std=93c and --std=08, ghdl synth of each top, no latch"
+	@echo "make synth        size and fmax: yosys iCE40 / xc7, nextpnr HX8K / UP5K -> build/synth/report.json"
 	@echo "make clean        remove build/ (keeps .venv)"
 
 setup:
@@ -32,7 +33,11 @@ synth-check: setup
 	$(PY) -m stepramp.rtlcheck --out build/synth_check
 
 test: lint
-	$(PY) -m pytest -n $(JOBS) -q
+	$(PY) -m pytest -n $(JOBS) -rA --durations=5
+
+synth:
+	@scripts/bootstrap.sh $(VENV) synth
+	$(PY) -m stepramp.synth --out build/synth
 
 demo: setup
 	$(PY) -m stepramp.demo --out build/demo

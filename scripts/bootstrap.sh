@@ -1,13 +1,22 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
-# Make sure what the regression needs is here: python3 with venv, GHDL, then the .venv with pinned packages.
+# Make sure what the regression needs is here: python3 with venv, GHDL, yosys, then the .venv with pinned
+# packages; with "synth" also nextpnr-ice40 (for `make synth`).
 # Installs Debian packages only when they are missing and we are root; otherwise stops with what to install.
+# Usage: scripts/bootstrap.sh [VENV] [synth]
 set -euo pipefail
 venv=${1:-.venv}
+what=${2:-test}
 
 need_apt=()
 python3 -c 'import ensurepip, venv' 2>/dev/null || need_apt+=(python3-venv)
 command -v ghdl >/dev/null 2>&1 || need_apt+=(ghdl)
+command -v yosys >/dev/null 2>&1 || need_apt+=(yosys)
+command -v make >/dev/null 2>&1 || need_apt+=(make)
+command -v gcc >/dev/null 2>&1 || need_apt+=(gcc)
+if [ "$what" = synth ]; then
+  command -v nextpnr-ice40 >/dev/null 2>&1 || need_apt+=(nextpnr-ice40 fpga-icestorm)
+fi
 
 if [ ${#need_apt[@]} -gt 0 ]; then
   if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
@@ -18,7 +27,7 @@ if [ ${#need_apt[@]} -gt 0 ]; then
   else
     echo "bootstrap: missing ${need_apt[*]}." >&2
     echo "  Install them first, e.g.: sudo apt-get install ${need_apt[*]}" >&2
-    echo "  (GHDL 2.0 or newer with its VPI library; Debian 12's 'ghdl' package is what this project is tested with.)" >&2
+    echo "  (GHDL 2.0 or newer with its VPI library, and yosys: Debian 12's packages are what this project is tested with.)" >&2
     exit 1
   fi
 fi

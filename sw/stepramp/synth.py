@@ -1,0 +1,211 @@
+# SPDX-License-Identifier: MIT
+"""Synthesis report: size and speed of the tops with open tools (`make synth`).
+
+For each top: `ghdl synth` to Verilog, then yosys `synth_ice40` (iCE40 LUT4 / FF / carry counts), nextpnr-ice40
+for HX8K and UP5K (maximum clock frequency), and yosys `synth_xilinx -family xc7` (LUT / FF counts; no Xilinx
+timing here). Writes build/synth/report.json as
+    {"<top>": {"ice40_hx8k": {"lut4", "ff", "carry", "fmax_mhz"}, "ice40_up5k": {...}, "xc7": {"lut", "ff"}}}
+and build/synth/report.md.
+
+    python -m stepramp.synth [--out DIR] [--no-pnr] [TOP ...]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any
+
+from stepramp.hdl import SYNTH_TOPS
+from stepramp.rtlcheck import analyse, synth
+
+#: The tops of the report (the peripheral as users instantiate it).
+REPORT_TOPS = ("stepramp_plb", "stepramp_axil")
+
+#: nextpnr devices: name -> (nextpnr device flag, package).
+ICE40_DEVICES = {"ice40_hx8k": ("--hx8k", "ct256"), "ice40_up5k": ("--up5k", "sg48")}
+
+
+def _run(cmd: list[str], cwd: Path, log: Path) -> str:
+    res = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, check=False)
+    log.write_text(res.stdout + res.stderr)
+    if res.returncode != 0:
+        raise RuntimeError(f"{cmd[0]} failed (see {log}):\n{res.stderr[-2000:]}")
+    return res.stdout + res.stderr
+
+
+def _cells(stat: str) -> dict[str, int]:
+    """Cell counts from the last `stat` in a yosys log."""
+    block = stat[stat.rfind("Number of cells:") :]
+    return {m.group(1): int(m.group(2)) for m in re.finditer(r"^\s+(\S+)\s+(\d+)\s*$", block, re.M)}
+
+
+def netlist(top: str, out: Path) -> Path:
+    """ghdl synth of a top to Verilog in out/ (no latch: synth refuses them); returns the .v path."""
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        errors = analyse("08", work) or synth(top, SYNTH_TOPS.get(top, {}), work, out)
+    if errors:
+        raise RuntimeError("\n".join(errors))
+    return out / f"{top}.v"
+
+
+def ice40_cells(top: str, verilog: Path, out: Path) -> tuple[dict[str, int], Path]:
+    """yosys synth_ice40: (cell counts, netlist json). Fails on a latch."""
+    json_path = out / f"{top}_ice40.json"
+    log = _run(
+        ["yosys", "-p", f"read_verilog {verilog}; synth_ice40 -top {top} -json {json_path}; stat"],
+        out,
+        out / f"{top}_ice40.yosys.log",
+    )
+    cells = _cells(log)
+    if any("LATCH" in name.upper() for name in cells):
+        raise RuntimeError(f"{top}: latch cells after synth_ice40: {cells}")
+    return cells, json_path
+
+
+def ice40_summary(cells: dict[str, int]) -> dict[str, int]:
+    return {
+        "lut4": cells.get("SB_LUT4", 0),
+        "ff": sum(n for name, n in cells.items() if name.startswith("SB_DFF")),
+        "carry": cells.get("SB_CARRY", 0),
+    }
+
+
+_PORT = re.compile(r"(input|output)\s+(?:\[(\d+):(\d+)\]\s+)?(\w+)")
+
+
+def pnr_wrapper(top: str, verilog: Path, clock: str) -> str:
+    """A Verilog wrapper with three pins for place and route: the clock, a serial input, a serial output.
+
+    The IP's bus has ~110 ports, more than an UP5K package has pins, and an IP core's ports are not pins anyway.
+    Every input comes from a shift register fed by one pin; every output is registered and XOR-reduced to one pin,
+    so no logic is optimised away and every path of the core is timed between flip-flops. The wrapper adds about
+    one flip-flop per port; the area figures come from the core alone.
+    """
+    text = verilog.read_text()
+    header = re.search(rf"module {top}\s*\((.*?)\);", text, re.S)
+    if header is None:
+        raise RuntimeError(f"module {top} not found in {verilog}")
+    ins: list[tuple[str, int]] = []
+    outs: list[tuple[str, int]] = []
+    for kind, msb, lsb, name in _PORT.findall(header.group(1)):
+        width = int(msb) - int(lsb) + 1 if msb else 1
+        if name != clock:
+            (ins if kind == "input" else outs).append((name, width))
+    n_in = sum(w for _, w in ins)
+    n_out = sum(w for _, w in outs)
+    lines = [
+        f"module {top}_pnr (input {clock}, input sdi, output sdo);",
+        f"  reg [{n_in - 1}:0] sh;",
+        f"  always @(posedge {clock}) sh <= {{sh[{n_in - 2}:0], sdi}};",
+        f"  wire [{n_out - 1}:0] o;",
+        f"  reg [{n_out - 1}:0] oq;",
+        f"  always @(posedge {clock}) oq <= o;",
+        "  assign sdo = ^oq;",
+    ]
+    conns = [f".{clock}({clock})"]
+    pos = 0
+    for name, width in ins:
+        conns.append(f".{name}(sh[{pos + width - 1}:{pos}])")
+        pos += width
+    pos = 0
+    for name, width in outs:
+        conns.append(f".{name}(o[{pos + width - 1}:{pos}])")
+        pos += width
+    lines.append(f"  {top} core ({', '.join(conns)});")
+    lines.append("endmodule")
+    return "\n".join(lines) + "\n"
+
+
+def fmax(top: str, json_path: Path, device: str, out: Path) -> float:
+    flag, package = ICE40_DEVICES[device]
+    log = _run(
+        ["nextpnr-ice40", flag, "--package", package, "--json", str(json_path), "--freq", "50", "--seed", "1", "--timing-allow-fail"],
+        out,
+        out / f"{top}_{device}.nextpnr.log",
+    )
+    found = re.findall(r"Max frequency for clock\s+'[^']*':\s+([\d.]+) MHz", log)
+    if not found:
+        raise RuntimeError(f"no Max frequency line in {out / f'{top}_{device}.nextpnr.log'}")
+    return float(found[-1])
+
+
+def xc7(top: str, verilog: Path, out: Path) -> dict[str, int]:
+    log = _run(
+        ["yosys", "-p", f"read_verilog {verilog}; synth_xilinx -family xc7 -top {top}; stat"],
+        out,
+        out / f"{top}_xc7.yosys.log",
+    )
+    cells = _cells(log)
+    return {
+        "lut": sum(n for name, n in cells.items() if re.fullmatch(r"LUT\d", name)),
+        "ff": sum(n for name, n in cells.items() if re.fullmatch(r"FD[A-Z]*", name)),
+    }
+
+
+def report_top(top: str, out: Path, pnr: bool = True) -> dict[str, Any]:
+    verilog = netlist(top, out)
+    cells, _ = ice40_cells(top, verilog, out)
+    entry: dict[str, Any] = {}
+    wrapped: Path | None = None
+    if pnr:
+        clock = "aclk" if re.search(rf"module {top}\s*\(\s*input\s+aclk", verilog.read_text()) else "clk"
+        wrapper = out / f"{top}_pnr.v"
+        wrapper.write_text(pnr_wrapper(top, verilog, clock))
+        wrapped = out / f"{top}_pnr_ice40.json"
+        _run(
+            ["yosys", "-p", f"read_verilog {verilog} {wrapper}; synth_ice40 -top {top}_pnr -json {wrapped}"],
+            out,
+            out / f"{top}_pnr.yosys.log",
+        )
+    for device in ICE40_DEVICES:
+        entry[device] = dict(ice40_summary(cells))
+        if wrapped is not None:
+            entry[device]["fmax_mhz"] = fmax(top, wrapped, device, out)
+    entry["xc7"] = xc7(top, verilog, out)
+    return entry
+
+
+def markdown(report: dict[str, Any]) -> str:
+    lines = [
+        "| top | iCE40 HX8K LUT4 | FF | carry | HX8K fmax (MHz) | UP5K fmax (MHz) | xc7 LUT | xc7 FF |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for top, e in report.items():
+        hx, up, x = e["ice40_hx8k"], e["ice40_up5k"], e["xc7"]
+        lines.append(
+            f"| {top} | {hx['lut4']} | {hx['ff']} | {hx['carry']} | {hx.get('fmax_mhz', '-')} | "
+            f"{up.get('fmax_mhz', '-')} | {x['lut']} | {x['ff']} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--out", type=Path, default=Path("build/synth"))
+    parser.add_argument("--no-pnr", action="store_true", help="skip nextpnr (no fmax)")
+    parser.add_argument("tops", nargs="*", default=list(REPORT_TOPS))
+    args = parser.parse_args(argv)
+    missing = [t for t in ("yosys", *(() if args.no_pnr else ("nextpnr-ice40",))) if shutil.which(t) is None]
+    if missing:
+        print(f"synth: {', '.join(missing)} not found (Debian: apt-get install yosys nextpnr-ice40)", file=sys.stderr)
+        return 1
+    out: Path = args.out.resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    report = {top: report_top(top, out, pnr=not args.no_pnr) for top in args.tops}
+    (out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
+    (out / "report.md").write_text(markdown(report))
+    print(markdown(report), end="")
+    print(f"written: {out / 'report.json'}, {out / 'report.md'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
