@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 from typing import Any
 
-from cocotb.triggers import FallingEdge, ReadOnly, RisingEdge
+from cocotb.triggers import FallingEdge, Lock, ReadOnly, RisingEdge
 from cocotb.utils import get_sim_time
 from cocotb_bus.drivers import BusDriver
 
@@ -41,6 +41,7 @@ class IpifMaster(BusDriver):
         self.idle = idle
         self.timeout = timeout
         self.accesses = 0
+        self.lock = Lock()  # one access at a time when several coroutines share the master
         self.last_ack_edge = 0  # clock edge (in periods) at which the slave registered the last ack
         self.bus.bus2ip_cs.value = 0
         self.bus.bus2ip_rnw.value = 1
@@ -49,7 +50,7 @@ class IpifMaster(BusDriver):
         self.bus.bus2ip_be.value = 0
 
     async def _access(self, addr: int, rnw: int, data: int, be: int) -> tuple[int, bool]:
-        async with self.busy_lock:
+        async with self.lock:
             await FallingEdge(self.clock)
             if self.idle is not None:
                 while next(self.idle):

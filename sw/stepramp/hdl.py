@@ -19,7 +19,11 @@ HDL_FILES: tuple[str, ...] = (
     "stepramp_timer.vhd",
     "stepramp_next_delay.vhd",
     "stepramp_engine.vhd",
+    "stepramp_stepper.vhd",
     "stepramp_regfile.vhd",
+    "stepramp_core.vhd",
+    "stepramp_plb.vhd",
+    "stepramp_axil.vhd",
 )
 
 #: Entities that are synthesised and checked for latches, with the generics they are checked at.
@@ -28,7 +32,10 @@ SYNTH_TOPS: dict[str, dict[str, int]] = {
     "stepramp_divider": {"G_WIDTH": 32},
     "stepramp_timer": {"G_WIDTH": 16},
     "stepramp_engine": {},
+    "stepramp_stepper": {},
     "stepramp_regfile": {},
+    "stepramp_plb": {},
+    "stepramp_axil": {},
 }
 
 

@@ -127,7 +127,19 @@ def pnr_wrapper(top: str, verilog: Path, clock: str) -> str:
 def fmax(top: str, json_path: Path, device: str, out: Path) -> float:
     flag, package = ICE40_DEVICES[device]
     log = _run(
-        ["nextpnr-ice40", flag, "--package", package, "--json", str(json_path), "--freq", "50", "--seed", "1", "--timing-allow-fail"],
+        [
+            "nextpnr-ice40",
+            flag,
+            "--package",
+            package,
+            "--json",
+            str(json_path),
+            "--freq",
+            "50",
+            "--seed",
+            "1",
+            "--timing-allow-fail",
+        ],
         out,
         out / f"{top}_{device}.nextpnr.log",
     )

@@ -1,0 +1,526 @@
+-- SPDX-License-Identifier: MIT
+-- stepramp_stepper: the stepping logic. Between the register file / ramp engine and the motor pins: STEP/DIR/ENABLE
+-- timing, the start gate that keeps DIR setup and hold, and the winding outputs of two H-bridges (wave, full step
+-- two-phase-on, half step, sine/cosine PWM microstepping). docs/stepramp_stepper.md has the tables and diagrams.
+--
+-- Timing (edge numbers are rising edges of clk; "after edge e" is the clock cycle that follows it):
+--   * STEP: eng_step sampled '1' at edge E -> step_o rises at edge E (high after E) and stays high for exactly
+--     W = max(step_width, 1) clocks (falls at edge E + W). An eng_step while step_o is high restarts the width
+--     (the pulse then ends W clocks after the later eng_step; the two engine pulses merge into one STEP pulse).
+--   * Start gate, start_req sampled at edge Q while the gate is idle and eng_busy = '0':
+--       same direction (new_dir = dir_o):   start_out high after edge S = Q (1 clock latency);
+--       direction change: DIR changes at edge D = max(Q + 1, R + max(dir_hold, 1)), R = the last edge at which
+--       eng_step was sampled '1' (no constraint when none since reset), and start_out is high after edge
+--       S = D + 1 + max(dir_setup - 5, 0). The engine samples start_out at S + 1, its pulse 0 is high after
+--       S + 3 and step_o rises at S + 4, so the first STEP rising edge comes exactly max(dir_setup, 5) clocks
+--       after the DIR change.
+--     A start_req while the gate is busy (gate_busy = '1') or while eng_busy = '1' is dropped.
+--   * Windings: modes 1 .. 3 follow position at the edge where step_o rises (position is already updated in the
+--     cycle eng_step is high). Mode 4 (PWM): the duty is recomputed continuously by a serial multiplier (rounds of
+--     G_DUTY_BITS + 3 clocks); the pins show the duty of a new position from edge E + G_DUTY_BITS + 4 to
+--     E + 2 * G_DUTY_BITS + 6 at the latest (E: the edge at which step_o rises; 16 .. 30 clocks at the default).
+
+library ieee;
+  use ieee.std_logic_1164.all;
+  use ieee.numeric_std.all;
+  use ieee.math_real.all;
+
+entity stepramp_stepper is
+  generic (
+    G_MICROSTEPS : positive := 16;
+    G_DUTY_BITS  : positive := 12
+  );
+  port (
+    clk        : in    std_logic;
+    rst        : in    std_logic;
+    mode       : in    std_logic_vector(2 downto 0);
+    ustep_log2 : in    std_logic_vector(2 downto 0);
+    step_width : in    std_logic_vector(15 downto 0);
+    dir_setup  : in    std_logic_vector(15 downto 0);
+    dir_hold   : in    std_logic_vector(15 downto 0);
+    enable_in  : in    std_logic;
+    pwm_period : in    std_logic_vector(15 downto 0);
+    start_req  : in    std_logic;
+    new_dir    : in    std_logic;
+    start_out  : out   std_logic;
+    start_dir  : out   std_logic;
+    gate_busy  : out   std_logic;
+    eng_step   : in    std_logic;
+    eng_busy   : in    std_logic;
+    eng_dir    : in    std_logic;
+    position   : in    std_logic_vector(31 downto 0);
+    dir_fault  : out   std_logic;
+    step_o     : out   std_logic;
+    dir_o      : out   std_logic;
+    enable_o   : out   std_logic;
+    a1         : out   std_logic;
+    a2         : out   std_logic;
+    b1         : out   std_logic;
+    b2         : out   std_logic
+  );
+end entity stepramp_stepper;
+
+architecture rtl of stepramp_stepper is
+
+  -- log2 of a power of two (the generic checks below make sure it is one).
+  function log2_of (
+    n : positive
+  ) return natural is
+
+    variable v_bits : natural;
+
+  begin
+
+    v_bits := 0;
+
+    while 2 ** v_bits < n loop
+
+      v_bits := v_bits + 1;
+
+    end loop;
+
+    return v_bits;
+
+  end function log2_of;
+
+  -- Microsteps per full step as a power of two, and the width of the electrical index at full resolution
+  -- (4 * G_MICROSTEPS positions per electrical cycle).
+  constant C_LG : natural  := log2_of(G_MICROSTEPS);
+  constant C_EW : positive := C_LG + 2;
+
+  type t_mag_table is array (natural range <>) of unsigned(G_DUTY_BITS downto 0);
+
+  -- Quarter-wave magnitude table: C_COS(k) = floor(2^G_DUTY_BITS * cos(pi * k / (2 * G_MICROSTEPS)) + 0.5),
+  -- k = 0 .. G_MICROSTEPS (C_COS(0) = 2^G_DUTY_BITS, C_COS(G_MICROSTEPS) = 0), computed at elaboration.
+  function make_cos_table return t_mag_table is
+
+    variable v_tab : t_mag_table(0 to G_MICROSTEPS);
+    variable v_x   : real;
+
+  begin
+
+    for k in 0 to G_MICROSTEPS loop
+
+      v_x      := cos(MATH_PI * real(k) / real(2 * G_MICROSTEPS));
+      v_tab(k) := to_unsigned(integer(floor(real(2 ** G_DUTY_BITS) * v_x + 0.5)), G_DUTY_BITS + 1);
+
+    end loop;
+
+    -- cos(pi / 2) is not exactly 0 in floating point; the table must end at 0 (winding off).
+    v_tab(G_MICROSTEPS) := (others => '0');
+    return v_tab;
+
+  end function make_cos_table;
+
+  constant C_COS : t_mag_table(0 to G_MICROSTEPS) := make_cos_table;
+
+  -- Modes.
+  constant C_MODE_WAVE : std_logic_vector(2 downto 0) := "001";
+  constant C_MODE_FULL : std_logic_vector(2 downto 0) := "010";
+  constant C_MODE_HALF : std_logic_vector(2 downto 0) := "011";
+  constant C_MODE_PWM  : std_logic_vector(2 downto 0) := "100";
+
+  -- Start gate states (constants, not an enum, so that GHDL's VPI shows a plain vector).
+  constant C_GS_IDLE  : std_logic_vector(1 downto 0) := "00";
+  constant C_GS_HOLD  : std_logic_vector(1 downto 0) := "01";
+  constant C_GS_SETUP : std_logic_vector(1 downto 0) := "10";
+  constant C_GS_FIRED : std_logic_vector(1 downto 0) := "11";
+
+  -- Clocks from the edge that registers start_out to the edge at which step_o rises for the engine's pulse 0:
+  -- 1 (engine samples start) + 2 (engine first-pulse latency) + 1 (step_o register).
+  constant C_START_TO_STEP : natural := 4;
+  -- Shortest DIR change -> first STEP rising edge: the gate registers start_out one edge after the DIR change.
+  constant C_SETUP_MIN : natural := C_START_TO_STEP + 1;
+
+  constant C_SINCE_MAX : unsigned(15 downto 0) := (others => '1');
+
+  -- STEP pulse.
+  signal step_r     : std_logic;
+  signal width_cnt  : unsigned(15 downto 0);
+  signal width_m1   : unsigned(15 downto 0);
+  signal since_step : unsigned(15 downto 0); -- edges since eng_step was last sampled '1' (saturating)
+
+  -- Start gate.
+  signal gstate      : std_logic_vector(1 downto 0);
+  signal dir_r       : std_logic;
+  signal pend_dir    : std_logic;
+  signal start_r     : std_logic;
+  signal gate_busy_r : std_logic;
+  signal fault_r     : std_logic;
+  signal setup_cnt   : unsigned(15 downto 0);
+  signal setup_wait  : unsigned(15 downto 0);
+  signal hold_m1     : unsigned(15 downto 0);
+  signal hold_ok     : std_logic;
+
+  -- Winding levels of the on/off modes, from the half-step index h (0 .. 7).
+  signal half_idx : unsigned(2 downto 0);
+  signal lvl_a1   : std_logic;
+  signal lvl_a2   : std_logic;
+  signal lvl_b1   : std_logic;
+  signal lvl_b2   : std_logic;
+
+  -- PWM: electrical index at full resolution, table stage, duty stage, carrier.
+  signal u_shift   : natural range 0 to C_LG;
+  signal e_idx     : unsigned(C_EW - 1 downto 0);
+  signal quad      : std_logic_vector(1 downto 0);
+  signal frac_idx  : natural range 0 to G_MICROSTEPS - 1;
+  signal cos_f     : unsigned(G_DUTY_BITS downto 0);
+  signal cos_g     : unsigned(G_DUTY_BITS downto 0);
+  signal swap1     : std_logic;
+  signal neg_a1    : std_logic;
+  signal neg_b1    : std_logic;
+  signal mag_a     : unsigned(G_DUTY_BITS downto 0);
+  signal mag_b     : unsigned(G_DUTY_BITS downto 0);
+  signal mul_cnt   : natural range 0 to G_DUTY_BITS + 2;
+  signal mul_p     : unsigned(15 downto 0);
+  signal acc_a     : unsigned(15 downto 0);
+  signal acc_b     : unsigned(15 downto 0);
+  signal q_a       : unsigned(G_DUTY_BITS downto 0);
+  signal q_b       : unsigned(G_DUTY_BITS downto 0);
+  signal neg_a2    : std_logic;
+  signal neg_b2    : std_logic;
+  signal duty_a    : unsigned(15 downto 0);
+  signal duty_b    : unsigned(15 downto 0);
+  signal neg_a     : std_logic;
+  signal neg_b     : std_logic;
+  signal carrier   : unsigned(15 downto 0);
+  signal period_m1 : unsigned(15 downto 0);
+  signal pwm_run   : std_logic;
+
+  -- Output registers.
+  signal enable_r : std_logic;
+  signal a1_r     : std_logic;
+  signal a2_r     : std_logic;
+  signal b1_r     : std_logic;
+  signal b2_r     : std_logic;
+
+begin
+
+  assert G_MICROSTEPS >= 1 and G_MICROSTEPS <= 128 and 2 ** C_LG = G_MICROSTEPS
+    report "stepramp_stepper: G_MICROSTEPS must be a power of two in 1 .. 128"
+    severity failure;
+
+  assert G_DUTY_BITS >= 4 and G_DUTY_BITS <= 16
+    report "stepramp_stepper: G_DUTY_BITS must be in 4 .. 16"
+    severity failure;
+
+  ---------------------------------------------------------------------------------------------------------------------
+  -- STEP pulse: exactly max(step_width, 1) clocks high per eng_step; an eng_step during a pulse restarts the width.
+  ---------------------------------------------------------------------------------------------------------------------
+  width_m1 <= (others => '0') when unsigned(step_width) = 0 else
+              unsigned(step_width) - 1;
+
+  step_proc : process (clk) is
+  begin
+
+    if rising_edge(clk) then
+      if (rst = '1') then
+        step_r     <= '0';
+        width_cnt  <= (others => '0');
+        since_step <= C_SINCE_MAX;
+      elsif (eng_step = '1') then
+        step_r     <= '1';
+        width_cnt  <= width_m1;
+        since_step <= (others => '0');
+      else
+        if (step_r = '1') then
+          if (width_cnt = 0) then
+            step_r <= '0';
+          else
+            width_cnt <= width_cnt - 1;
+          end if;
+        end if;
+        if (since_step /= C_SINCE_MAX) then
+          since_step <= since_step + 1;
+        end if;
+      end if;
+    end if;
+
+  end process step_proc;
+
+  ---------------------------------------------------------------------------------------------------------------------
+  -- Start gate: DIR changes only between moves, dir_hold after the last STEP rising edge at the earliest, and
+  -- start_out follows so that the engine's first STEP rising edge comes max(dir_setup, 5) clocks after it.
+  ---------------------------------------------------------------------------------------------------------------------
+  -- DIR may change at edge D when D - R >= max(dir_hold, 1), i.e. since_step (value after edge D - 1) >= hold - 1.
+  hold_m1 <= (others => '0') when unsigned(dir_hold) = 0 else
+             unsigned(dir_hold) - 1;
+
+  hold_ok <= '1' when since_step >= hold_m1 else
+             '0';
+
+  setup_wait <= unsigned(dir_setup) - C_SETUP_MIN when unsigned(dir_setup) > C_SETUP_MIN else
+                (others => '0');
+
+  gate_proc : process (clk) is
+
+    variable v_next : std_logic_vector(1 downto 0);
+
+  begin
+
+    if rising_edge(clk) then
+      if (rst = '1') then
+        gstate      <= C_GS_IDLE;
+        dir_r       <= '0';
+        pend_dir    <= '0';
+        start_r     <= '0';
+        gate_busy_r <= '0';
+        fault_r     <= '0';
+        setup_cnt   <= (others => '0');
+      else
+        start_r <= '0';
+        v_next  := gstate;
+
+        case gstate is
+
+          when C_GS_HOLD =>
+
+            if (hold_ok = '1' and eng_step = '0') then
+              dir_r     <= pend_dir;
+              setup_cnt <= setup_wait;
+              v_next    := C_GS_SETUP;
+            end if;
+
+          when C_GS_SETUP =>
+
+            if (setup_cnt = 0) then
+              start_r <= '1';
+              v_next  := C_GS_FIRED;
+            else
+              setup_cnt <= setup_cnt - 1;
+            end if;
+
+          when C_GS_FIRED =>
+
+            -- The engine samples start_out at this edge and shows busy from the next cycle on: a start_req seen
+            -- now would pass the engine's idle check, so it is dropped here.
+            v_next := C_GS_IDLE;
+
+          when others =>
+
+            if (start_req = '1' and eng_busy = '0') then
+              if (new_dir = dir_r) then
+                start_r <= '1';
+                v_next  := C_GS_FIRED;
+              else
+                pend_dir <= new_dir;
+                v_next   := C_GS_HOLD;
+              end if;
+            end if;
+
+        end case;
+
+        gstate <= v_next;
+        if (v_next = C_GS_IDLE) then
+          gate_busy_r <= '0';
+        else
+          gate_busy_r <= '1';
+        end if;
+
+        -- A pulse while the engine's direction differs from DIR: the engine was started around the gate (or
+        -- its direction input is not wired to start_dir). Sticky until the next accepted start_req.
+        if (eng_step = '1' and eng_dir /= dir_r) then
+          fault_r <= '1';
+        elsif (gstate = C_GS_IDLE and start_req = '1' and eng_busy = '0') then
+          fault_r <= '0';
+        end if;
+      end if;
+    end if;
+
+  end process gate_proc;
+
+  ---------------------------------------------------------------------------------------------------------------------
+  -- On/off modes: half-step index h, then AVR446 Table 2-1 (h = 0: A+, 1: A+B+, 2: B+, 3: A-B+, 4: A-, 5: A-B-,
+  -- 6: B-, 7: A+B-). Wave drive uses the even h, full step two-phase-on the odd h.
+  ---------------------------------------------------------------------------------------------------------------------
+  half_idx <= unsigned(position(1 downto 0)) & '0' when mode = C_MODE_WAVE else
+              unsigned(position(1 downto 0)) & '1' when mode = C_MODE_FULL else
+              unsigned(position(2 downto 0));
+
+  lvl_a1 <= '1' when half_idx = 7 or half_idx = 0 or half_idx = 1 else
+            '0';
+  lvl_a2 <= '1' when half_idx = 3 or half_idx = 4 or half_idx = 5 else
+            '0';
+  lvl_b1 <= '1' when half_idx = 1 or half_idx = 2 or half_idx = 3 else
+            '0';
+  lvl_b2 <= '1' when half_idx = 5 or half_idx = 6 or half_idx = 7 else
+            '0';
+
+  ---------------------------------------------------------------------------------------------------------------------
+  -- PWM microstepping. e = position mod (4 * 2^u), scaled to the table's resolution: e_idx = e * G / 2^u.
+  -- Quadrant q = e_idx / G, f = e_idx mod G:
+  --   |A| = C_COS(f) for q = 0, 2 and C_COS(G - f) for q = 1, 3; A < 0 for q = 1, 2 (cos)
+  --   |B| = C_COS(G - f) for q = 0, 2 and C_COS(f) for q = 1, 3; B < 0 for q = 2, 3 (sin)
+  ---------------------------------------------------------------------------------------------------------------------
+  u_shift <= C_LG - to_integer(unsigned(ustep_log2)) when to_integer(unsigned(ustep_log2)) < C_LG else
+             0;
+
+  e_idx    <= shift_left(unsigned(position(C_EW - 1 downto 0)), u_shift);
+  quad     <= std_logic_vector(e_idx(C_EW - 1 downto C_EW - 2));
+  frac_idx <= to_integer(e_idx and to_unsigned(G_MICROSTEPS - 1, C_EW));
+
+  period_m1 <= unsigned(pwm_period) - 1;
+  pwm_run   <= '1' when unsigned(pwm_period) >= 2 else
+               '0';
+
+  -- Stage 1: the two table reads (registered: a ROM).
+  table_proc : process (clk) is
+  begin
+
+    if rising_edge(clk) then
+      cos_f  <= C_COS(frac_idx);
+      cos_g  <= C_COS(G_MICROSTEPS - frac_idx);
+      swap1  <= quad(0);
+      neg_a1 <= quad(1) xor quad(0);
+      neg_b1 <= quad(1);
+    end if;
+
+  end process table_proc;
+
+  mag_a <= cos_f when swap1 = '0' else
+           cos_g;
+  mag_b <= cos_g when swap1 = '0' else
+           cos_f;
+
+  -- Duty = floor((|value| * pwm_period + 2^(G_DUTY_BITS - 1)) / 2^G_DUTY_BITS), at most pwm_period, for both
+  -- windings by one serial shift-add multiplier each (no wide multiplier: iCE40 has no DSP). A round takes
+  -- C_ROUND = G_DUTY_BITS + 3 clocks and rounds follow each other without pause:
+  --   mul_cnt = 0:                 load |A|, |B|, signs and pwm_period; clear the accumulators;
+  --   mul_cnt = 1 .. BITS + 1:     A + (pwm_period if the multiplier's LSB is '1'), shift {acc, q} right;
+  --   mul_cnt = BITS + 2:          product = acc * 2^(BITS + 1) + q; duty = product / 2^BITS rounded (bit BITS - 1)
+  mul_proc : process (clk) is
+
+    variable v_sum_a : unsigned(16 downto 0);
+    variable v_sum_b : unsigned(16 downto 0);
+
+  begin
+
+    if rising_edge(clk) then
+      if (rst = '1') then
+        mul_cnt <= 0;
+        duty_a  <= (others => '0');
+        duty_b  <= (others => '0');
+        neg_a   <= '0';
+        neg_b   <= '0';
+      elsif (mul_cnt = 0) then
+        q_a     <= mag_a;
+        q_b     <= mag_b;
+        neg_a2  <= neg_a1;
+        neg_b2  <= neg_b1;
+        mul_p   <= unsigned(pwm_period);
+        acc_a   <= (others => '0');
+        acc_b   <= (others => '0');
+        mul_cnt <= 1;
+      elsif (mul_cnt <= G_DUTY_BITS + 1) then
+        v_sum_a := '0' & acc_a;
+        if (q_a(0) = '1') then
+          v_sum_a := v_sum_a + mul_p;
+        end if;
+        v_sum_b := '0' & acc_b;
+        if (q_b(0) = '1') then
+          v_sum_b := v_sum_b + mul_p;
+        end if;
+        acc_a   <= v_sum_a(16 downto 1);
+        q_a     <= v_sum_a(0) & q_a(G_DUTY_BITS downto 1);
+        acc_b   <= v_sum_b(16 downto 1);
+        q_b     <= v_sum_b(0) & q_b(G_DUTY_BITS downto 1);
+        mul_cnt <= mul_cnt + 1;
+      else
+        -- product < 2^(BITS + 16), so acc(15) = '0' and the duty fits 16 bits
+        if (q_a(G_DUTY_BITS - 1) = '1') then
+          duty_a <= (acc_a(14 downto 0) & q_a(G_DUTY_BITS)) + 1;
+        else
+          duty_a <= acc_a(14 downto 0) & q_a(G_DUTY_BITS);
+        end if;
+        if (q_b(G_DUTY_BITS - 1) = '1') then
+          duty_b <= (acc_b(14 downto 0) & q_b(G_DUTY_BITS)) + 1;
+        else
+          duty_b <= acc_b(14 downto 0) & q_b(G_DUTY_BITS);
+        end if;
+        neg_a   <= neg_a2;
+        neg_b   <= neg_b2;
+        mul_cnt <= 0;
+      end if;
+    end if;
+
+  end process mul_proc;
+
+  -- Carrier 0 .. pwm_period - 1, free running (a shorter new period wraps at once).
+  carrier_proc : process (clk) is
+  begin
+
+    if rising_edge(clk) then
+      if (rst = '1' or pwm_run = '0' or carrier >= period_m1) then
+        carrier <= (others => '0');
+      else
+        carrier <= carrier + 1;
+      end if;
+    end if;
+
+  end process carrier_proc;
+
+  ---------------------------------------------------------------------------------------------------------------------
+  -- Outputs: one register per pin. Bridge encoding: current + : IN1 = 1 (or PWM), IN2 = 0; current - : IN1 = 0,
+  -- IN2 = 1 (or PWM); off: both 0. IN1 and IN2 are never both '1'.
+  ---------------------------------------------------------------------------------------------------------------------
+  out_proc : process (clk) is
+
+    variable v_on_a : std_logic;
+    variable v_on_b : std_logic;
+
+  begin
+
+    if rising_edge(clk) then
+      if (rst = '1') then
+        enable_r <= '0';
+        a1_r     <= '0';
+        a2_r     <= '0';
+        b1_r     <= '0';
+        b2_r     <= '0';
+      else
+        enable_r <= enable_in;
+        a1_r     <= '0';
+        a2_r     <= '0';
+        b1_r     <= '0';
+        b2_r     <= '0';
+
+        v_on_a := '0';
+        v_on_b := '0';
+        if (pwm_run = '1' and carrier < duty_a) then
+          v_on_a := '1';
+        end if;
+        if (pwm_run = '1' and carrier < duty_b) then
+          v_on_b := '1';
+        end if;
+
+        if (enable_in = '1') then
+          if (mode = C_MODE_WAVE or mode = C_MODE_FULL or mode = C_MODE_HALF) then
+            a1_r <= lvl_a1;
+            a2_r <= lvl_a2;
+            b1_r <= lvl_b1;
+            b2_r <= lvl_b2;
+          elsif (mode = C_MODE_PWM) then
+            a1_r <= v_on_a and not neg_a;
+            a2_r <= v_on_a and neg_a;
+            b1_r <= v_on_b and not neg_b;
+            b2_r <= v_on_b and neg_b;
+          end if;
+        end if;
+      end if;
+    end if;
+
+  end process out_proc;
+
+  step_o    <= step_r;
+  dir_o     <= dir_r;
+  start_out <= start_r;
+  start_dir <= dir_r;
+  gate_busy <= gate_busy_r;
+  dir_fault <= fault_r;
+  enable_o  <= enable_r;
+  a1        <= a1_r;
+  a2        <= a2_r;
+  b1        <= b1_r;
+  b2        <= b2_r;
+
+end architecture rtl;

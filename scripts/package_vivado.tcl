@@ -1,0 +1,92 @@
+# SPDX-License-Identifier: MIT
+# package_vivado.tcl: package stepramp_axil (the stepramp core with an AXI4-Lite slave) as a Vivado IP, for the
+# IP integrator (block design with MicroBlaze on AXI).
+#
+# UNTESTED: Vivado is not installed where stepramp is developed and verified, so this script has never been run.
+# It is a small, standard IP packager script (Vivado Tcl reference UG835, IP packager UG1118); check the result in
+# the IP packager (Tools > Edit in IP Packager on build/vivado_ip/stepramp_axil/component.xml) the first time.
+#
+# Usage (from the repository root or anywhere else):
+#   vivado -mode batch -source scripts/package_vivado.tcl
+# Result: build/vivado_ip/stepramp_axil/ (component.xml, hdl/, xgui/), VLNV stepramp:ip:stepramp_axil:<version>
+# with the version of the ID register (hdl/stepramp_regs_pkg.vhd, C_ID_VALUE: 0x53520002 -> 0.2). Add
+# build/vivado_ip to the IP repositories of the Vivado project (Settings > IP > Repository).
+#
+# hdl/ holds two bus tops (stepramp_plb, stepramp_axil), so the sources go into an in-memory project with the top
+# set explicitly and `ipx::package_project` packages that (what "Package your current project" does); letting
+# `ipx::infer_core` pick the top from the folder could pick stepramp_plb.
+
+set root   [file normalize [file join [file dirname [info script]] ..]]
+set ip_dir [file join $root build vivado_ip stepramp_axil]
+
+# Version from the ID register: bits 15:8 major, 7:0 minor.
+set fh [open [file join $root hdl stepramp_regs_pkg.vhd] r]
+set pkg [read $fh]
+close $fh
+if {![regexp {C_ID_VALUE\s*:[^:]*:=\s*x"([0-9A-Fa-f]{8})"} $pkg -> id_hex]} {
+  error "C_ID_VALUE not found in hdl/stepramp_regs_pkg.vhd"
+}
+scan $id_hex %x id_value
+set version "[expr {($id_value >> 8) & 0xFF}].[expr {$id_value & 0xFF}]"
+
+# Sources: every RTL file (plain VHDL, no vendor primitives; Vivado orders them itself). Copied into the IP.
+file delete -force $ip_dir
+file mkdir $ip_dir
+create_project -in_memory stepramp_package
+add_files -norecurse [lsort [glob [file join $root hdl *.vhd]]]
+set_property top stepramp_axil [current_fileset]
+update_compile_order -fileset sources_1
+
+ipx::package_project -root_dir $ip_dir -vendor stepramp -library ip -taxonomy /UserIP -import_files \
+  -set_current true
+set core [ipx::current_core]
+set_property name          stepramp_axil $core
+set_property version       $version $core
+set_property core_revision 1 $core
+set_property display_name  "stepramp stepper-motor ramp (AXI4-Lite)" $core
+set_property description   "Linear speed ramps for stepper motors (AVR446 recurrence), STEP/DIR outputs" $core
+
+# Interfaces. The packager infers them from the port names (s_axil_*, aclk, aresetn); make sure of each.
+proc ensure_interface {core name vlnv} {
+  if {[llength [ipx::get_bus_interfaces $name -of_objects $core]] == 0} {
+    ipx::infer_bus_interface $name $vlnv $core
+  }
+}
+
+if {[llength [ipx::get_bus_interfaces s_axil -of_objects $core]] == 0} {
+  ipx::infer_bus_interfaces xilinx.com:interface:aximm_rtl:1.0 $core
+}
+ensure_interface $core aclk    xilinx.com:signal:clock_rtl:1.0
+ensure_interface $core aresetn xilinx.com:signal:reset_rtl:1.0
+ensure_interface $core irq     xilinx.com:signal:interrupt_rtl:1.0
+
+proc set_bus_parameter {core busif name value} {
+  set intf [ipx::get_bus_interfaces $busif -of_objects $core]
+  set param [ipx::get_bus_parameters $name -of_objects $intf]
+  if {[llength $param] == 0} {
+    set param [ipx::add_bus_parameter $name $intf]
+  }
+  set_property value $value $param
+}
+
+set_bus_parameter $core aresetn POLARITY    ACTIVE_LOW
+set_bus_parameter $core irq     SENSITIVITY LEVEL_HIGH
+ipx::associate_bus_interfaces -busif s_axil -clock aclk $core
+ipx::associate_bus_interfaces -clock aclk -reset aresetn $core
+
+# Memory map: the registers sit in the low 128 bytes (7 address bits) and repeat in the rest of the 4 KiB block.
+set mmap [ipx::add_memory_map s_axil $core]
+set_property slave_memory_map_ref s_axil [ipx::get_bus_interfaces s_axil -of_objects $core]
+set block [ipx::add_address_block reg0 $mmap]
+set_property base_address 0 $block
+set_property range 4096 $block
+set_property width 32 $block
+set_property usage register $block
+
+# stepramp_axil has no generics, so the IP has no user parameters.
+ipx::create_xgui_files $core
+ipx::update_checksums $core
+ipx::check_integrity $core
+ipx::save_core $core
+close_project
+puts "stepramp: packaged stepramp:ip:stepramp_axil:$version in $ip_dir"

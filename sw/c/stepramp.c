@@ -1,0 +1,258 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * stepramp driver for MicroBlaze standalone: see stepramp.h. C99, no malloc, no stdio.
+ */
+#ifdef STEPRAMP_CONFIG_HEADER
+#include STEPRAMP_CONFIG_HEADER /* may define STEPRAMP_READ32 / _WRITE32 / _WRITE8 / _IDLE / _CMD_BYTE_LANE */
+#endif
+
+#include "stepramp.h"
+
+#include <stddef.h>
+#include <stdint.h>
+
+/* Register access: the Xilinx standalone BSP unless the user has defined the macros. */
+#if !defined(STEPRAMP_READ32) || !defined(STEPRAMP_WRITE32) || !defined(STEPRAMP_WRITE8)
+#include "xil_io.h"
+#endif
+#ifndef STEPRAMP_READ32
+#define STEPRAMP_READ32(addr) Xil_In32(addr)
+#endif
+#ifndef STEPRAMP_WRITE32
+#define STEPRAMP_WRITE32(addr, value) Xil_Out32((addr), (value))
+#endif
+#ifndef STEPRAMP_WRITE8
+#define STEPRAMP_WRITE8(addr, value) Xil_Out8((addr), (value))
+#endif
+
+/* Run between two STATUS polls of stepramp_wait_done. */
+#ifndef STEPRAMP_IDLE
+#define STEPRAMP_IDLE() ((void)0)
+#endif
+
+/* Byte address offset, within a register, of its bits 7:0 (see stepramp.h). */
+#ifndef STEPRAMP_CMD_BYTE_LANE
+#if defined(__BYTE_ORDER__) && defined(__ORDER_BIG_ENDIAN__) && __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
+#define STEPRAMP_CMD_BYTE_LANE 3u
+#else
+#define STEPRAMP_CMD_BYTE_LANE 0u
+#endif
+#endif
+
+#define REG(dev, off) ((dev)->base + (uintptr_t)(off))
+
+static void write_reg(const stepramp_t *dev, uint32_t off, uint32_t value)
+{
+    STEPRAMP_WRITE32(REG(dev, off), value);
+}
+
+static uint32_t read_reg(const stepramp_t *dev, uint32_t off)
+{
+    return (uint32_t)STEPRAMP_READ32(REG(dev, off));
+}
+
+/* A wide value as its _LO (bits 31:0) and _HI (the bits above) words. */
+static void write_wide(const stepramp_t *dev, uint32_t off_lo, uint32_t off_hi, uint64_t value)
+{
+    write_reg(dev, off_lo, (uint32_t)(value & UINT32_C(0xFFFFFFFF)));
+    write_reg(dev, off_hi, (uint32_t)(value >> 32));
+}
+
+/* A CTRL command (START / SOFT_STOP / HARD_STOP, all in bits 7:0): byte 0 of CTRL only, the enables are kept. */
+static void command(const stepramp_t *dev, uint32_t mask)
+{
+    STEPRAMP_WRITE8(REG(dev, STEPRAMP_REG_CTRL + STEPRAMP_CMD_BYTE_LANE), (uint8_t)mask);
+}
+
+int stepramp_init(stepramp_t *dev, uintptr_t base, double fclk, double spr, uint32_t prescale)
+{
+    uint32_t id;
+
+    if (dev == NULL) {
+        return STEPRAMP_ENULL;
+    }
+    dev->base = base;
+    dev->fclk = fclk;
+    dev->spr = spr;
+    dev->prescale = prescale;
+    id = read_reg(dev, STEPRAMP_REG_ID);
+    dev->version = id & 0xFFFFu;
+    return (id >> 16) == STEPRAMP_ID_MAGIC ? STEPRAMP_OK : STEPRAMP_EID;
+}
+
+int stepramp_plan(const stepramp_t *dev, stepramp_plan_t *plan, int64_t steps, double accel, double decel, double speed)
+{
+    if (dev == NULL || plan == NULL) {
+        return STEPRAMP_ENULL;
+    }
+    return (int)stepramp_plan_move(plan, steps, accel, decel, speed, dev->spr, dev->fclk, dev->prescale);
+}
+
+int stepramp_program(const stepramp_t *dev, const stepramp_plan_t *plan)
+{
+    if (dev == NULL || plan == NULL) {
+        return STEPRAMP_ENULL;
+    }
+    /* in address order, like driver.plan_writes (the order does not matter to the core) */
+    write_reg(dev, STEPRAMP_REG_STEPS, plan->direction ? 0u - plan->steps : plan->steps);
+    write_reg(dev, STEPRAMP_REG_PRESCALE, plan->prescale);
+    write_wide(dev, STEPRAMP_REG_C_FIRST_LO, STEPRAMP_REG_C_FIRST_HI, plan->c_first);
+    write_wide(dev, STEPRAMP_REG_C_LAST_LO, STEPRAMP_REG_C_LAST_HI, plan->c_last);
+    write_reg(dev, STEPRAMP_REG_SA, plan->sa);
+    write_wide(dev, STEPRAMP_REG_C_SA_LO, STEPRAMP_REG_C_SA_HI, plan->c_sa);
+    write_reg(dev, STEPRAMP_REG_SD, plan->sd);
+    write_wide(dev, STEPRAMP_REG_C_SD_LO, STEPRAMP_REG_C_SD_HI, plan->c_sd);
+    write_wide(dev, STEPRAMP_REG_ACCEL_SEED_LO, STEPRAMP_REG_ACCEL_SEED_HI, plan->accel_seed);
+    write_wide(dev, STEPRAMP_REG_DECEL_SEED_LO, STEPRAMP_REG_DECEL_SEED_HI, plan->decel_seed);
+    write_wide(dev, STEPRAMP_REG_CRUISE_LO, STEPRAMP_REG_CRUISE_HI, plan->cruise);
+#ifdef STEPRAMP_PLAN_HAS_STOP_RATIO
+    write_reg(dev, STEPRAMP_REG_STOP_RATIO, plan->stop_ratio);
+#else
+    /* TODO(lead): write plan->stop_ratio (accel / decel, Q16.16) once stepramp_plan_t has it; until then 1.0 */
+    write_reg(dev, STEPRAMP_REG_STOP_RATIO, STEPRAMP_STOP_RATIO_ONE);
+#endif
+    return STEPRAMP_OK;
+}
+
+void stepramp_start(const stepramp_t *dev)
+{
+    command(dev, STEPRAMP_CTRL_START_MASK);
+}
+
+int stepramp_move(const stepramp_t *dev, int64_t steps, double accel, double decel, double speed)
+{
+    stepramp_plan_t plan;
+    int rc = stepramp_plan(dev, &plan, steps, accel, decel, speed);
+
+    if (rc != STEPRAMP_OK) {
+        return rc; /* nothing written */
+    }
+    (void)stepramp_program(dev, &plan);
+    stepramp_start(dev);
+    return STEPRAMP_OK;
+}
+
+void stepramp_soft_stop(const stepramp_t *dev)
+{
+    command(dev, STEPRAMP_CTRL_SOFT_STOP_MASK);
+}
+
+void stepramp_hard_stop(const stepramp_t *dev)
+{
+    command(dev, STEPRAMP_CTRL_HARD_STOP_MASK);
+}
+
+void stepramp_enable_irq(const stepramp_t *dev, int done, int error)
+{
+    uint32_t value = (done ? STEPRAMP_CTRL_IRQ_DONE_EN_MASK : 0u) | (error ? STEPRAMP_CTRL_IRQ_ERROR_EN_MASK : 0u);
+
+    write_reg(dev, STEPRAMP_REG_CTRL, value); /* the command bits are written 0: no command */
+}
+
+uint32_t stepramp_status(const stepramp_t *dev, stepramp_status_t *status)
+{
+    uint32_t raw = read_reg(dev, STEPRAMP_REG_STATUS);
+
+    if (status != NULL) {
+        status->raw = raw;
+        status->state = (raw & STEPRAMP_STATUS_STATE_MASK) >> STEPRAMP_STATUS_STATE_SHIFT;
+        status->busy = (raw & STEPRAMP_STATUS_BUSY_MASK) != 0u;
+        status->dir = (raw & STEPRAMP_STATUS_DIR_MASK) >> STEPRAMP_STATUS_DIR_SHIFT;
+        status->done = (raw & STEPRAMP_STATUS_DONE_MASK) != 0u;
+        status->error = (raw & STEPRAMP_STATUS_ERROR_MASK) != 0u;
+        status->err_code = (raw & STEPRAMP_STATUS_ERR_CODE_MASK) >> STEPRAMP_STATUS_ERR_CODE_SHIFT;
+    }
+    return raw;
+}
+
+void stepramp_clear_flags(const stepramp_t *dev)
+{
+    /* W1C bits are all in byte 0, the rest of STATUS is read only: a whole-word write is the strobe-0x1 write */
+    write_reg(dev, STEPRAMP_REG_STATUS, STEPRAMP_STATUS_DONE_MASK | STEPRAMP_STATUS_ERROR_MASK);
+}
+
+int32_t stepramp_position(const stepramp_t *dev)
+{
+    uint32_t raw = read_reg(dev, STEPRAMP_REG_POSITION);
+
+    /* two's complement without implementation-defined conversion: raw >= 2^31 is raw - 2^32 = -(~raw) - 1 */
+    return raw <= UINT32_C(0x7FFFFFFF) ? (int32_t)raw : -(int32_t)(~raw) - 1;
+}
+
+void stepramp_set_position(const stepramp_t *dev, int32_t position)
+{
+    write_reg(dev, STEPRAMP_REG_POSITION, (uint32_t)position); /* modulo 2^32: two's complement */
+}
+
+int stepramp_wait_done(const stepramp_t *dev, uint32_t max_polls)
+{
+    uint32_t i;
+    stepramp_status_t st;
+
+    for (i = 0; i < max_polls; i++) {
+        if (i != 0u) {
+            STEPRAMP_IDLE();
+        }
+        (void)stepramp_status(dev, &st);
+        if (st.done) {
+            stepramp_clear_flags(dev);
+            return st.error ? STEPRAMP_ECORE(st.err_code) : STEPRAMP_OK;
+        }
+    }
+    return STEPRAMP_ETIMEOUT;
+}
+
+/* The error table of docs/registers.md (stepramp.regmap.ERROR_CODES): X(name, cause). */
+#define STEPRAMP_CORE_ERRORS(X)                                                                                        \
+    X(NONE, "no error")                                                                                                \
+    X(PRESCALE, "PRESCALE is 0")                                                                                       \
+    X(BOUNDS, "SA or SD outside 1 .. STEPS-1, or SA > SD")                                                             \
+    X(C_FIRST, "C_FIRST below one tick while the move has intervals")                                                  \
+    X(C_LAST, "C_LAST below one tick while used")                                                                      \
+    X(C_SA, "C_SA below one tick while used")                                                                          \
+    X(C_SD, "C_SD below one tick while used")                                                                          \
+    X(CRUISE, "CRUISE below one tick while a cruise interval exists")                                                  \
+    X(ACCEL_SEED, "ACCEL_SEED below one tick while the accel recurrence is used")                                      \
+    X(DECEL_SEED, "DECEL_SEED below one tick while the decel recurrence is used")                                      \
+    X(LATE, "the next delay was not ready in time (speed too high for the clock); the move stopped")                   \
+    X(ZERO_TICKS, "an interval of zero ticks would have been emitted; the move stopped")                               \
+    X(RANGE, "a recurrence value left its 48-bit range; the move stopped")                                             \
+    X(STEPS, "STEPS is -2^31 (|steps| must be <= 2^31 - 1)")                                                           \
+    X(POS_BUSY, "POSITION written while a move runs (the write was ignored)")
+
+#define CORE_TABLE_SIZE 16u /* ERR_CODE is 4 bits */
+#define CAUSE(name, text) [STEPRAMP_ERR_##name] = text,
+#define NAME(name, text) [STEPRAMP_ERR_##name] = #name,
+#define RESULT(name, text) [STEPRAMP_ERR_##name] = "core error " #name ": " text,
+
+static const char *const core_causes[CORE_TABLE_SIZE] = {STEPRAMP_CORE_ERRORS(CAUSE)};
+static const char *const core_names[CORE_TABLE_SIZE] = {STEPRAMP_CORE_ERRORS(NAME)};
+static const char *const core_results[CORE_TABLE_SIZE] = {STEPRAMP_CORE_ERRORS(RESULT)};
+
+const char *stepramp_strcoreerror(uint32_t code)
+{
+    return code < CORE_TABLE_SIZE && core_causes[code] != NULL ? core_causes[code] : "unknown error code";
+}
+
+const char *stepramp_corename(uint32_t code)
+{
+    return code < CORE_TABLE_SIZE && core_names[code] != NULL ? core_names[code] : "UNKNOWN";
+}
+
+const char *stepramp_strresult(int result)
+{
+    if (result == STEPRAMP_EID) {
+        return "the ID register does not identify a stepramp core at this address";
+    }
+    if (result == STEPRAMP_ETIMEOUT) {
+        return "no DONE within the allowed number of status polls";
+    }
+    if (STEPRAMP_IS_ECORE(result)) {
+        uint32_t code = STEPRAMP_ECORE_CODE(result);
+        return core_results[code] != NULL ? core_results[code] : "core error: unknown error code";
+    }
+    if (result >= 0 && result < STEPRAMP_EID) {
+        return stepramp_strerror((stepramp_err_t)result); /* "unknown error" past the enum */
+    }
+    return "unknown error";
+}

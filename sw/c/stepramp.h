@@ -1,0 +1,211 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * stepramp driver: the C counterpart of sw/stepramp/driver.py (class StepRamp), for MicroBlaze standalone.
+ *
+ * The same operations with the same register semantics as the Python driver: stepramp_program writes every
+ * motion register (STEPS .. STOP_RATIO) in address order, like driver.plan_writes(); START, SOFT_STOP and
+ * HARD_STOP are written to byte 0 of CTRL only, so the interrupt enables in byte 1 are kept; STATUS.DONE and
+ * STATUS.ERROR are cleared by writing 1. The register map is docs/registers.md (stepramp_regs.h in C).
+ *
+ * C99, no malloc, no stdio. Register access goes through three macros, which stepramp.c defines to the Xilinx
+ * standalone BSP's functions (and includes "xil_io.h") unless they are already defined -- on the compiler's
+ * command line, or in a header named by STEPRAMP_CONFIG_HEADER (-DSTEPRAMP_CONFIG_HEADER='"my_bus.h"'):
+ *
+ *   STEPRAMP_READ32(addr)         default Xil_In32(addr)   32-bit read
+ *   STEPRAMP_WRITE32(addr, value) default Xil_Out32(addr, value)  32-bit write, all four byte enables
+ *   STEPRAMP_WRITE8(addr, value)  default Xil_Out8(addr, value)   8-bit write: one byte enable
+ *
+ * The CTRL commands are byte writes (STEPRAMP_WRITE8) rather than a whole word built from a shadow of the
+ * interrupt enables: the driver keeps no copy of hardware state, so enables changed elsewhere (an interrupt
+ * handler, a debugger) are never overwritten, exactly like the Python driver's strobe-0x1 write. The byte lane
+ * that holds CTRL bits 7:0 is at byte address CTRL + STEPRAMP_CMD_BYTE_LANE: 0 on a little-endian bus (AXI
+ * MicroBlaze, x86), 3 on a big-endian one (PLB MicroBlaze); the default follows the compiler's byte order
+ * (__BYTE_ORDER__) and may be overridden with -DSTEPRAMP_CMD_BYTE_LANE=n. Every other access is a 32-bit word.
+ *
+ * Results are int: STEPRAMP_OK (0); a stepramp_err_t of stepramp_plan.h (bad move parameters, NULL pointer);
+ * STEPRAMP_EID or STEPRAMP_ETIMEOUT; or STEPRAMP_ECORE(code) for an error the core flagged in STATUS.ERR_CODE.
+ * stepramp_strresult() gives any of them in words.
+ *
+ *   stepramp_t motor;
+ *   if (stepramp_init(&motor, XPAR_STEPRAMP_0_BASEADDR, 50e6, 400.0 * 16, 50) != STEPRAMP_OK) { ... }
+ *   stepramp_enable_irq(&motor, 1, 1);
+ *   rc = stepramp_move(&motor, 3200, 40.0, 40.0, 20.0);      (steps, rad/s^2, rad/s^2, rad/s)
+ *   if (rc == STEPRAMP_OK) rc = stepramp_wait_done(&motor, 100000000u);
+ *   if (rc != STEPRAMP_OK) puts(stepramp_strresult(rc));
+ */
+#ifndef STEPRAMP_H
+#define STEPRAMP_H
+
+#include <stdint.h>
+
+#include "stepramp_plan.h"
+#include "stepramp_regs.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** ID register bits 31:16 of every stepramp core ('SR'). */
+#define STEPRAMP_ID_MAGIC 0x5352u
+
+/** STOP_RATIO value 1.0 (Q16.16): accel equal to decel. */
+#define STEPRAMP_STOP_RATIO_ONE 0x00010000u
+
+/** Driver results beyond stepramp_err_t (whose values stay below 64). */
+enum {
+    STEPRAMP_EID = 64,        /**< the ID register does not hold STEPRAMP_ID_MAGIC in bits 31:16 */
+    STEPRAMP_ETIMEOUT = 65,   /**< stepramp_wait_done: no STATUS.DONE within max_polls reads */
+    STEPRAMP_ECORE_BASE = 128 /**< STEPRAMP_ECORE(code): the core flagged STATUS.ERROR with ERR_CODE code */
+};
+
+/** The result for a core error: STATUS.ERR_CODE code (0 .. 15) offset by STEPRAMP_ECORE_BASE. */
+#define STEPRAMP_ECORE(code) (STEPRAMP_ECORE_BASE + (int)(code))
+/** Nonzero when result r is a core error (STEPRAMP_ECORE(code)). */
+#define STEPRAMP_IS_ECORE(r) ((r) >= STEPRAMP_ECORE_BASE && (r) < STEPRAMP_ECORE_BASE + 16)
+/** The STATUS.ERR_CODE of a core-error result. */
+#define STEPRAMP_ECORE_CODE(r) ((uint32_t)((r)-STEPRAMP_ECORE_BASE))
+
+/** STATUS.STATE values. */
+#define STEPRAMP_STATE_STOP 0u
+#define STEPRAMP_STATE_ACCEL 1u
+#define STEPRAMP_STATE_RUN 2u
+#define STEPRAMP_STATE_DECEL 3u
+
+/** One stepramp core: its base address and the parameters every move is planned with. */
+typedef struct {
+    uintptr_t base;    /**< bus address of the core's register window (offset 0 = ID) */
+    double fclk;       /**< engine clock frequency, Hz */
+    double spr;        /**< steps per revolution (with microstepping) */
+    uint32_t prescale; /**< base timer period in clocks, 1 .. 65535 */
+    uint32_t version;  /**< ID bits 15:0 read by stepramp_init: major << 8 | minor */
+} stepramp_t;
+
+/** STATUS decoded (like driver.Status). */
+typedef struct {
+    uint32_t raw;      /**< the STATUS word as read */
+    uint32_t state;    /**< STEPRAMP_STATE_STOP, _ACCEL, _RUN or _DECEL */
+    int busy;          /**< 1 while a move runs */
+    uint32_t dir;      /**< direction of the current or last move (1: position counts down) */
+    int done;          /**< sticky: a move ended (normally, stopped or rejected) */
+    int error;         /**< sticky: a move was rejected or stopped on an error */
+    uint32_t err_code; /**< cause of the last error, STEPRAMP_ERR_* of stepramp_regs.h (kept after clearing) */
+} stepramp_status_t;
+
+/**
+ * Set up the device structure and check that a stepramp core answers at base (reads ID only; writes nothing).
+ *
+ * @param dev      device structure to fill in (filled in even when the ID check fails)
+ * @param base     bus address of the core
+ * @param fclk     engine clock frequency, Hz; spr: steps per revolution; prescale: base timer period in clocks.
+ *                 These are checked when a move is planned (stepramp_plan_move), not here.
+ * @return STEPRAMP_OK; STEPRAMP_EID when ID bits 31:16 are not STEPRAMP_ID_MAGIC; STEPRAMP_ENULL if dev is NULL
+ */
+int stepramp_init(stepramp_t *dev, uintptr_t base, double fclk, double spr, uint32_t prescale);
+
+/**
+ * Plan a move with the device's fclk, spr and prescale (stepramp_plan_move; Python's StepRamp.plan).
+ * Touches no register.
+ *
+ * @param plan  output, written only on success
+ * @param steps signed step count; accel, decel in rad/s^2; speed in rad/s
+ * @return STEPRAMP_OK or the stepramp_err_t of the first failed check; STEPRAMP_ENULL if dev or plan is NULL
+ */
+int stepramp_plan(const stepramp_t *dev, stepramp_plan_t *plan, int64_t steps, double accel, double decel,
+                  double speed);
+
+/**
+ * Write every motion register of a plan, in address order (Python's plan_writes): STEPS as the signed step
+ * count in two's complement (-steps when direction is 1), PRESCALE, each wide value as _LO (bits 31:0) and _HI
+ * (the bits above), SA, SD, STOP_RATIO. The core latches them at START, so this is safe during a move (it
+ * prepares the next one). Does not start the move.
+ *
+ * STOP_RATIO: plan->stop_ratio when stepramp_plan_t has it (STEPRAMP_PLAN_HAS_STOP_RATIO defined), otherwise
+ * STEPRAMP_STOP_RATIO_ONE (ratio 1.0).
+ *
+ * @return STEPRAMP_OK; STEPRAMP_ENULL (nothing written) if dev or plan is NULL
+ */
+int stepramp_program(const stepramp_t *dev, const stepramp_plan_t *plan);
+
+/** START: begin the programmed move (ignored by the core while busy). Byte 0 of CTRL only. */
+void stepramp_start(const stepramp_t *dev);
+
+/**
+ * Plan, program and start a move (Python's StepRamp.move).
+ *
+ * @param steps signed step count (|steps| <= 2^31 - 1); accel, decel in rad/s^2; speed in rad/s
+ * @return STEPRAMP_OK, or the plan's error (stepramp_err_t) -- then no register has been written
+ */
+int stepramp_move(const stepramp_t *dev, int64_t steps, double accel, double decel, double speed);
+
+/** SOFT_STOP: decelerate at the programmed decel to zero, then DONE. Byte 0 of CTRL only. */
+void stepramp_soft_stop(const stepramp_t *dev);
+
+/** HARD_STOP: no further step pulse from the next clock on, then DONE. Byte 0 of CTRL only. */
+void stepramp_hard_stop(const stepramp_t *dev);
+
+/**
+ * Set the interrupt enables (CTRL.IRQ_DONE_EN, CTRL.IRQ_ERROR_EN): the level irq output follows STATUS.DONE /
+ * STATUS.ERROR where enabled. A 32-bit write whose command bits are 0, so it starts or stops nothing.
+ *
+ * @param done  nonzero: interrupt on DONE; error: nonzero: interrupt on ERROR
+ */
+void stepramp_enable_irq(const stepramp_t *dev, int done, int error);
+
+/**
+ * Read and decode STATUS.
+ *
+ * @param status output, may be NULL
+ * @return the raw STATUS word
+ */
+uint32_t stepramp_status(const stepramp_t *dev, stepramp_status_t *status);
+
+/** Clear the sticky STATUS.DONE and STATUS.ERROR (write 1 to both; ERR_CODE keeps the last cause). */
+void stepramp_clear_flags(const stepramp_t *dev);
+
+/** The signed 32-bit position counter, in steps. */
+int32_t stepramp_position(const stepramp_t *dev);
+
+/**
+ * Set the position counter. Only while stopped: during a move the core ignores the write and flags
+ * STATUS.ERROR with ERR_CODE POS_BUSY (which the next stepramp_wait_done reports).
+ */
+void stepramp_set_position(const stepramp_t *dev, int32_t position);
+
+/**
+ * Poll STATUS until DONE (Python's StepRamp.wait_done), then clear DONE and ERROR.
+ * Between two polls the macro STEPRAMP_IDLE() runs (default: nothing; define it to sleep or yield).
+ *
+ * @param max_polls at most this many STATUS reads (0: none, the result is STEPRAMP_ETIMEOUT)
+ * @return STEPRAMP_OK when the move ended without error; STEPRAMP_ECORE(err_code) when the core flagged ERROR
+ *         (the flags are cleared in both cases); STEPRAMP_ETIMEOUT (flags untouched) when DONE never came
+ */
+int stepramp_wait_done(const stepramp_t *dev, uint32_t max_polls);
+
+/**
+ * A STATUS.ERR_CODE value in words: the cause column of the error table of docs/registers.md
+ * (for example "PRESCALE is 0" for STEPRAMP_ERR_PRESCALE).
+ *
+ * @return a static string; "unknown error code" for a code not in the table
+ */
+const char *stepramp_strcoreerror(uint32_t code);
+
+/**
+ * The name of a STATUS.ERR_CODE value ("NONE", "PRESCALE", ..., "POS_BUSY"), like driver.Status.err_name.
+ *
+ * @return a static string; "UNKNOWN" for a code not in the table
+ */
+const char *stepramp_corename(uint32_t code);
+
+/**
+ * Any result of this driver in words: stepramp_strerror() for a stepramp_err_t, the ID and timeout errors,
+ * and "core error: " cause texts for STEPRAMP_ECORE(code).
+ *
+ * @return a static string; "unknown error" for a value that is none of these
+ */
+const char *stepramp_strresult(int result);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* STEPRAMP_H */

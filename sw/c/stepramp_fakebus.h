@@ -1,0 +1,119 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * A fake stepramp register bank for host tests (not for the target): a uint32_t array behind the driver's
+ * STEPRAMP_READ32 / STEPRAMP_WRITE32 / STEPRAMP_WRITE8, with the core's register semantics -- byte-lane
+ * writes (little-endian lanes: byte address offset b is bits 8b+7:8b), ID and the status fields read only,
+ * CTRL command bits act on write and read 0, STATUS.DONE / ERROR cleared by writing 1, POSITION writes
+ * ignored (ERROR, POS_BUSY) while busy, bus errors counted for addresses outside the 128-byte window -- and
+ * a log of every write and a count of the driver's STEPRAMP_IDLE() calls. The "core" side is driven by the test:
+ * stepramp_fakebus_set_status() and stepramp_fakebus_finish_after().
+ *
+ * The host build compiles stepramp.c with -DSTEPRAMP_CONFIG_HEADER='"stepramp_fakebus.h"', which routes the
+ * driver's register access here. The stepramp_fakebus_*move/program* functions are a ctypes entry point
+ * for sw/tests/test_c_driver.py.
+ */
+#ifndef STEPRAMP_FAKEBUS_H
+#define STEPRAMP_FAKEBUS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "stepramp_plan.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Registers of the 128-byte window. */
+#define STEPRAMP_FAKEBUS_WORDS 32u
+/** Entries of the write log (later writes are counted, not logged). */
+#define STEPRAMP_FAKEBUS_LOG_MAX 256u
+
+/** One bus write as the core sees it. */
+typedef struct {
+    uint32_t offset; /**< byte offset of the register (word aligned) */
+    uint32_t value;  /**< the 32-bit data word, written bytes in their lanes, the other lanes 0 */
+    uint32_t be;     /**< byte enables, bit b = bits 8b+7:8b */
+} stepramp_fakebus_write_t;
+
+/** The fake core's state, all visible to the tests. */
+typedef struct {
+    uintptr_t base;                                         /**< bus address of offset 0 */
+    uint32_t regs[STEPRAMP_FAKEBUS_WORDS];                  /**< register contents (CTRL holds the enables only) */
+    stepramp_fakebus_write_t log[STEPRAMP_FAKEBUS_LOG_MAX]; /**< the first writes since the last clear */
+    uint32_t writes;                                        /**< writes since the last clear (may exceed LOG_MAX) */
+    uint32_t reads;                                         /**< reads since the last clear */
+    uint32_t status_reads;                                  /**< STATUS reads since the last clear */
+    uint32_t bus_errors;                                    /**< accesses outside the window or misaligned words */
+    uint32_t idles;                                         /**< STEPRAMP_IDLE() calls since the last clear */
+    uint32_t starts, soft_stops, hard_stops;                /**< CTRL commands received */
+    uint32_t finish_after;                                  /**< 0: off; n: the move ends at the n-th STATUS read */
+    uint32_t finish_err_code;                               /**< ERR_CODE it ends with (0: no error) */
+} stepramp_fakebus_t;
+
+/** The one fake core. */
+extern stepramp_fakebus_t stepramp_fakebus;
+
+/** Reset the fake core at bus address base: registers at their reset values, ID = id, log and counters clear. */
+void stepramp_fakebus_reset(uintptr_t base, uint32_t id);
+
+/** Clear the write log and the access counters (not the registers). */
+void stepramp_fakebus_clear_log(void);
+
+/** Core side: set STATUS's read-only fields (STATE, BUSY, DIR, ERR_CODE) and, with flags, raise DONE / ERROR. */
+void stepramp_fakebus_set_status(uint32_t state, uint32_t busy, uint32_t dir, uint32_t err_code, uint32_t flags);
+
+/**
+ * Core side: the move ends at the n-th STATUS read from now (that read sees it): STATE STOP, BUSY 0, DONE 1, and
+ * ERROR with ERR_CODE err_code when err_code != 0 (with 0, ERR_CODE and ERROR stay as they are). n = 0 disarms.
+ */
+void stepramp_fakebus_finish_after(uint32_t n, uint32_t err_code);
+
+/** Bus side, used by the driver through the macros below. */
+uint32_t stepramp_fakebus_read32(uintptr_t addr);
+void stepramp_fakebus_write32(uintptr_t addr, uint32_t value);
+void stepramp_fakebus_write8(uintptr_t addr, uint8_t value);
+void stepramp_fakebus_idle(void);
+
+/* ---- ctypes entry points (sw/tests/test_c_driver.py) ---- */
+
+/** Base address the entry points below put the fake core at. */
+#define STEPRAMP_FAKEBUS_BASE ((uintptr_t)0x44A00000u)
+
+/**
+ * Reset the fake core, stepramp_init a device at STEPRAMP_FAKEBUS_BASE with fclk, spr, prescale, clear the log,
+ * then stepramp_move. Returns stepramp_move's result (or stepramp_init's if it fails).
+ */
+int stepramp_fakebus_move(int64_t steps, double accel, double decel, double speed, double spr, double fclk,
+                          uint32_t prescale);
+
+/** Reset the fake core, clear the log, stepramp_program(plan). Returns its result. */
+int stepramp_fakebus_program(const stepramp_plan_t *plan);
+
+/** Writes logged since the last clear (at most STEPRAMP_FAKEBUS_LOG_MAX). */
+uint32_t stepramp_fakebus_log_count(void);
+
+/**
+ * Log entry i: its offset, data word and byte enables (outputs may be NULL).
+ * @return 0, or -1 (outputs untouched) when i >= stepramp_fakebus_log_count()
+ */
+int stepramp_fakebus_log_entry(uint32_t i, uint32_t *offset, uint32_t *value, uint32_t *be);
+
+/** Pointer to the fake core's state (for ctypes). */
+stepramp_fakebus_t *stepramp_fakebus_state(void);
+
+/** sizeof(stepramp_plan_t) and sizeof(stepramp_fakebus_t): lets ctypes check its structure layouts. */
+size_t stepramp_fakebus_sizeof_plan(void);
+size_t stepramp_fakebus_sizeof_state(void);
+
+/* The driver's register access, when this file is its STEPRAMP_CONFIG_HEADER. */
+#define STEPRAMP_READ32(addr) stepramp_fakebus_read32(addr)
+#define STEPRAMP_WRITE32(addr, value) stepramp_fakebus_write32((addr), (value))
+#define STEPRAMP_WRITE8(addr, value) stepramp_fakebus_write8((addr), (value))
+#define STEPRAMP_IDLE() stepramp_fakebus_idle()
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* STEPRAMP_FAKEBUS_H */

@@ -1,0 +1,566 @@
+/* SPDX-License-Identifier: MIT */
+/*
+ * Host unit tests of the stepramp driver (stepramp.c) on the fake register bank of stepramp_fakebus.c, which the
+ * host build routes STEPRAMP_READ32 / _WRITE32 / _WRITE8 to. Expected register words are computed here from the
+ * plan struct with the offsets of docs/registers.md written out, not with the driver's code. The comparison with
+ * the Python driver's plan_writes() is done by sw/tests/test_c_driver.py. Exit status 0 when every check passes.
+ */
+#include "stepramp.h"
+#include "stepramp_fakebus.h"
+
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+static int g_checks;
+static int g_failures;
+
+#define CHECK(cond)                                                                                                    \
+    do {                                                                                                               \
+        g_checks++;                                                                                                    \
+        if (!(cond)) {                                                                                                 \
+            g_failures++;                                                                                              \
+            printf("%s:%d: %s: check failed: %s\n", __FILE__, __LINE__, __func__, #cond);                              \
+        }                                                                                                              \
+    } while (0)
+
+/* CHECK(got == want) for 32-bit words, printing both */
+#define CHECK_EQ(got, want)                                                                                            \
+    do {                                                                                                               \
+        unsigned long got_ = (unsigned long)(got), want_ = (unsigned long)(want);                                      \
+        g_checks++;                                                                                                    \
+        if (got_ != want_) {                                                                                           \
+            g_failures++;                                                                                              \
+            printf("%s:%d: %s: %s = 0x%08lx, expected %s = 0x%08lx\n", __FILE__, __LINE__, __func__, #got, got_,       \
+                   #want, want_);                                                                                      \
+        }                                                                                                              \
+    } while (0)
+
+#define BASE ((uintptr_t)0x40A00000u)
+#define GOOD_ID 0x53520002u
+
+/* Offsets from docs/registers.md, written out (not stepramp_regs.h) */
+enum {
+    O_ID = 0x00,
+    O_CTRL = 0x04,
+    O_STATUS = 0x08,
+    O_STEPS = 0x0C,
+    O_PRESCALE = 0x10,
+    O_C_FIRST_LO = 0x14,
+    O_C_FIRST_HI = 0x18,
+    O_C_LAST_LO = 0x1C,
+    O_C_LAST_HI = 0x20,
+    O_SA = 0x24,
+    O_C_SA_LO = 0x28,
+    O_C_SA_HI = 0x2C,
+    O_SD = 0x30,
+    O_C_SD_LO = 0x34,
+    O_C_SD_HI = 0x38,
+    O_ACCEL_SEED_LO = 0x3C,
+    O_ACCEL_SEED_HI = 0x40,
+    O_DECEL_SEED_LO = 0x44,
+    O_DECEL_SEED_HI = 0x48,
+    O_CRUISE_LO = 0x4C,
+    O_CRUISE_HI = 0x50,
+    O_STOP_RATIO = 0x54,
+    O_POSITION = 0x58
+};
+
+#define N_MOTION 19 /* STEPS .. STOP_RATIO: (0x54 - 0x0C) / 4 + 1 */
+#define TWO32 4294967296.0
+
+typedef struct {
+    uint32_t offset, value;
+} word_t;
+
+/* The expected motion-register words of a plan, in address order: LO / HI by division, STEPS by negation in
+ * 64-bit signed arithmetic. */
+static void expected_words(const stepramp_plan_t *p, word_t out[N_MOTION])
+{
+    int64_t signed_steps = p->direction ? -(int64_t)p->steps : (int64_t)p->steps;
+    const uint64_t wide[7] = {p->c_first, p->c_last, p->c_sa, p->c_sd, p->accel_seed, p->decel_seed, p->cruise};
+    const uint32_t lo_off[7] = {O_C_FIRST_LO,    O_C_LAST_LO,     O_C_SA_LO,  O_C_SD_LO,
+                                O_ACCEL_SEED_LO, O_DECEL_SEED_LO, O_CRUISE_LO};
+    int i, n = 0;
+
+    memset(out, 0, N_MOTION * sizeof *out);
+    out[n].offset = O_STEPS;
+    out[n++].value = (uint32_t)(signed_steps < 0 ? (uint64_t)(signed_steps + 4294967296LL) : (uint64_t)signed_steps);
+    out[n].offset = O_PRESCALE;
+    out[n++].value = p->prescale;
+    for (i = 0; i < 7; i++) {
+        out[n].offset = lo_off[i];
+        out[n++].value = (uint32_t)(wide[i] % 4294967296ULL);
+        out[n].offset = lo_off[i] + 4u;
+        out[n++].value = (uint32_t)(wide[i] / 4294967296ULL);
+    }
+    out[n].offset = O_SA;
+    out[n++].value = p->sa;
+    out[n].offset = O_SD;
+    out[n++].value = p->sd;
+    out[n].offset = O_STOP_RATIO;
+#ifdef STEPRAMP_PLAN_HAS_STOP_RATIO
+    out[n++].value = p->stop_ratio;
+#else
+    out[n++].value = 0x10000u; /* ratio 1.0 until the plan has stop_ratio */
+#endif
+    CHECK_EQ(n, N_MOTION);
+    /* address order (insertion sort: n is small) */
+    for (i = 1; i < n; i++) {
+        word_t w = out[i];
+        int j = i - 1;
+        while (j >= 0 && out[j].offset > w.offset) {
+            out[j + 1] = out[j];
+            j--;
+        }
+        out[j + 1] = w;
+    }
+}
+
+static stepramp_fakebus_t *const bus = &stepramp_fakebus;
+
+static uint32_t reg(uint32_t offset)
+{
+    CHECK(offset < 4u * STEPRAMP_FAKEBUS_WORDS);
+    return offset < 4u * STEPRAMP_FAKEBUS_WORDS ? bus->regs[offset / 4u] : 0xDEADBEEFu;
+}
+
+/* a device on a freshly reset fake core, log cleared */
+static stepramp_t fresh(double fclk, double spr, uint32_t prescale)
+{
+    stepramp_t dev;
+
+    stepramp_fakebus_reset(BASE, GOOD_ID);
+    CHECK_EQ(stepramp_init(&dev, BASE, fclk, spr, prescale), STEPRAMP_OK);
+    stepramp_fakebus_clear_log();
+    return dev;
+}
+
+/* the log holds exactly the motion words of plan (full-word writes, address order) from entry first on */
+static void check_program_log(const stepramp_plan_t *plan, uint32_t first)
+{
+    word_t want[N_MOTION];
+    int i;
+
+    expected_words(plan, want);
+    for (i = 0; i < N_MOTION; i++) {
+        const stepramp_fakebus_write_t *w = &bus->log[first + (uint32_t)i];
+        CHECK_EQ(w->offset, want[i].offset);
+        CHECK_EQ(w->value, want[i].value);
+        CHECK_EQ(w->be, 0xFu);
+        CHECK_EQ(reg(want[i].offset), want[i].value);
+    }
+}
+
+static void test_init(void)
+{
+    stepramp_t dev;
+    static const uint32_t bad_ids[] = {0x00000000u, 0xFFFFFFFFu, 0x53530002u, 0x52530002u, 0x00005352u, 0x5352FFFFu};
+    size_t i;
+
+    stepramp_fakebus_reset(BASE, GOOD_ID);
+    CHECK_EQ(stepramp_init(&dev, BASE, 50e6, 6400.0, 50u), STEPRAMP_OK);
+    CHECK(dev.base == BASE && dev.fclk == 50e6 && dev.spr == 6400.0 && dev.prescale == 50u);
+    CHECK_EQ(dev.version, 0x0002u);
+    CHECK_EQ(bus->writes, 0u); /* init only reads */
+    CHECK_EQ(bus->reads, 1u);
+    for (i = 0; i < sizeof bad_ids / sizeof bad_ids[0]; i++) {
+        int want = (bad_ids[i] >> 16) == 0x5352u ? STEPRAMP_OK : STEPRAMP_EID;
+        stepramp_fakebus_reset(BASE, bad_ids[i]);
+        CHECK_EQ(stepramp_init(&dev, BASE, 50e6, 6400.0, 50u), want);
+        CHECK_EQ(bus->writes, 0u);
+    }
+    /* a core at another address: the device's base is where it reads */
+    stepramp_fakebus_reset(BASE + 0x1000u, GOOD_ID);
+    CHECK_EQ(stepramp_init(&dev, BASE + 0x1000u, 1e6, 200.0, 1u), STEPRAMP_OK);
+    CHECK_EQ(bus->bus_errors, 0u);
+    CHECK_EQ(stepramp_init(NULL, BASE, 1e6, 200.0, 1u), STEPRAMP_ENULL);
+}
+
+/* move = plan + program + START, for a trapezoid, a triangle with negative steps, and the empty moves */
+static void test_move_writes(void)
+{
+    static const struct {
+        int64_t steps;
+        double accel, decel, speed, spr, fclk;
+        uint32_t prescale;
+    } moves[] = {
+        {200, 10.35, 10.35, 31.4159, 200.0, 1e6, 1u},         /* trapezoid */
+        {-75, 12.0, 16.0, 0.628, 200.0, 1e6, 1u},             /* triangle, negative */
+        {400, 40.0, 40.0, 20.0, 400.0, 1e6, 1u},              /* AVR446 demo move */
+        {-3200, 40.0, 25.0, 20.0, 6400.0, 50e6, 50u},         /* prescale */
+        {2147483647, 40.0, 40.0, 20.0, 6400.0, 100e6, 1000u}, /* the largest |steps| */
+        {-2147483647, 40.0, 40.0, 20.0, 6400.0, 100e6, 1000u},
+        {0, 1.0, 1.0, 1.0, 200.0, 1e6, 1u},
+        {-1, 1.0, 1.0, 1.0, 200.0, 1e6, 1u},
+    };
+    size_t i;
+
+    for (i = 0; i < sizeof moves / sizeof moves[0]; i++) {
+        stepramp_t dev = fresh(moves[i].fclk, moves[i].spr, moves[i].prescale);
+        stepramp_plan_t plan;
+        const stepramp_fakebus_write_t *last = &bus->log[N_MOTION];
+
+        CHECK_EQ(stepramp_plan_move(&plan, moves[i].steps, moves[i].accel, moves[i].decel, moves[i].speed, moves[i].spr,
+                                    moves[i].fclk, moves[i].prescale),
+                 STEPRAMP_OK);
+        CHECK_EQ(stepramp_move(&dev, moves[i].steps, moves[i].accel, moves[i].decel, moves[i].speed), STEPRAMP_OK);
+        CHECK_EQ(bus->writes, N_MOTION + 1u);
+        check_program_log(&plan, 0u);
+        /* then START: byte 0 of CTRL only */
+        CHECK_EQ(last->offset, O_CTRL);
+        CHECK_EQ(last->be, 0x1u);
+        CHECK_EQ(last->value, 0x1u);
+        CHECK_EQ(bus->starts, 1u);
+        CHECK_EQ(bus->soft_stops + bus->hard_stops, 0u);
+        /* STEPS is the signed step count */
+        CHECK((int64_t)(reg(O_STEPS) >= 0x80000000u ? (int64_t)reg(O_STEPS) - 4294967296LL : (int64_t)reg(O_STEPS)) ==
+              moves[i].steps);
+        CHECK_EQ(bus->bus_errors, 0u);
+        /* the log accessors (for ctypes) give the same entries */
+        CHECK_EQ(stepramp_fakebus_log_count(), N_MOTION + 1u);
+        {
+            uint32_t off = 0u, value = 0u, be = 0u;
+            CHECK_EQ(stepramp_fakebus_log_entry(N_MOTION, &off, &value, &be), 0);
+            CHECK(off == O_CTRL && value == 0x1u && be == 0x1u);
+            CHECK_EQ(stepramp_fakebus_log_entry(0u, &off, NULL, NULL), 0);
+            CHECK_EQ(off, O_STEPS);
+            CHECK_EQ(stepramp_fakebus_log_entry(N_MOTION + 1u, &off, &value, &be), -1);
+        }
+    }
+}
+
+/* program() of hand-made plans whose wide fields use every word and byte */
+static void test_program_splits_wide_values(void)
+{
+    stepramp_plan_t plan;
+    stepramp_t dev = fresh(1e6, 200.0, 1u);
+
+    memset(&plan, 0, sizeof plan);
+    plan.steps = 0x7FFFFFFFu;
+    plan.direction = 1u;
+    plan.prescale = 0xFFFFu;
+    plan.c_first = UINT64_C(0xABCD12345678);
+    plan.c_last = UINT64_C(0xFFFFFFFFFFFF);
+    plan.sa = 0x12345678u;
+    plan.c_sa = UINT64_C(0x000100000000);
+    plan.sd = 0x7FFFFFFEu;
+    plan.c_sd = UINT64_C(0x0000FFFFFFFF);
+    plan.accel_seed = UINT64_C(0x8000DEADBEEF);
+    plan.decel_seed = UINT64_C(0x0001);
+    plan.cruise = UINT64_C(0x0123456789ABCDEF);
+#ifdef STEPRAMP_PLAN_HAS_STOP_RATIO
+    plan.stop_ratio = 0x00018000u; /* 1.5 */
+#endif
+    CHECK_EQ(stepramp_program(&dev, &plan), STEPRAMP_OK);
+    CHECK_EQ(bus->writes, (uint32_t)N_MOTION);
+    CHECK_EQ(bus->starts, 0u); /* program does not start */
+    check_program_log(&plan, 0u);
+    /* the same words, spelled out */
+    CHECK_EQ(reg(O_STEPS), 0x80000001u);
+    CHECK_EQ(reg(O_C_FIRST_LO), 0x12345678u);
+    CHECK_EQ(reg(O_C_FIRST_HI), 0xABCDu);
+    CHECK_EQ(reg(O_C_SA_LO), 0u);
+    CHECK_EQ(reg(O_C_SA_HI), 1u);
+    CHECK_EQ(reg(O_C_SD_LO), 0xFFFFFFFFu);
+    CHECK_EQ(reg(O_C_SD_HI), 0u);
+    CHECK_EQ(reg(O_CRUISE_LO), 0x89ABCDEFu);
+    CHECK_EQ(reg(O_CRUISE_HI), 0x01234567u);
+#ifdef STEPRAMP_PLAN_HAS_STOP_RATIO
+    CHECK_EQ(reg(O_STOP_RATIO), 0x00018000u);
+#else
+    CHECK_EQ(reg(O_STOP_RATIO), 0x10000u); /* ratio 1.0 until the plan has stop_ratio */
+#endif
+
+    plan.direction = 0u;
+    plan.steps = 5u;
+    stepramp_fakebus_clear_log();
+    CHECK_EQ(stepramp_program(&dev, &plan), STEPRAMP_OK);
+    CHECK_EQ(reg(O_STEPS), 5u);
+    plan.direction = 1u;
+    plan.steps = 0u; /* -0 */
+    CHECK_EQ(stepramp_program(&dev, &plan), STEPRAMP_OK);
+    CHECK_EQ(reg(O_STEPS), 0u);
+    plan.steps = 1u;
+    CHECK_EQ(stepramp_program(&dev, &plan), STEPRAMP_OK);
+    CHECK_EQ(reg(O_STEPS), 0xFFFFFFFFu);
+
+    stepramp_fakebus_clear_log();
+    CHECK_EQ(stepramp_program(&dev, NULL), STEPRAMP_ENULL);
+    CHECK_EQ(stepramp_program(NULL, &plan), STEPRAMP_ENULL);
+    CHECK_EQ(bus->writes, 0u);
+}
+
+/* START, SOFT_STOP, HARD_STOP touch byte 0 of CTRL only; the enables in byte 1 survive them */
+static void test_commands_keep_irq_enables(void)
+{
+    static const uint32_t enables[4] = {0x000u, 0x100u, 0x200u, 0x300u};
+    size_t i;
+
+    for (i = 0; i < 4; i++) {
+        stepramp_t dev = fresh(1e6, 200.0, 1u);
+
+        stepramp_enable_irq(&dev, (enables[i] & 0x100u) != 0u, (enables[i] & 0x200u) != 0u);
+        CHECK_EQ(bus->writes, 1u);
+        CHECK_EQ(bus->log[0].offset, O_CTRL);
+        CHECK_EQ(bus->log[0].value, enables[i]);
+        CHECK_EQ(bus->starts + bus->soft_stops + bus->hard_stops, 0u); /* enabling starts nothing */
+        CHECK_EQ(reg(O_CTRL), enables[i]);
+
+        stepramp_start(&dev);
+        stepramp_soft_stop(&dev);
+        stepramp_hard_stop(&dev);
+        CHECK_EQ(bus->writes, 4u);
+        CHECK_EQ(bus->log[1].value, 0x1u);
+        CHECK_EQ(bus->log[2].value, 0x2u);
+        CHECK_EQ(bus->log[3].value, 0x4u);
+        CHECK(bus->log[1].be == 0x1u && bus->log[2].be == 0x1u && bus->log[3].be == 0x1u);
+        CHECK(bus->log[1].offset == O_CTRL && bus->log[2].offset == O_CTRL && bus->log[3].offset == O_CTRL);
+        CHECK(bus->starts == 1u && bus->soft_stops == 1u && bus->hard_stops == 1u);
+        CHECK_EQ(reg(O_CTRL), enables[i]);
+        CHECK_EQ(stepramp_fakebus_read32(BASE + O_CTRL), enables[i]); /* the command bits read 0 */
+
+        /* a whole move keeps them too */
+        CHECK_EQ(stepramp_move(&dev, 200, 10.35, 10.35, 31.4159), STEPRAMP_OK);
+        CHECK_EQ(reg(O_CTRL), enables[i]);
+        CHECK_EQ(bus->bus_errors, 0u);
+    }
+    {
+        stepramp_t dev = fresh(1e6, 200.0, 1u);
+        stepramp_enable_irq(&dev, 7, 0); /* any nonzero is true */
+        CHECK_EQ(reg(O_CTRL), 0x100u);
+        stepramp_enable_irq(&dev, 0, -1);
+        CHECK_EQ(reg(O_CTRL), 0x200u);
+        stepramp_enable_irq(&dev, 0, 0);
+        CHECK_EQ(reg(O_CTRL), 0u);
+    }
+}
+
+static void test_status_decoding(void)
+{
+    stepramp_t dev = fresh(1e6, 200.0, 1u);
+    uint32_t state, busy, dir, done, error, code;
+
+    for (state = 0; state < 4u; state++) {
+        for (busy = 0; busy < 2u; busy++) {
+            for (dir = 0; dir < 2u; dir++) {
+                for (done = 0; done < 2u; done++) {
+                    for (error = 0; error < 2u; error++) {
+                        for (code = 0; code < 16u; code++) {
+                            stepramp_status_t st;
+                            uint32_t raw = state | busy << 2 | dir << 3 | done << 4 | error << 5 | code << 8;
+
+                            bus->regs[O_STATUS / 4u] = raw;
+                            memset(&st, 0xA5, sizeof st);
+                            CHECK_EQ(stepramp_status(&dev, &st), raw);
+                            CHECK(st.raw == raw && st.state == state && st.busy == (int)busy && st.dir == dir &&
+                                  st.done == (int)done && st.error == (int)error && st.err_code == code);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    CHECK_EQ(stepramp_status(&dev, NULL), bus->regs[O_STATUS / 4u]);
+    CHECK_EQ(bus->writes, 0u); /* reading STATUS clears nothing */
+    bus->regs[O_STATUS / 4u] = 0u;
+    stepramp_fakebus_set_status(STEPRAMP_STATE_RUN, 1u, 1u, 0u, 0u);
+    {
+        stepramp_status_t st;
+        (void)stepramp_status(&dev, &st);
+        CHECK(st.state == STEPRAMP_STATE_RUN && st.busy && st.dir == 1u && !st.done && !st.error);
+    }
+}
+
+static void test_clear_flags(void)
+{
+    stepramp_t dev = fresh(1e6, 200.0, 1u);
+
+    stepramp_fakebus_set_status(0u, 0u, 1u, STEPRAMP_ERR_LATE, 0x30u);
+    stepramp_clear_flags(&dev);
+    CHECK_EQ(bus->writes, 1u);
+    CHECK_EQ(bus->log[0].offset, O_STATUS);
+    CHECK_EQ(bus->log[0].value, 0x30u);
+    CHECK_EQ(reg(O_STATUS), (uint32_t)(STEPRAMP_ERR_LATE << 8 | 0x8u)); /* ERR_CODE and DIR stay */
+}
+
+static void test_wait_done(void)
+{
+    stepramp_t dev;
+    stepramp_status_t st;
+    uint32_t code;
+
+    /* done at the 5th poll, no error */
+    dev = fresh(1e6, 200.0, 1u);
+    stepramp_fakebus_set_status(STEPRAMP_STATE_ACCEL, 1u, 0u, 0u, 0u);
+    stepramp_fakebus_finish_after(5u, 0u);
+    CHECK_EQ(stepramp_wait_done(&dev, 100u), STEPRAMP_OK);
+    CHECK_EQ(bus->status_reads, 5u);
+    CHECK_EQ(bus->idles, 4u); /* between polls */
+    CHECK_EQ(bus->writes, 1u);
+    CHECK(bus->log[0].offset == O_STATUS && bus->log[0].value == 0x30u);
+    (void)stepramp_status(&dev, &st);
+    CHECK(!st.done && !st.error && !st.busy && st.state == STEPRAMP_STATE_STOP);
+
+    /* done already at the first poll */
+    dev = fresh(1e6, 200.0, 1u);
+    stepramp_fakebus_set_status(0u, 0u, 0u, 0u, STEPRAMP_STATUS_DONE_MASK);
+    CHECK_EQ(stepramp_wait_done(&dev, 1u), STEPRAMP_OK);
+    CHECK(bus->status_reads == 1u && bus->idles == 0u);
+
+    /* every error code the core can report */
+    for (code = 1; code < 16u; code++) {
+        dev = fresh(1e6, 200.0, 1u);
+        stepramp_fakebus_set_status(STEPRAMP_STATE_RUN, 1u, 1u, 0u, 0u);
+        stepramp_fakebus_finish_after(3u, code);
+        CHECK_EQ(stepramp_wait_done(&dev, 10u), STEPRAMP_ECORE(code));
+        CHECK(STEPRAMP_IS_ECORE(STEPRAMP_ECORE(code)) && STEPRAMP_ECORE_CODE(STEPRAMP_ECORE(code)) == code);
+        CHECK_EQ(bus->status_reads, 3u);
+        (void)stepramp_status(&dev, &st);
+        CHECK(!st.done && !st.error && st.err_code == code && st.dir == 1u); /* flags cleared, cause kept */
+    }
+
+    /* timeout: never done; nothing written */
+    dev = fresh(1e6, 200.0, 1u);
+    stepramp_fakebus_set_status(STEPRAMP_STATE_RUN, 1u, 0u, 0u, 0u);
+    stepramp_fakebus_finish_after(1001u, 0u);
+    CHECK_EQ(stepramp_wait_done(&dev, 1000u), STEPRAMP_ETIMEOUT);
+    CHECK_EQ(bus->status_reads, 1000u);
+    CHECK_EQ(bus->idles, 999u);
+    CHECK_EQ(bus->writes, 0u);
+    CHECK_EQ(stepramp_wait_done(&dev, 1u), STEPRAMP_OK); /* the 1001st read: done */
+
+    /* no polls at all */
+    dev = fresh(1e6, 200.0, 1u);
+    stepramp_fakebus_set_status(0u, 0u, 0u, 0u, STEPRAMP_STATUS_DONE_MASK);
+    CHECK_EQ(stepramp_wait_done(&dev, 0u), STEPRAMP_ETIMEOUT);
+    CHECK_EQ(bus->reads, 0u);
+
+    /* ERROR is only acted on with DONE (a POSITION write during a move flags ERROR; the move goes on) */
+    dev = fresh(1e6, 200.0, 1u);
+    stepramp_fakebus_set_status(STEPRAMP_STATE_RUN, 1u, 0u, STEPRAMP_ERR_POS_BUSY, STEPRAMP_STATUS_ERROR_MASK);
+    CHECK_EQ(stepramp_wait_done(&dev, 50u), STEPRAMP_ETIMEOUT);
+    CHECK_EQ(bus->status_reads, 50u);
+    CHECK_EQ(bus->bus_errors, 0u);
+}
+
+static void test_position(void)
+{
+    static const int32_t values[] = {0, 1, -1, 123456, -123456, INT32_MAX, INT32_MIN, INT32_MIN + 1, 0x12345678};
+    static const uint32_t words[] = {0u,          1u,          0xFFFFFFFFu, 0x0001E240u, 0xFFFE1DC0u,
+                                     0x7FFFFFFFu, 0x80000000u, 0x80000001u, 0x12345678u};
+    stepramp_t dev = fresh(1e6, 200.0, 1u);
+    size_t i;
+
+    for (i = 0; i < sizeof values / sizeof values[0]; i++) {
+        stepramp_fakebus_clear_log();
+        stepramp_set_position(&dev, values[i]);
+        CHECK_EQ(bus->writes, 1u);
+        CHECK(bus->log[0].offset == O_POSITION && bus->log[0].be == 0xFu);
+        CHECK_EQ(reg(O_POSITION), words[i]);
+        CHECK(stepramp_position(&dev) == values[i]);
+        /* and from a raw word the core counted to */
+        bus->regs[O_POSITION / 4u] = words[i];
+        CHECK(stepramp_position(&dev) == values[i]);
+    }
+    /* during a move: ignored, ERROR with POS_BUSY, which wait_done reports at DONE */
+    stepramp_set_position(&dev, 100);
+    stepramp_fakebus_set_status(STEPRAMP_STATE_RUN, 1u, 0u, 0u, 0u);
+    stepramp_set_position(&dev, -5);
+    CHECK(stepramp_position(&dev) == 100);
+    stepramp_fakebus_finish_after(2u, 0u);
+    CHECK_EQ(stepramp_wait_done(&dev, 10u), STEPRAMP_ECORE(STEPRAMP_ERR_POS_BUSY));
+}
+
+/* an invalid move returns the plan's error and writes nothing */
+static void test_invalid_move_writes_nothing(void)
+{
+    static const struct {
+        int64_t steps;
+        double accel, decel, speed, spr, fclk;
+        uint32_t prescale;
+        int want;
+    } moves[] = {
+        {200, 0.0, 10.0, 10.0, 200.0, 1e6, 1u, STEPRAMP_EACCEL},
+        {200, 10.0, -1.0, 10.0, 200.0, 1e6, 1u, STEPRAMP_EDECEL},
+        {200, 10.0, 10.0, 0.0, 200.0, 1e6, 1u, STEPRAMP_ESPEED},
+        {200, 10.0, 10.0, 10.0, 0.0, 1e6, 1u, STEPRAMP_ESPR},
+        {200, 10.0, 10.0, 10.0, 200.0, 0.0, 1u, STEPRAMP_EFCLK},
+        {200, 10.0, 10.0, 10.0, 200.0, 1e6, 0u, STEPRAMP_EPRESCALE},
+        {200, 10.0, 10.0, 10.0, 200.0, 1e6, 65536u, STEPRAMP_EPRESCALE},
+        {INT64_C(2147483648), 10.0, 10.0, 10.0, 200.0, 1e6, 1u, STEPRAMP_ESTEPS},
+        {-INT64_C(2147483648), 10.0, 10.0, 10.0, 200.0, 1e6, 1u, STEPRAMP_ESTEPS},
+        {200, 1e6, 1e6, 1e4, 200.0, 1e6, 1u, STEPRAMP_ETOOFAST}, /* 318 kHz step rate at 1 MHz */
+    };
+    size_t i;
+
+    for (i = 0; i < sizeof moves / sizeof moves[0]; i++) {
+        stepramp_t dev = fresh(moves[i].fclk, moves[i].spr, moves[i].prescale);
+        stepramp_plan_t plan;
+        int plan_rc = stepramp_plan_move(&plan, moves[i].steps, moves[i].accel, moves[i].decel, moves[i].speed,
+                                         moves[i].spr, moves[i].fclk, moves[i].prescale);
+
+        CHECK_EQ(plan_rc, moves[i].want);
+        CHECK_EQ(stepramp_move(&dev, moves[i].steps, moves[i].accel, moves[i].decel, moves[i].speed), plan_rc);
+        CHECK_EQ(bus->writes, 0u);
+        CHECK_EQ(bus->starts, 0u);
+        CHECK_EQ(stepramp_plan(&dev, &plan, moves[i].steps, moves[i].accel, moves[i].decel, moves[i].speed), plan_rc);
+    }
+    {
+        stepramp_t dev = fresh(1e6, 200.0, 1u);
+        CHECK_EQ(stepramp_move(NULL, 200, 10.0, 10.0, 10.0), STEPRAMP_ENULL);
+        CHECK_EQ(stepramp_plan(&dev, NULL, 200, 10.0, 10.0, 10.0), STEPRAMP_ENULL);
+        CHECK_EQ(bus->writes, 0u);
+    }
+}
+
+static void test_error_texts(void)
+{
+    uint32_t a, b;
+
+    CHECK(strcmp(stepramp_strcoreerror(STEPRAMP_ERR_NONE), "no error") == 0);
+    CHECK(strcmp(stepramp_strcoreerror(STEPRAMP_ERR_PRESCALE), "PRESCALE is 0") == 0);
+    CHECK(strcmp(stepramp_strcoreerror(STEPRAMP_ERR_POS_BUSY),
+                 "POSITION written while a move runs (the write was ignored)") == 0);
+    CHECK(strcmp(stepramp_corename(STEPRAMP_ERR_LATE), "LATE") == 0);
+    CHECK(strcmp(stepramp_corename(STEPRAMP_ERR_ZERO_TICKS), "ZERO_TICKS") == 0);
+    for (a = 0; a <= STEPRAMP_ERR_POS_BUSY; a++) {
+        CHECK(strcmp(stepramp_strcoreerror(a), "unknown error code") != 0);
+        CHECK(strcmp(stepramp_corename(a), "UNKNOWN") != 0);
+        CHECK(strstr(stepramp_strresult(STEPRAMP_ECORE(a)), stepramp_strcoreerror(a)) != NULL);
+        CHECK(strstr(stepramp_strresult(STEPRAMP_ECORE(a)), stepramp_corename(a)) != NULL);
+        for (b = 0; b < a; b++) {
+            CHECK(strcmp(stepramp_strcoreerror(a), stepramp_strcoreerror(b)) != 0);
+        }
+    }
+    CHECK(strcmp(stepramp_strcoreerror(STEPRAMP_ERR_POS_BUSY + 1u), "unknown error code") == 0);
+    CHECK(strcmp(stepramp_strcoreerror(UINT32_MAX), "unknown error code") == 0);
+    CHECK(strcmp(stepramp_corename(99u), "UNKNOWN") == 0);
+    CHECK(strcmp(stepramp_strresult(STEPRAMP_OK), "success") == 0);
+    CHECK(strcmp(stepramp_strresult(STEPRAMP_EACCEL), stepramp_strerror(STEPRAMP_EACCEL)) == 0);
+    CHECK(strcmp(stepramp_strresult(STEPRAMP_ENULL), stepramp_strerror(STEPRAMP_ENULL)) == 0);
+    CHECK(strstr(stepramp_strresult(STEPRAMP_EID), "ID") != NULL);
+    CHECK(strstr(stepramp_strresult(STEPRAMP_ETIMEOUT), "DONE") != NULL);
+    CHECK(strcmp(stepramp_strresult(-1), "unknown error") == 0);
+    CHECK(strcmp(stepramp_strresult(STEPRAMP_ECORE(16)), "unknown error") == 0);
+    CHECK(strcmp(stepramp_strresult(STEPRAMP_ECORE(15)), "core error: unknown error code") == 0);
+    /* the driver's results do not collide with the plan's errors */
+    CHECK((int)STEPRAMP_ENULL < STEPRAMP_EID && STEPRAMP_EID != STEPRAMP_ETIMEOUT);
+    CHECK(STEPRAMP_ETIMEOUT < STEPRAMP_ECORE(0));
+}
+
+int main(void)
+{
+    test_init();
+    test_move_writes();
+    test_program_splits_wide_values();
+    test_commands_keep_irq_enables();
+    test_status_decoding();
+    test_clear_flags();
+    test_wait_done();
+    test_position();
+    test_invalid_move_writes_nothing();
+    test_error_texts();
+    printf("test_stepramp: %d checks, %d failed\n", g_checks, g_failures);
+    return g_failures == 0 ? 0 : 1;
+}

@@ -1,0 +1,433 @@
+# SPDX-License-Identifier: MIT
+"""Reusable cocotb monitors for the motor pins of every motion test (stepper alone, engine + stepper, tops).
+
+Each monitor is given the settings the test programmed (so that a test can pass a wrong one on purpose and see the
+monitor fail), watches the pins from start() on, records every violation as (time in ns, message) and raises
+AssertionError listing them in check(). They wait on edges of the signals they watch, not on every clock; only the
+PWM duty measurement samples the pins clock by clock, for one carrier period now and then.
+
+* StepWidthMonitor: every STEP pulse is high at least max(step_width, 1) clocks (exactly, with exact=True).
+* DirTimingMonitor: no DIR change within dir_setup clocks before or dir_hold clocks after a STEP rising edge.
+* ShootThroughMonitor: IN1 and IN2 of a bridge are never '1' together.
+* ElectricalMonitor: after every STEP rising edge the windings show the model's state for the position counted
+  from the STEP pulses and DIR (so the electrical position follows the step count in both directions); in PWM mode
+  the polarity at every step and the duty measured over a carrier period now and then.
+
+The rules come from stepramp.stepper (the model), never from the RTL. Times are converted to clock periods
+(tbutil.CLK_PERIOD_NS unless told otherwise).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Coroutine, Iterable, Sequence
+from typing import Any, ClassVar
+
+import cocotb
+from cocotb.triggers import ClockCycles, ReadOnly, RisingEdge
+from cocotb.utils import get_sim_time
+
+from stepramp import stepper as sm
+from tbutil import CLK_PERIOD_NS
+
+
+def _bit(signal: Any) -> int:
+    """A 1-bit signal as 0 / 1 (X, Z, U read as 0, with the raw value kept out of the arithmetic)."""
+    value = signal.value
+    return 1 if str(value) == "1" else 0
+
+
+def _name(signal: Any) -> str:
+    return str(getattr(signal, "_name", signal))
+
+
+class Monitor:
+    """Base: a list of violations, start / stop of the watching coroutines, check()."""
+
+    def __init__(self, name: str, clk_period_ns: float = CLK_PERIOD_NS) -> None:
+        self.name = name
+        self.clk_period_ns = clk_period_ns
+        self.violations: list[tuple[float, str]] = []
+        self._tasks: list[Any] = []
+
+    def _coroutines(self) -> Iterable[Coroutine[Any, Any, None]]:
+        raise NotImplementedError
+
+    def start(self) -> Monitor:
+        """Start watching (call after reset). Returns self, so `mon = XMonitor(...).start()` works."""
+        self._tasks = [cocotb.start_soon(c) for c in self._coroutines()]
+        return self
+
+    def stop(self) -> None:
+        """Stop watching (for example before the settings change); the violations are kept."""
+        for task in self._tasks:
+            if not task.done():
+                task.cancel()
+        self._tasks = []
+
+    def now(self) -> float:
+        """Simulation time in clock periods."""
+        return get_sim_time("ns") / self.clk_period_ns
+
+    def violation(self, message: str) -> None:
+        self.violations.append((get_sim_time("ns"), message))
+
+    def check(self) -> None:
+        """Raise AssertionError listing the violations (at most 20 shown)."""
+        if self.violations:
+            lines = [f"  {t:.0f} ns: {msg}" for t, msg in self.violations[:20]]
+            more = len(self.violations) - 20
+            if more > 0:
+                lines.append(f"  ... and {more} more")
+            raise AssertionError(f"{self.name}: {len(self.violations)} violation(s)\n" + "\n".join(lines))
+
+
+class StepWidthMonitor(Monitor):
+    """STEP high for at least max(step_width, 1) clocks per pulse (exactly that with exact=True)."""
+
+    def __init__(
+        self,
+        step: Any,
+        step_width: int,
+        *,
+        exact: bool = False,
+        clk_period_ns: float = CLK_PERIOD_NS,
+        name: str = "STEP width",
+    ) -> None:
+        super().__init__(name, clk_period_ns)
+        self.step = step
+        self.step_width = step_width
+        self.exact = exact
+        self.pulses = 0
+        self.widths: list[float] = []
+
+    def _coroutines(self) -> Iterable[Coroutine[Any, Any, None]]:
+        return [self._watch()]
+
+    async def _watch(self) -> None:
+        while True:
+            await RisingEdge(self.step)
+            rise = self.now()
+            await self.step.falling_edge
+            fall = self.now()
+            self.pulses += 1
+            self.widths.append(fall - rise)
+            for problem in sm.check_step_widths([rise], [fall], self.step_width, exact=self.exact):
+                self.violation(problem)
+
+
+class DirTimingMonitor(Monitor):
+    """No DIR change within dir_setup clocks before or dir_hold clocks after a STEP rising edge (never both at once).
+
+    Each STEP rising edge is checked against the latest DIR change, each DIR change against the latest rising edge.
+    """
+
+    def __init__(
+        self,
+        step: Any,
+        direction: Any,
+        dir_setup: int,
+        dir_hold: int,
+        *,
+        clk_period_ns: float = CLK_PERIOD_NS,
+        name: str = "DIR setup/hold",
+    ) -> None:
+        super().__init__(name, clk_period_ns)
+        self.step = step
+        self.direction = direction
+        self.dir_setup = dir_setup
+        self.dir_hold = dir_hold
+        self.last_rise: float | None = None
+        self.last_change: float | None = None
+        self.rises = 0
+        self.changes: list[float] = []
+
+    def _coroutines(self) -> Iterable[Coroutine[Any, Any, None]]:
+        return [self._watch_step(), self._watch_dir()]
+
+    async def _watch_step(self) -> None:
+        while True:
+            await RisingEdge(self.step)
+            t = self.now()
+            self.rises += 1
+            if self.last_change is not None and not sm.setup_ok(self.last_change, t, self.dir_setup):
+                self.violation(
+                    f"STEP rise {t - self.last_change:.0f} clocks after the DIR change (setup {max(self.dir_setup, 1)})"
+                )
+            self.last_rise = t
+
+    async def _watch_dir(self) -> None:
+        while True:
+            await self.direction.value_change
+            t = self.now()
+            self.changes.append(t)
+            if self.last_rise is not None and not sm.hold_ok(self.last_rise, t, self.dir_hold):
+                self.violation(
+                    f"DIR change {t - self.last_rise:.0f} clocks after a STEP rise (hold {max(self.dir_hold, 1)})"
+                )
+            self.last_change = t
+
+
+class ShootThroughMonitor(Monitor):
+    """IN1 and IN2 of each bridge never '1' together. bridges: pairs (in1, in2), e.g. [(a1, a2), (b1, b2)]."""
+
+    def __init__(
+        self,
+        bridges: Sequence[tuple[Any, Any]],
+        *,
+        clk_period_ns: float = CLK_PERIOD_NS,
+        name: str = "shoot-through",
+    ) -> None:
+        super().__init__(name, clk_period_ns)
+        self.bridges = list(bridges)
+        self.edges = 0
+
+    def _coroutines(self) -> Iterable[Coroutine[Any, Any, None]]:
+        # One watcher per input (cocotb 2.1's First() does not survive Task.cancel() cleanly).
+        out: list[Coroutine[Any, Any, None]] = []
+        for k, (in1, in2) in enumerate(self.bridges):
+            out += [self._watch(k, in1, in2), self._watch(k, in2, in1)]
+        return out
+
+    async def _watch(self, k: int, rising: Any, other: Any) -> None:
+        while True:
+            await RisingEdge(rising)
+            await ReadOnly()
+            self.edges += 1
+            if _bit(other):
+                self.violation(f"bridge {k} ({_name(rising)}, {_name(other)}): both inputs '1'")
+
+
+class ElectricalMonitor(Monitor):
+    """The windings follow the step count: after each STEP rising edge, the position (start value +1 per STEP with
+    DIR = 0, -1 with DIR = 1) gives the expected winding state from stepramp.stepper.
+
+    Every check is made `settle` clocks after the STEP rising edge (default: stepramp.stepper.winding_latency: 0
+    for the on/off modes, 2 * duty_bits + 6 for PWM). On/off modes (0 .. 3, 5 .. 7): a1, a2, b1, b2 equal the
+    model's levels. PWM mode (4): at every step the polarity (the input of the wrong sign is '0', an input with a
+    duty of the full period is '1'); and after every `pwm_every`-th step (and at start) the on-clocks of each input
+    are counted over one carrier period and compared with the model's duty within duty_tolerance counts (a
+    measurement that a
+    STEP interrupts is dropped and counted in duty_skipped). Every STEP rising edge is counted (the count never
+    misses one); a check whose settle time a newer STEP interrupts (steps closer than `settle`, as between two
+    moves) is left to the newer one and counted in `superseded`. pins: (a1, a2, b1, b2).
+    """
+
+    def __init__(
+        self,
+        clk: Any,
+        step: Any,
+        direction: Any,
+        pins: Sequence[Any],
+        mode: int,
+        *,
+        position: int = 0,
+        ustep_log2: int = 0,
+        pwm_period: int = 0,
+        microsteps: int = sm.DEFAULT_MICROSTEPS,
+        duty_bits: int = sm.DEFAULT_DUTY_BITS,
+        enable: bool = True,
+        settle: int | None = None,
+        pwm_every: int = 16,
+        duty_tolerance: int = 1,
+        clk_period_ns: float = CLK_PERIOD_NS,
+        name: str = "electrical position",
+    ) -> None:
+        super().__init__(name, clk_period_ns)
+        if len(pins) != 4:
+            raise ValueError("pins must be (a1, a2, b1, b2)")
+        self.clk = clk
+        self.step = step
+        self.direction = direction
+        self.pins = list(pins)
+        self.mode = sm.effective_mode(mode)
+        self.position = position
+        self.ustep_log2 = ustep_log2
+        self.pwm_period = pwm_period
+        self.microsteps = microsteps
+        self.duty_bits = duty_bits
+        self.enable = enable
+        self.settle = sm.winding_latency(self.mode, duty_bits) if settle is None else settle
+        self.pwm_every = max(pwm_every, 1)
+        self.duty_tolerance = duty_tolerance
+        self.steps = 0
+        self.checked = 0
+        self.duty_measured = 0
+        self.duty_skipped = 0
+        self.superseded = 0
+        self._measuring = False
+
+    def _coroutines(self) -> Iterable[Coroutine[Any, Any, None]]:
+        return [self._watch()]
+
+    def levels(self) -> tuple[int, int, int, int]:
+        return tuple(_bit(p) for p in self.pins)  # type: ignore[return-value]
+
+    def expected_pwm(self, position: int) -> tuple[sm.Winding, sm.Winding]:
+        return sm.pwm_windings(
+            position, self.ustep_log2, self.pwm_period, self.microsteps, self.duty_bits, enable=self.enable
+        )
+
+    def _spawn(self, coro: Coroutine[Any, Any, None]) -> None:
+        self._tasks = [t for t in self._tasks if not t.done()]
+        self._tasks.append(cocotb.start_soon(coro))
+
+    async def _watch(self) -> None:
+        self._spawn(self._check_after(self.position, self.steps, initial=True))
+        while True:
+            await RisingEdge(self.step)
+            self.position += -1 if _bit(self.direction) else 1
+            self.steps += 1
+            self._spawn(self._check_after(self.position, self.steps))
+
+    async def _check_after(self, pos: int, steps: int, initial: bool = False) -> None:
+        """settle clocks after a STEP rising edge (at once for the initial check): compare, unless a newer STEP
+        came meanwhile (then that one's check covers it; counted in `superseded`)."""
+        if self.settle and not initial:
+            await ClockCycles(self.clk, self.settle)
+        await ReadOnly()
+        if self.steps != steps:
+            self.superseded += 1
+            return
+        self._check_position(pos, initial)
+
+    def _check_position(self, pos: int, initial: bool = False) -> None:
+        """Compare the pins now (in ReadOnly) with the model at pos; start a duty measurement now and then."""
+        self.checked += 1
+        got = self.levels()
+        if self.mode != sm.MODE_PWM:
+            want = sm.winding_levels(self.mode, pos, self.enable)
+            if got != want:
+                self.violation(
+                    f"position {pos} ({sm.MODE_NAMES[self.mode]}, e = {sm.electrical_position(self.mode, pos)}): "
+                    f"a1 a2 b1 b2 = {got}, expected {want}"
+                )
+            return
+        for k, w in enumerate(self.expected_pwm(pos)):
+            in1, in2 = got[2 * k], got[2 * k + 1]
+            act1, act2 = w.levels()
+            winding = "AB"[k]
+            if (in1 and not act1) or (in2 and not act2):
+                self.violation(
+                    f"position {pos}: winding {winding} inputs ({in1}, {in2}) but polarity {w.polarity:+d} "
+                    f"(duty {w.duty})"
+                )
+            if w.duty >= self.pwm_period >= 2 and (in1, in2) != (act1, act2):
+                self.violation(f"position {pos}: winding {winding} at full duty but inputs ({in1}, {in2})")
+        if not self._measuring and (initial or self.steps % self.pwm_every == 0):
+            self._measuring = True
+            self._spawn(self._measure(pos, self.steps))
+
+    async def measure(self, pos: int) -> tuple[list[int], bool]:
+        """On-clocks of a1, a2, b1, b2 over one carrier period from the next clock edge; flag: a STEP interrupted."""
+        steps = self.steps
+        counts = [0, 0, 0, 0]
+        for _ in range(max(self.pwm_period, 1)):
+            await RisingEdge(self.clk)
+            await ReadOnly()
+            for k, p in enumerate(self.pins):
+                counts[k] += _bit(p)
+        return counts, self.steps != steps
+
+    async def _measure(self, pos: int, steps: int) -> None:
+        try:
+            counts, interrupted = await self.measure(pos)
+        finally:
+            self._measuring = False
+        if interrupted or self.steps != steps:
+            self.duty_skipped += 1
+            return
+        self.duty_measured += 1
+        for k, w in enumerate(self.expected_pwm(pos)):
+            on1, on2 = counts[2 * k], counts[2 * k + 1]
+            want1, want2 = (w.duty, 0) if w.polarity > 0 else (0, w.duty) if w.polarity < 0 else (0, 0)
+            if abs(on1 - want1) > self.duty_tolerance or abs(on2 - want2) > self.duty_tolerance:
+                self.violation(
+                    f"position {pos}: winding {'AB'[k]} on-clocks ({on1}, {on2}) per {self.pwm_period}, "
+                    f"expected ({want1}, {want2})"
+                )
+
+
+class MotionMonitors:
+    """All four monitors on one set of pins, with one check(). names maps step, dir, a1, a2, b1, b2 to the
+    pins' names on the dut (default: the stepramp_stepper port names step_o, dir_o, a1, a2, b1, b2)."""
+
+    DEFAULT_NAMES: ClassVar[dict[str, str]] = {
+        "clk": "clk",
+        "step": "step_o",
+        "dir": "dir_o",
+        "a1": "a1",
+        "a2": "a2",
+        "b1": "b1",
+        "b2": "b2",
+    }
+
+    def __init__(
+        self,
+        dut: Any,
+        *,
+        mode: int,
+        step_width: int,
+        dir_setup: int,
+        dir_hold: int,
+        position: int = 0,
+        ustep_log2: int = 0,
+        pwm_period: int = 0,
+        microsteps: int = sm.DEFAULT_MICROSTEPS,
+        duty_bits: int = sm.DEFAULT_DUTY_BITS,
+        enable: bool = True,
+        pwm_every: int = 16,
+        names: dict[str, str] | None = None,
+        clk_period_ns: float = CLK_PERIOD_NS,
+    ) -> None:
+        n = {**self.DEFAULT_NAMES, **(names or {})}
+        sig = {k: getattr(dut, v) for k, v in n.items()}
+        pins = (sig["a1"], sig["a2"], sig["b1"], sig["b2"])
+        self.width = StepWidthMonitor(sig["step"], step_width, clk_period_ns=clk_period_ns)
+        self.dir = DirTimingMonitor(sig["step"], sig["dir"], dir_setup, dir_hold, clk_period_ns=clk_period_ns)
+        self.shoot = ShootThroughMonitor([pins[:2], pins[2:]], clk_period_ns=clk_period_ns)
+        self.electrical = ElectricalMonitor(
+            sig["clk"],
+            sig["step"],
+            sig["dir"],
+            pins,
+            mode,
+            position=position,
+            ustep_log2=ustep_log2,
+            pwm_period=pwm_period,
+            microsteps=microsteps,
+            duty_bits=duty_bits,
+            enable=enable,
+            pwm_every=pwm_every,
+            clk_period_ns=clk_period_ns,
+        )
+        self.all: list[Monitor] = [self.width, self.dir, self.shoot, self.electrical]
+
+    def start(self) -> MotionMonitors:
+        for m in self.all:
+            m.start()
+        return self
+
+    def stop(self) -> None:
+        for m in self.all:
+            m.stop()
+
+    def check(self) -> None:
+        """Raise one AssertionError with the violations of every monitor."""
+        problems: list[str] = []
+        for m in self.all:
+            try:
+                m.check()
+            except AssertionError as exc:
+                problems.append(str(exc))
+        if problems:
+            raise AssertionError("\n".join(problems))
+
+
+__all__ = [
+    "DirTimingMonitor",
+    "ElectricalMonitor",
+    "Monitor",
+    "MotionMonitors",
+    "ShootThroughMonitor",
+    "StepWidthMonitor",
+]
