@@ -14,6 +14,9 @@ library work;
   use work.stepramp_regs_pkg.all;
 
 entity stepramp_axil is
+  generic (
+    G_MICROSTEPS : positive := 16 -- sine table steps per full step (stepramp_stepper)
+  );
   port (
     aclk    : in    std_logic;
     aresetn : in    std_logic;
@@ -37,10 +40,15 @@ entity stepramp_axil is
     s_axil_rresp   : out   std_logic_vector(1 downto 0);
     s_axil_rvalid  : out   std_logic;
     s_axil_rready  : in    std_logic;
-    -- Interrupt and motor outputs.
-    irq  : out   std_logic;
-    step : out   std_logic;
-    dir  : out   std_logic
+    -- Interrupt and motor outputs (see stepramp_core).
+    irq    : out   std_logic;
+    step   : out   std_logic;
+    dir    : out   std_logic;
+    enable : out   std_logic;
+    a1     : out   std_logic;
+    a2     : out   std_logic;
+    b1     : out   std_logic;
+    b2     : out   std_logic
   );
 end entity stepramp_axil;
 
@@ -180,20 +188,28 @@ begin
   s_axil_rdata   <= rdata;
 
   core_inst : entity work.stepramp_core
+    generic map (
+      G_MICROSTEPS => G_MICROSTEPS
+    )
     port map (
-      clk   => aclk,
-      rst   => rst,
-      wr    => wr,
-      rd    => rd,
-      addr  => addr,
-      wdata => wdata,
-      be    => wstrb,
-      rdata => core_rd,
-      ack   => core_ack,
-      err   => core_err,
-      irq   => irq,
-      step  => step,
-      dir   => dir
+      clk    => aclk,
+      rst    => rst,
+      wr     => wr,
+      rd     => rd,
+      addr   => addr,
+      wdata  => wdata,
+      be     => wstrb,
+      rdata  => core_rd,
+      ack    => core_ack,
+      err    => core_err,
+      irq    => irq,
+      step   => step,
+      dir    => dir,
+      enable => enable,
+      a1     => a1,
+      a2     => a2,
+      b1     => b1,
+      b2     => b2
     );
 
 end architecture rtl;

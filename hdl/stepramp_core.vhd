@@ -1,7 +1,8 @@
 -- SPDX-License-Identifier: MIT
 -- stepramp_core: the stepramp core behind a bus-agnostic register port (one-cycle read/write strobes, answer one
--- clock later). It only wires the blocks: register file, ramp engine. The bus tops (stepramp_plb for the
--- PLB-like IPIF, stepramp_axil for AXI4-Lite) turn their bus into the strobes.
+-- clock later). It only wires the blocks: register file, stepping logic (start gate for DIR timing, STEP/DIR/ENABLE,
+-- windings) and ramp engine. The bus tops (stepramp_plb for the PLB-like IPIF, stepramp_axil for AXI4-Lite) turn
+-- their bus into the strobes.
 
 library ieee;
   use ieee.std_logic_1164.all;
@@ -10,6 +11,9 @@ library work;
   use work.stepramp_regs_pkg.all;
 
 entity stepramp_core is
+  generic (
+    G_MICROSTEPS : positive := 16
+  );
   port (
     clk : in    std_logic;
     rst : in    std_logic;
@@ -22,16 +26,34 @@ entity stepramp_core is
     rdata : out   std_logic_vector(31 downto 0);
     ack   : out   std_logic;
     err   : out   std_logic;
-    -- Interrupt and motor outputs.
-    irq  : out   std_logic;
-    step : out   std_logic;
-    dir  : out   std_logic
+    -- Interrupt and motor outputs: STEP/DIR/ENABLE for a driver chip, A1 A2 B1 B2 for two H-bridges.
+    irq    : out   std_logic;
+    step   : out   std_logic;
+    dir    : out   std_logic;
+    enable : out   std_logic;
+    a1     : out   std_logic;
+    a2     : out   std_logic;
+    b1     : out   std_logic;
+    b2     : out   std_logic
   );
 end entity stepramp_core;
 
 architecture rtl of stepramp_core is
 
+  signal start_req  : std_logic;
   signal start      : std_logic;
+  signal start_dir  : std_logic;
+  signal gate_busy  : std_logic;
+  signal busy_any   : std_logic;
+  signal dir_fault  : std_logic;
+  signal eng_step   : std_logic;
+  signal enable_cfg : std_logic;
+  signal mode       : std_logic_vector(2 downto 0);
+  signal ustep_log2 : std_logic_vector(2 downto 0);
+  signal step_width : std_logic_vector(15 downto 0);
+  signal dir_setup  : std_logic_vector(15 downto 0);
+  signal dir_hold   : std_logic_vector(15 downto 0);
+  signal pwm_period : std_logic_vector(15 downto 0);
   signal soft_stop  : std_logic;
   signal hard_stop  : std_logic;
   signal steps      : std_logic_vector(30 downto 0);
@@ -74,7 +96,7 @@ begin
       ack            => ack,
       err            => err,
       irq            => irq,
-      start          => start,
+      start          => start_req,
       soft_stop      => soft_stop,
       hard_stop      => hard_stop,
       steps          => steps,
@@ -92,7 +114,14 @@ begin
       stop_ratio     => stop_ratio,
       pos_load       => pos_load,
       pos_value      => pos_value,
-      eng_busy       => busy,
+      enable         => enable_cfg,
+      mode           => mode,
+      ustep_log2     => ustep_log2,
+      step_width     => step_width,
+      dir_setup      => dir_setup,
+      dir_hold       => dir_hold,
+      pwm_period     => pwm_period,
+      eng_busy       => busy_any,
       eng_done       => done,
       eng_error      => error,
       eng_err_code   => err_code,
@@ -100,7 +129,44 @@ begin
       eng_dir        => dir_i,
       eng_position   => position,
       eng_step_count => step_count,
-      eng_cur_delay  => cur_delay
+      eng_cur_delay  => cur_delay,
+      dir_fault      => dir_fault
+    );
+
+  -- STATUS.BUSY covers a start held back by the stepping logic for DIR setup/hold.
+  busy_any <= busy or gate_busy;
+
+  stepper_inst : entity work.stepramp_stepper
+    generic map (
+      G_MICROSTEPS => G_MICROSTEPS
+    )
+    port map (
+      clk        => clk,
+      rst        => rst,
+      mode       => mode,
+      ustep_log2 => ustep_log2,
+      step_width => step_width,
+      dir_setup  => dir_setup,
+      dir_hold   => dir_hold,
+      enable_in  => enable_cfg,
+      pwm_period => pwm_period,
+      start_req  => start_req,
+      new_dir    => direction,
+      start_out  => start,
+      start_dir  => start_dir,
+      gate_busy  => gate_busy,
+      eng_step   => eng_step,
+      eng_busy   => busy,
+      eng_dir    => dir_i,
+      position   => position,
+      dir_fault  => dir_fault,
+      step_o     => step,
+      dir_o      => dir,
+      enable_o   => enable,
+      a1         => a1,
+      a2         => a2,
+      b1         => b1,
+      b2         => b2
     );
 
   engine_inst : entity work.stepramp_engine
@@ -111,7 +177,7 @@ begin
       soft_stop  => soft_stop,
       hard_stop  => hard_stop,
       steps      => steps,
-      direction  => direction,
+      direction  => start_dir,
       prescale   => prescale,
       c_first    => c_first,
       c_last     => c_last,
@@ -125,7 +191,7 @@ begin
       stop_ratio => stop_ratio,
       pos_load   => pos_load,
       pos_value  => pos_value,
-      step       => step,
+      step       => eng_step,
       dir        => dir_i,
       busy       => busy,
       done       => done,
@@ -136,7 +202,5 @@ begin
       step_count => step_count,
       cur_delay  => cur_delay
     );
-
-  dir <= dir_i;
 
 end architecture rtl;

@@ -14,6 +14,9 @@ library work;
   use work.stepramp_regs_pkg.all;
 
 entity stepramp_plb is
+  generic (
+    G_MICROSTEPS : positive := 16 -- sine table steps per full step (stepramp_stepper)
+  );
   port (
     clk : in    std_logic;
     rst : in    std_logic;
@@ -30,8 +33,13 @@ entity stepramp_plb is
     -- Interrupt (level, active high): STATUS.DONE or STATUS.ERROR when enabled in CTRL.
     irq : out   std_logic;
     -- Motor outputs.
-    step : out   std_logic;
-    dir  : out   std_logic
+    step   : out   std_logic;
+    dir    : out   std_logic;
+    enable : out   std_logic;
+    a1     : out   std_logic;
+    a2     : out   std_logic;
+    b1     : out   std_logic;
+    b2     : out   std_logic
   );
 end entity stepramp_plb;
 
@@ -73,20 +81,28 @@ begin
                   (others => '0');
 
   core_inst : entity work.stepramp_core
+    generic map (
+      G_MICROSTEPS => G_MICROSTEPS
+    )
     port map (
-      clk   => clk,
-      rst   => rst,
-      wr    => wr,
-      rd    => rd,
-      addr  => bus2ip_addr(C_ADDR_BITS - 1 downto 0),
-      wdata => bus2ip_data,
-      be    => bus2ip_be,
-      rdata => rdata,
-      ack   => ack,
-      err   => err,
-      irq   => irq,
-      step  => step,
-      dir   => dir
+      clk    => clk,
+      rst    => rst,
+      wr     => wr,
+      rd     => rd,
+      addr   => bus2ip_addr(C_ADDR_BITS - 1 downto 0),
+      wdata  => bus2ip_data,
+      be     => bus2ip_be,
+      rdata  => rdata,
+      ack    => ack,
+      err    => err,
+      irq    => irq,
+      step   => step,
+      dir    => dir,
+      enable => enable,
+      a1     => a1,
+      a2     => a2,
+      b1     => b1,
+      b2     => b2
     );
 
 end architecture rtl;

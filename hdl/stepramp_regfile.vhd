@@ -50,7 +50,15 @@ entity stepramp_regfile is
     stop_ratio : out   std_logic_vector(31 downto 0);
     pos_load   : out   std_logic;
     pos_value  : out   std_logic_vector(31 downto 0);
-    -- Engine status.
+    -- Stepping logic configuration.
+    enable     : out   std_logic;
+    mode       : out   std_logic_vector(2 downto 0);
+    ustep_log2 : out   std_logic_vector(2 downto 0);
+    step_width : out   std_logic_vector(15 downto 0);
+    dir_setup  : out   std_logic_vector(15 downto 0);
+    dir_hold   : out   std_logic_vector(15 downto 0);
+    pwm_period : out   std_logic_vector(15 downto 0);
+    -- Engine and stepping logic status (eng_busy: the engine, or a start held for DIR timing).
     eng_busy       : in    std_logic;
     eng_done       : in    std_logic;
     eng_error      : in    std_logic;
@@ -59,22 +67,27 @@ entity stepramp_regfile is
     eng_dir        : in    std_logic;
     eng_position   : in    std_logic_vector(31 downto 0);
     eng_step_count : in    std_logic_vector(30 downto 0);
-    eng_cur_delay  : in    std_logic_vector(31 downto 0)
+    eng_cur_delay  : in    std_logic_vector(31 downto 0);
+    dir_fault      : in    std_logic
   );
 end entity stepramp_regfile;
 
 architecture rtl of stepramp_regfile is
 
-  -- The plain read/write words, STEPS .. STOP_RATIO, are contiguous: one register per word, indexed by word
-  -- offset. They are reached with constant indices only (loops below), so no memory is inferred.
-  constant C_FIRST_W : natural := C_REG_STEPS / 4;
-  constant C_LAST_W  : natural := C_REG_STOP_RATIO / 4;
+  -- The plain read/write words: the motion registers STEPS .. STOP_RATIO, and the stepping configuration DRIVE ..
+  -- PWM_PERIOD (written only while stopped). One register per word, indexed by word offset, reached with constant
+  -- indices only (loops below), so no memory is inferred; the words in between are never written (constant 0).
+  constant C_FIRST_W     : natural := C_REG_STEPS / 4;
+  constant C_LAST_MOVE_W : natural := C_REG_STOP_RATIO / 4;
+  constant C_FIRST_CFG_W : natural := C_REG_DRIVE / 4;
+  constant C_LAST_W      : natural := C_REG_PWM_PERIOD / 4;
 
   type reg_array_t is array (C_FIRST_W to C_LAST_W) of std_logic_vector(31 downto 0);
 
   signal mem : reg_array_t;
 
   signal irq_done_en  : std_logic;
+  signal enable_r     : std_logic;
   signal irq_error_en : std_logic;
   signal done_flag    : std_logic;
   signal error_flag   : std_logic;
@@ -130,9 +143,19 @@ architecture rtl of stepramp_regfile is
   ) return boolean is
   begin
 
-    return w >= C_FIRST_W and w <= C_LAST_W;
+    return (w >= C_FIRST_W and w <= C_LAST_MOVE_W) or (w >= C_FIRST_CFG_W and w <= C_LAST_W);
 
   end function is_storage;
+
+  -- Whether a word index is a stepping configuration register (written only while stopped).
+  function is_config (
+    w : natural
+  ) return boolean is
+  begin
+
+    return w >= C_FIRST_CFG_W and w <= C_LAST_W;
+
+  end function is_config;
 
   -- Bits of a storage register that exist (the others read 0).
   function storage_mask (
@@ -140,8 +163,10 @@ architecture rtl of stepramp_regfile is
   ) return std_logic_vector is
   begin
 
-    if (w = word(C_REG_PRESCALE)) then
+    if (w = word(C_REG_PRESCALE) or w = word(C_REG_STEP_WIDTH) or w = word(C_REG_PWM_PERIOD)) then
       return x"0000FFFF";
+    elsif (w = word(C_REG_DRIVE)) then
+      return x"00000077";
     elsif (w = word(C_REG_C_FIRST_HI) or w = word(C_REG_C_LAST_HI) or w = word(C_REG_C_SA_HI) or
            w = word(C_REG_C_SD_HI) or w = word(C_REG_ACCEL_SEED_HI) or w = word(C_REG_DECEL_SEED_HI)) then
       return x"0000FFFF";
@@ -185,6 +210,9 @@ begin
 
         if (not mapped) then
           err_r <= '1';
+        elsif (is_config(w) and eng_busy = '1') then
+          error_flag <= '1';
+          err_code_r <= C_ERR_CFG_BUSY;
         elsif (is_storage(w)) then
 
           for i in mem'range loop
@@ -201,6 +229,10 @@ begin
           if (be(1) = '1') then
             irq_done_en  <= wdata(C_CTRL_IRQ_DONE_EN_LSB);
             irq_error_en <= wdata(C_CTRL_IRQ_ERROR_EN_LSB);
+          end if;
+
+          if (be(2) = '1') then
+            enable_r <= wdata(C_CTRL_ENABLE_LSB);
           end if;
 
           if (new_ctrl(C_CTRL_START_LSB) = '1') then
@@ -242,12 +274,14 @@ begin
         elsif (w = word(C_REG_CTRL)) then
           rd_v(C_CTRL_IRQ_DONE_EN_LSB)  := irq_done_en;
           rd_v(C_CTRL_IRQ_ERROR_EN_LSB) := irq_error_en;
+          rd_v(C_CTRL_ENABLE_LSB)       := enable_r;
         elsif (w = word(C_REG_STATUS)) then
           rd_v(C_STATUS_STATE_LSB + 1 downto C_STATUS_STATE_LSB)       := eng_state;
           rd_v(C_STATUS_BUSY_LSB)                                      := eng_busy;
           rd_v(C_STATUS_DIR_LSB)                                       := eng_dir;
           rd_v(C_STATUS_DONE_LSB)                                      := done_flag;
           rd_v(C_STATUS_ERROR_LSB)                                     := error_flag;
+          rd_v(C_STATUS_DIR_FAULT_LSB)                                 := dir_fault;
           rd_v(C_STATUS_ERR_CODE_LSB + 3 downto C_STATUS_ERR_CODE_LSB) := err_code_r;
         elsif (w = word(C_REG_POSITION)) then
           rd_v := eng_position;
@@ -298,6 +332,7 @@ begin
         irq_r        <= '0';
         irq_done_en  <= '0';
         irq_error_en <= '0';
+        enable_r     <= '0';
         done_flag    <= '0';
         error_flag   <= '0';
         err_code_r   <= C_ERR_NONE;
@@ -309,7 +344,8 @@ begin
 
         end loop;
 
-        mem(word(C_REG_PRESCALE)) <= x"00000001";
+        mem(word(C_REG_PRESCALE))   <= x"00000001";
+        mem(word(C_REG_STEP_WIDTH)) <= x"00000001";
       end if;
     end if;
 
@@ -355,5 +391,12 @@ begin
   decel_seed <= mem(word(C_REG_DECEL_SEED_HI))(15 downto 0) & mem(word(C_REG_DECEL_SEED_LO));
   cruise     <= mem(word(C_REG_CRUISE_HI)) & mem(word(C_REG_CRUISE_LO));
   stop_ratio <= mem(word(C_REG_STOP_RATIO));
+  enable     <= enable_r;
+  mode       <= mem(word(C_REG_DRIVE))(C_DRIVE_MODE_LSB + 2 downto C_DRIVE_MODE_LSB);
+  ustep_log2 <= mem(word(C_REG_DRIVE))(C_DRIVE_USTEP_LOG2_LSB + 2 downto C_DRIVE_USTEP_LOG2_LSB);
+  step_width <= mem(word(C_REG_STEP_WIDTH))(15 downto 0);
+  dir_setup  <= mem(word(C_REG_DIR_TIMING))(C_DIR_TIMING_SETUP_LSB + 15 downto C_DIR_TIMING_SETUP_LSB);
+  dir_hold   <= mem(word(C_REG_DIR_TIMING))(C_DIR_TIMING_HOLD_LSB + 15 downto C_DIR_TIMING_HOLD_LSB);
+  pwm_period <= mem(word(C_REG_PWM_PERIOD))(15 downto 0);
 
 end architecture rtl;

@@ -37,6 +37,10 @@ package stepramp_regs_pkg is
   constant C_REG_POSITION      : natural := 16#58#;
   constant C_REG_CUR_DELAY     : natural := 16#5C#;
   constant C_REG_STEP_COUNT    : natural := 16#60#;
+  constant C_REG_DRIVE         : natural := 16#64#;
+  constant C_REG_STEP_WIDTH    : natural := 16#68#;
+  constant C_REG_DIR_TIMING    : natural := 16#6C#;
+  constant C_REG_PWM_PERIOD    : natural := 16#70#;
 
   -- Fields: lowest bit and width.
   constant C_CTRL_START_LSB        : natural := 0;
@@ -49,6 +53,8 @@ package stepramp_regs_pkg is
   constant C_CTRL_IRQ_DONE_EN_W    : natural := 1;
   constant C_CTRL_IRQ_ERROR_EN_LSB : natural := 9;
   constant C_CTRL_IRQ_ERROR_EN_W   : natural := 1;
+  constant C_CTRL_ENABLE_LSB       : natural := 16;
+  constant C_CTRL_ENABLE_W         : natural := 1;
   constant C_STATUS_STATE_LSB      : natural := 0;
   constant C_STATUS_STATE_W        : natural := 2;
   constant C_STATUS_BUSY_LSB       : natural := 2;
@@ -59,8 +65,18 @@ package stepramp_regs_pkg is
   constant C_STATUS_DONE_W         : natural := 1;
   constant C_STATUS_ERROR_LSB      : natural := 5;
   constant C_STATUS_ERROR_W        : natural := 1;
+  constant C_STATUS_DIR_FAULT_LSB  : natural := 6;
+  constant C_STATUS_DIR_FAULT_W    : natural := 1;
   constant C_STATUS_ERR_CODE_LSB   : natural := 8;
   constant C_STATUS_ERR_CODE_W     : natural := 4;
+  constant C_DRIVE_MODE_LSB        : natural := 0;
+  constant C_DRIVE_MODE_W          : natural := 3;
+  constant C_DRIVE_USTEP_LOG2_LSB  : natural := 4;
+  constant C_DRIVE_USTEP_LOG2_W    : natural := 3;
+  constant C_DIR_TIMING_SETUP_LSB  : natural := 0;
+  constant C_DIR_TIMING_SETUP_W    : natural := 16;
+  constant C_DIR_TIMING_HOLD_LSB   : natural := 16;
+  constant C_DIR_TIMING_HOLD_W     : natural := 16;
 
   -- STATUS.ERR_CODE values.
   constant C_ERR_NONE       : std_logic_vector(3 downto 0) := x"0";
@@ -78,5 +94,6 @@ package stepramp_regs_pkg is
   constant C_ERR_RANGE      : std_logic_vector(3 downto 0) := x"C";
   constant C_ERR_STEPS      : std_logic_vector(3 downto 0) := x"D";
   constant C_ERR_POS_BUSY   : std_logic_vector(3 downto 0) := x"E";
+  constant C_ERR_CFG_BUSY   : std_logic_vector(3 downto 0) := x"F";
 
 end package stepramp_regs_pkg;

@@ -4,7 +4,8 @@
 The bus master is tb/ipif.py's IpifMaster for the PLB-like top, or cocotbext-axi's AxiLiteMaster (wrapped to the
 driver's read/write interface) for the AXI4-Lite top; with `idle` the masters insert idle cycles and, on AXI,
 backpressure on every channel. The engine's own start edge (edge 0 of the model) is taken from the rising edge of
-the core's busy, so step edges are compared with stepramp.model whatever the bus timing.
+the core's (engine's) busy, so step edges are compared with stepramp.model whatever the bus timing and whatever
+time the stepping logic holds a start back for DIR setup/hold.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from cocotb.triggers import ClockCycles, FallingEdge, First, RisingEdge, Timer
 from ipif import IpifError, IpifMaster
 from stepramp.driver import Status, StepRamp
 from stepramp.plan import Plan
+from stepramp.stepper import STEP_LATENCY
 from tbutil import CLK_PERIOD_NS, cocotb, now_cycles
 
 
@@ -120,9 +122,11 @@ class PeripheralTb:
         await First(RisingEdge(self.dut.irq), Timer(cycles * CLK_PERIOD_NS, unit="ns"))
 
     def edges_since(self, first_step: int, first_start: int) -> list[int]:
-        """Step edges of the move whose engine start was the first one recorded at or after first_start."""
+        """STEP pin edges of the move whose engine start was the first one recorded at or after first_start,
+        counted from the engine's start edge and less the stepping logic's register stage, so that they compare
+        with stepramp.model.edges."""
         start = self.start_edges[first_start]
-        return [e - start for e in self.step_edges[first_step:]]
+        return [e - start - STEP_LATENCY for e in self.step_edges[first_step:]]
 
     async def run_plan(self, drv: StepRamp, plan: Plan) -> tuple[list[int], Status]:
         """Program, start, wait for done (interrupt-driven); step edges counted from the engine's start edge."""

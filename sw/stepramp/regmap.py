@@ -88,6 +88,7 @@ ERROR_CODES: dict[str, tuple[int, str]] = {
     "RANGE": (12, "a recurrence value left its 48-bit range; the move stopped"),
     "STEPS": (13, "STEPS is -2^31 (|steps| must be <= 2^31 - 1)"),
     "POS_BUSY": (14, "POSITION written while a move runs (the write was ignored)"),
+    "CFG_BUSY": (15, "DRIVE, STEP_WIDTH, DIR_TIMING or PWM_PERIOD written while a move runs (ignored)"),
 }
 
 REGISTERS: tuple[Register, ...] = (
@@ -102,6 +103,7 @@ REGISTERS: tuple[Register, ...] = (
             Field("HARD_STOP", 2, 1, WS, 0, "no further step pulse from the next clock on, then done"),
             Field("IRQ_DONE_EN", 8, 1, RW, 0, "irq follows STATUS.DONE"),
             Field("IRQ_ERROR_EN", 9, 1, RW, 0, "irq follows STATUS.ERROR"),
+            Field("ENABLE", 16, 1, RW, 0, "ENABLE output to the motor driver; '0' also switches the windings off"),
         ),
     ),
     Register(
@@ -114,6 +116,7 @@ REGISTERS: tuple[Register, ...] = (
             Field("DIR", 3, 1, RO, 0, "direction of the current or last move (1: position counts down)"),
             Field("DONE", 4, 1, W1C, 0, "a move ended (normally, stopped or rejected); write 1 to clear"),
             Field("ERROR", 5, 1, W1C, 0, "a move was rejected or stopped on an error; write 1 to clear"),
+            Field("DIR_FAULT", 6, 1, RO, 0, "a step came while DIR disagreed with the engine (never expected)"),
             Field("ERR_CODE", 8, 4, RO, 0, "cause of the last error (table below)"),
         ),
     ),
@@ -139,6 +142,26 @@ REGISTERS: tuple[Register, ...] = (
     _value("POSITION", 0x58, RW, 32, "signed position in steps; written only while stopped"),
     _value("CUR_DELAY", 0x5C, RO, 32, "integer ticks of the interval now counting down"),
     _value("STEP_COUNT", 0x60, RO, 31, "pulses emitted in the current (or last) move"),
+    Register(
+        "DRIVE",
+        0x64,
+        "Stepping outputs; written only while stopped",
+        (
+            Field("MODE", 0, 3, RW, 0, "0 STEP/DIR only, 1 wave, 2 full step, 3 half step, 4 sine/cosine PWM"),
+            Field("USTEP_LOG2", 4, 3, RW, 0, "PWM microsteps per full step = 2^USTEP_LOG2 (at most G_MICROSTEPS)"),
+        ),
+    ),
+    _value("STEP_WIDTH", 0x68, RW, 16, "STEP high time in clocks (0 acts as 1); below the shortest interval", 1),
+    Register(
+        "DIR_TIMING",
+        0x6C,
+        "DIR setup and hold around STEP rising edges; written only while stopped",
+        (
+            Field("SETUP", 0, 16, RW, 0, "DIR setup before a STEP rising edge, clocks (at least 5 are kept)"),
+            Field("HOLD", 16, 16, RW, 0, "DIR hold after a STEP rising edge, clocks (0 acts as 1)"),
+        ),
+    ),
+    _value("PWM_PERIOD", 0x70, RW, 16, "PWM carrier period in clocks (0 or 1: windings off in mode 4)"),
 )
 
 REGISTERS_BY_NAME: dict[str, Register] = {r.name: r for r in REGISTERS}
