@@ -18,7 +18,7 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import Protocol
 
-from stepramp.plan import Plan, plan_move
+from stepramp.plan import Plan, plan_move_info
 from stepramp.regmap import ERROR_CODES, ID_MAGIC, REGISTERS_BY_NAME, offset, split_wide
 
 STATE_NAMES = ("STOP", "ACCEL", "RUN", "DECEL")
@@ -92,6 +92,33 @@ def plan_writes(plan: Plan) -> list[tuple[int, int]]:
     return sorted(writes)
 
 
+#: DRIVE.MODE values.
+MODES = {"stepdir": 0, "wave": 1, "full": 2, "half": 3, "pwm": 4}
+
+
+@dataclass(frozen=True)
+class Outputs:
+    """Configuration of the stepping outputs (registers DRIVE, STEP_WIDTH, DIR_TIMING, PWM_PERIOD)."""
+
+    mode: str = "stepdir"
+    ustep_log2: int = 0
+    step_width: int = 1
+    dir_setup: int = 0
+    dir_hold: int = 0
+    pwm_period: int = 0
+
+    def check(self) -> None:
+        """ValueError with the reason if a field does not fit its register."""
+        if self.mode not in MODES:
+            raise ValueError(f"mode must be one of {sorted(MODES)}, got {self.mode!r}")
+        if not 0 <= self.ustep_log2 <= 7:
+            raise ValueError(f"ustep_log2 must be in 0 .. 7, got {self.ustep_log2}")
+        for name in ("step_width", "dir_setup", "dir_hold", "pwm_period"):
+            value = getattr(self, name)
+            if not isinstance(value, int) or not 0 <= value <= 0xFFFF:
+                raise ValueError(f"{name} must be an integer number of clocks in 0 .. 65535, got {value!r}")
+
+
 class StepRamp:
     """Driver of one stepramp core."""
 
@@ -100,6 +127,7 @@ class StepRamp:
         self.fclk = fclk
         self.spr = spr
         self.prescale = prescale
+        self.outputs = Outputs()
 
     async def check_id(self) -> int:
         """Read ID; raise StepRampError if this is not a stepramp core. Returns the version (major << 8 | minor)."""
@@ -109,8 +137,40 @@ class StepRamp:
         return raw & 0xFFFF
 
     def plan(self, steps: int, accel: float, decel: float, speed: float) -> Plan:
-        """Register values of a move in physical units (rad/s^2, rad/s); ValueError with the reason if invalid."""
-        return plan_move(steps, accel, decel, speed, self.spr, self.fclk, self.prescale)
+        """Register values of a move in physical units (rad/s^2, rad/s); ValueError with the reason if invalid.
+
+        Besides the plan's own limits, the STEP pulse width configured with configure_outputs must be shorter than
+        the move's shortest interval.
+        """
+        plan, info = plan_move_info(steps, accel, decel, speed, self.spr, self.fclk, self.prescale)
+        shortest = int(info.min_interval) * self.prescale if plan.steps > 1 else None
+        if shortest is not None and max(self.outputs.step_width, 1) >= shortest:
+            raise ValueError(
+                f"STEP width {self.outputs.step_width} clocks does not fit the shortest interval of the move "
+                f"({shortest} clocks): lower the speed or the STEP width"
+            )
+        return plan
+
+    async def configure_outputs(self, outputs: Outputs) -> None:
+        """Write the stepping output registers (only while stopped: the core flags CFG_BUSY otherwise)."""
+        outputs.check()
+        drive = REGISTERS_BY_NAME["DRIVE"]
+        timing = REGISTERS_BY_NAME["DIR_TIMING"]
+        await self.access.write(
+            offset("DRIVE"),
+            MODES[outputs.mode] << drive.field("MODE").lsb | outputs.ustep_log2 << drive.field("USTEP_LOG2").lsb,
+        )
+        await self.access.write(offset("STEP_WIDTH"), outputs.step_width)
+        await self.access.write(
+            offset("DIR_TIMING"),
+            outputs.dir_setup << timing.field("SETUP").lsb | outputs.dir_hold << timing.field("HOLD").lsb,
+        )
+        await self.access.write(offset("PWM_PERIOD"), outputs.pwm_period)
+        self.outputs = outputs
+
+    async def set_enable(self, on: bool) -> None:
+        """The ENABLE output (byte 2 of CTRL only); off also switches the H-bridge windings off."""
+        await self.access.write(offset("CTRL"), _bit("CTRL", "ENABLE") if on else 0, strobe=0x4)
 
     async def program(self, plan: Plan) -> None:
         """Write the move registers (the core latches them at START, so this is safe during a move)."""

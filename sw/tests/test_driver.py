@@ -1,0 +1,132 @@
+# SPDX-License-Identifier: MIT
+"""The Python driver over a fake register bank (no simulator): what it writes, how it decodes, how it fails."""
+
+from __future__ import annotations
+
+import asyncio
+import mmap
+from pathlib import Path
+
+import pytest
+
+from stepramp.driver import MmapAccess, Outputs, Status, StepRamp, StepRampError, plan_writes
+from stepramp.plan import plan_move
+from stepramp.regmap import ERROR_CODES, ID_VALUE, offset
+
+
+class FakeBank:
+    """Registers as a dict; STATUS answers from a script; writes are logged with their strobes."""
+
+    def __init__(self, status_script: list[int] | None = None) -> None:
+        self.regs: dict[int, int] = {offset("ID"): ID_VALUE}
+        self.log: list[tuple[int, int, int]] = []
+        self.status_script = list(status_script or [])
+
+    async def read(self, addr: int) -> int:
+        if addr == offset("STATUS") and self.status_script:
+            return self.status_script.pop(0)
+        return self.regs.get(addr, 0)
+
+    async def write(self, addr: int, value: int, strobe: int = 0xF) -> None:
+        self.log.append((addr, value, strobe))
+        self.regs[addr] = value
+
+
+def run(coro):
+    return asyncio.run(coro)
+
+
+def test_move_writes_every_motion_register_then_start() -> None:
+    bank = FakeBank()
+    drv = StepRamp(bank, fclk=1e6, spr=200.0)
+    plan = run(drv.move(-150, 1000.0, 800.0, 50.0))
+    assert plan == plan_move(-150, 1000.0, 800.0, 50.0, 200.0, 1e6)
+    assert bank.log[:-1] == [(a, v, 0xF) for a, v in plan_writes(plan)]
+    assert bank.log[-1] == (offset("CTRL"), 1, 0x1), "START is a byte-0 write"
+    assert bank.regs[offset("STEPS")] == (-150) & 0xFFFF_FFFF
+    assert bank.regs[offset("CRUISE_HI")] == plan.cruise >> 32
+
+
+def test_invalid_move_writes_nothing() -> None:
+    bank = FakeBank()
+    drv = StepRamp(bank, fclk=1e6, spr=200.0)
+    with pytest.raises(ValueError, match="accel must be finite"):
+        run(drv.move(100, -1.0, 800.0, 50.0))
+    assert bank.log == []
+
+
+def test_step_width_must_fit_the_shortest_interval() -> None:
+    bank = FakeBank()
+    drv = StepRamp(bank, fclk=1e6, spr=200.0)
+    run(drv.configure_outputs(Outputs(mode="half", step_width=99)))
+    # 100 ticks at the cruise speed: a width of 99 fits, 100 does not.
+    speed = 2 * 3.141592653589793 / 200.0 * 1e6 / 100.5
+    drv.plan(500, 1e6, 1e6, speed)
+    run(drv.configure_outputs(Outputs(mode="half", step_width=100)))
+    with pytest.raises(ValueError, match="STEP width 100 clocks does not fit"):
+        drv.plan(500, 1e6, 1e6, speed)
+
+
+def test_configure_outputs_words_and_checks() -> None:
+    bank = FakeBank()
+    drv = StepRamp(bank, fclk=1e6, spr=200.0)
+    run(drv.configure_outputs(Outputs(mode="pwm", ustep_log2=4, step_width=7, dir_setup=20, dir_hold=9, pwm_period=40)))
+    assert bank.regs[offset("DRIVE")] == 4 | 4 << 4
+    assert bank.regs[offset("STEP_WIDTH")] == 7
+    assert bank.regs[offset("DIR_TIMING")] == 20 | 9 << 16
+    assert bank.regs[offset("PWM_PERIOD")] == 40
+    for bad, msg in (
+        (Outputs(mode="quarter"), "mode must be one of"),
+        (Outputs(ustep_log2=8), "ustep_log2"),
+        (Outputs(step_width=70000), "step_width"),
+        (Outputs(dir_hold=-1), "dir_hold"),
+    ):
+        with pytest.raises(ValueError, match=msg):
+            run(drv.configure_outputs(bad))
+    run(drv.set_enable(True))
+    assert bank.log[-1] == (offset("CTRL"), 1 << 16, 0x4)
+
+
+def test_status_decode() -> None:
+    raw = 2 | 1 << 2 | 1 << 3 | 1 << 4 | 1 << 5 | ERROR_CODES["LATE"][0] << 8
+    st = Status.decode(raw)
+    assert (st.state, st.busy, st.direction, st.done, st.error, st.err_name) == ("RUN", True, 1, True, True, "LATE")
+
+
+def test_wait_done_clears_flags_and_reports_errors() -> None:
+    bank = FakeBank(status_script=[1 << 2, 1 << 2, 1 << 4])
+    drv = StepRamp(bank, fclk=1e6, spr=200.0)
+    assert run(drv.wait_done()).done
+    assert bank.log[-1] == (offset("STATUS"), 0x30, 0x1), "DONE and ERROR cleared by writing 1"
+    bank.status_script = [1 << 4 | 1 << 5 | ERROR_CODES["BOUNDS"][0] << 8]
+    with pytest.raises(StepRampError, match="BOUNDS"):
+        run(drv.wait_done())
+    bank.status_script = [1 << 2] * 5
+    with pytest.raises(StepRampError, match="no DONE after 3 polls"):
+        run(drv.wait_done(polls=3))
+
+
+def test_id_and_position() -> None:
+    bank = FakeBank()
+    drv = StepRamp(bank, fclk=1e6, spr=200.0)
+    assert run(drv.check_id()) == ID_VALUE & 0xFFFF
+    bank.regs[offset("ID")] = 0xDEADBEEF
+    with pytest.raises(StepRampError, match="not a stepramp core"):
+        run(drv.check_id())
+    run(drv.set_position(-5))
+    assert bank.regs[offset("POSITION")] == 0xFFFF_FFFB
+    assert run(drv.position()) == -5
+    with pytest.raises(ValueError, match="does not fit"):
+        run(drv.set_position(1 << 31))
+
+
+def test_mmap_access_on_a_file(tmp_path: Path) -> None:
+    """MmapAccess on a plain file: the same code path as /dev/mem or /dev/uioN, byte strobes included."""
+    f = tmp_path / "regs.bin"
+    f.write_bytes(bytes(mmap.PAGESIZE))
+    acc = MmapAccess(str(f), 0, mmap.PAGESIZE)
+    run(acc.write(0x10, 0x11223344))
+    run(acc.write(0x10, 0xAABBCCDD, strobe=0b0101))
+    assert run(acc.read(0x10)) == 0x11BB33DD
+    acc.close()
+    assert f.read_bytes()[0x10:0x14] == bytes.fromhex("dd33bb11")
