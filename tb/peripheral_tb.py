@@ -19,7 +19,8 @@ from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, First, RisingEdge, Timer
 
 from ipif import IpifError, IpifMaster
-from stepramp.driver import Status, StepRamp
+from monitors import MotionMonitors
+from stepramp.driver import MODES, Outputs, Status, StepRamp
 from stepramp.plan import Plan
 from stepramp.stepper import STEP_LATENCY
 from tbutil import CLK_PERIOD_NS, cocotb, now_cycles
@@ -79,6 +80,9 @@ class PeripheralTb:
         self.bus: Any = None
         self.step_edges: list[int] = []
         self.start_edges: list[int] = []
+        self.outputs = Outputs()
+        self.enabled = False
+        self.monitors: MotionMonitors | None = None
 
     async def reset(self) -> None:
         if self.top == "stepramp_axil":
@@ -106,6 +110,39 @@ class PeripheralTb:
         await ClockCycles(self.clk, 2)
         cocotb.start_soon(self._monitor(self.dut.step, self.step_edges))
         cocotb.start_soon(self._monitor(self.dut.core_inst.busy, self.start_edges))
+        self._start_monitors(position=0)
+
+    def _start_monitors(self, position: int) -> None:
+        """STEP width, DIR setup/hold, shoot-through and electrical position monitors for the current settings."""
+        o = self.outputs
+        self.monitors = MotionMonitors(
+            self.dut,
+            mode=MODES[o.mode],
+            step_width=o.step_width,
+            dir_setup=o.dir_setup,
+            dir_hold=o.dir_hold,
+            position=position,
+            ustep_log2=o.ustep_log2,
+            pwm_period=o.pwm_period,
+            enable=self.enabled,
+            names={"clk": "aclk" if self.top == "stepramp_axil" else "clk", "step": "step", "dir": "dir"},
+        ).start()
+
+    async def configure(self, outputs: Outputs, enable: bool = True) -> None:
+        """Program the stepping outputs (while stopped) and restart the monitors with the new settings."""
+        drv = self.driver()
+        await drv.configure_outputs(outputs)
+        await drv.set_enable(enable)
+        self.finish()
+        self.outputs, self.enabled = outputs, enable
+        self._start_monitors(position=await drv.position())
+
+    def finish(self) -> None:
+        """Stop the monitors and raise if any of them saw a violation (call at the end of every motion test)."""
+        if self.monitors is not None:
+            self.monitors.stop()
+            self.monitors.check()
+            self.monitors = None
 
     @staticmethod
     async def _monitor(signal: Any, edges: list[int]) -> None:
@@ -115,7 +152,9 @@ class PeripheralTb:
 
     def driver(self, plan_args: dict[str, Any] | None = None) -> StepRamp:
         args = plan_args or {"fclk": 1e6, "spr": 200.0, "prescale": 1}
-        return StepRamp(self.bus, fclk=args["fclk"], spr=args["spr"], prescale=args["prescale"])
+        drv = StepRamp(self.bus, fclk=args["fclk"], spr=args["spr"], prescale=args["prescale"])
+        drv.outputs = self.outputs
+        return drv
 
     async def irq_or(self, cycles: int) -> None:
         """Idle between status polls: until irq rises, or at most `cycles` clocks."""

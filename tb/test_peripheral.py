@@ -19,7 +19,7 @@ import pytest
 from cocotb.triggers import ClockCycles
 
 from peripheral_tb import BusError, PeripheralTb
-from stepramp.driver import StepRampError, plan_writes
+from stepramp.driver import Outputs, StepRampError, plan_writes
 from stepramp.hdl import run_cocotb
 from stepramp.model import edges as model_edges
 from stepramp.plan import Plan, plan_move
@@ -195,6 +195,7 @@ async def bad_register_values_flag_an_error(dut) -> None:
     # And a good move afterwards runs normally.
     edges, _ = await tb.run_plan(drv, good)
     assert edges == model_edges(good)
+    tb.finish()
 
 
 @cocotb.test()
@@ -214,6 +215,7 @@ async def position_register(dut) -> None:
     with pytest.raises(StepRampError, match="POS_BUSY"):
         await drv.wait_done(idle=lambda: tb.irq_or(5_000))
     assert await drv.position() == -123456 + plan.steps
+    tb.finish()
 
 
 @cocotb.test()
@@ -237,6 +239,7 @@ async def motion_registers_are_shadowed(dut) -> None:
     await drv.wait_done(idle=lambda: tb.irq_or(5_000))
     assert tb.edges_since(n1, s1) == model_edges(second)
     assert await drv.position() == first.steps - second.steps
+    tb.finish()
 
 
 @cocotb.test()
@@ -257,6 +260,40 @@ async def start_while_busy_is_ignored(dut) -> None:
     assert len(tb.start_edges) == s0 + 1, "a START during the move restarted the engine"
     await ClockCycles(tb.clk, 100)
     assert not (await drv.status()).busy
+    tb.finish()
+
+
+@cocotb.test()
+async def stepping_configuration(dut) -> None:
+    """ENABLE follows CTRL.ENABLE and gates the windings; DRIVE .. PWM_PERIOD are written only while stopped."""
+    tb = make_tb(dut)
+    await tb.reset()
+    half = Outputs(mode="half", step_width=12, dir_setup=30, dir_hold=8)
+    await tb.configure(half, enable=True)
+    await ClockCycles(tb.clk, 3)
+    assert int(dut.enable.value) == 1
+    assert (await tb.bus.read(offset("DRIVE"))) == 3
+    drv = tb.driver()
+    plan = plan_move(**PROFILES_BY_NAME["trap_negative"].args())
+    await drv.program(plan)
+    await drv.start()
+    await ClockCycles(tb.clk, 300)
+    for name in ("DRIVE", "STEP_WIDTH", "DIR_TIMING", "PWM_PERIOD"):
+        await tb.bus.write(offset(name), 0x4)  # during the move: ignored, flagged
+    with pytest.raises(StepRampError, match="CFG_BUSY"):
+        await drv.wait_done(idle=lambda: tb.irq_or(5_000))
+    assert (await tb.bus.read(offset("DRIVE"))) == 3
+    assert (await tb.bus.read(offset("STEP_WIDTH"))) == 12
+    assert (await tb.bus.read(offset("DIR_TIMING"))) == 30 | 8 << 16
+    assert await drv.position() == -plan.steps
+    await ClockCycles(tb.clk, 20)
+    levels = [int(getattr(dut, pin).value) for pin in ("a1", "a2", "b1", "b2")]
+    assert any(levels), "half step: the windings are on while enabled"
+    await tb.configure(half, enable=False)
+    await ClockCycles(tb.clk, 3)
+    assert int(dut.enable.value) == 0
+    assert [int(getattr(dut, pin).value) for pin in ("a1", "a2", "b1", "b2")] == [0, 0, 0, 0]
+    tb.finish()
 
 
 @cocotb.test()
@@ -267,6 +304,7 @@ async def profiles_through_the_bus(dut) -> None:
         return
     tb = make_tb(dut, idle=bool(int(os.environ.get("BUS_IDLE", "0"))))
     await tb.reset()
+    await tb.configure(Outputs(**json.loads(os.environ.get("OUTPUTS", "{}"))), enable=True)
     await tb.driver().enable_irq(done=True, error=True)
     problems: list[str] = []
     position = 0
@@ -281,6 +319,7 @@ async def profiles_through_the_bus(dut) -> None:
         if status.error or await drv.position() != position:
             problems.append(f"{name}: error={status.error} position {await drv.position()} expected {position}")
     assert not problems, "\n".join(problems)
+    tb.finish()
 
 
 REGISTER_TESTS = [
@@ -293,6 +332,7 @@ REGISTER_TESTS = [
     "position_register",
     "motion_registers_are_shadowed",
     "start_while_busy_is_ignored",
+    "stepping_configuration",
 ]
 
 
@@ -302,7 +342,13 @@ def test_registers(top: str) -> None:
     run_cocotb(top, "test_peripheral", build_dir(f"{top}_registers"), testcase=REGISTER_TESTS)
 
 
-CHUNKS = 3
+#: Stepping outputs per chunk of profiles: every mode is used in a motion test, with the monitors on.
+CHUNK_OUTPUTS = [
+    {"mode": "half", "step_width": 5, "dir_setup": 20, "dir_hold": 10},
+    {"mode": "pwm", "ustep_log2": 4, "step_width": 10, "dir_setup": 7, "dir_hold": 3, "pwm_period": 40},
+    {"mode": "full", "step_width": 30},
+]
+CHUNKS = len(CHUNK_OUTPUTS)
 
 
 @pytest.mark.parametrize("chunk", range(CHUNKS))
@@ -315,7 +361,12 @@ def test_profiles(top: str, chunk: int) -> None:
         "test_peripheral",
         build_dir(f"{top}_profiles_{chunk}"),
         testcase="profiles_through_the_bus",
-        extra_env={"PROFILE_NAMES": json.dumps(names), "BUS_IDLE": str(int(chunk > 0)), "BUS_SEED": str(chunk)},
+        extra_env={
+            "PROFILE_NAMES": json.dumps(names),
+            "BUS_IDLE": str(int(chunk > 0)),
+            "BUS_SEED": str(chunk),
+            "OUTPUTS": json.dumps(CHUNK_OUTPUTS[chunk]),
+        },
     )
 
 
