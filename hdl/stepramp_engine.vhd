@@ -17,7 +17,16 @@
 --   edge 2: pulse 0 (step '1' in the following cycle), or done + error when a parameter is bad, or done for N = 0;
 --   edge 2 + prescale * T_k: pulse k. done comes with the last pulse; a late value stops the move with done + error
 --   at the edge of the pulse that had no successor ready (that pulse is emitted and counted).
--- All move parameters (steps .. cruise, direction, prescale) are latched at edge 0; every output is registered.
+-- All move parameters (steps .. stop_ratio, direction, prescale) are latched at edge 0; every output is registered.
+--
+-- Stops (docs/stepramp_engine.md "Stops", docs/algorithm.md "Soft stop"), strobes sampled at edge e while busy:
+--   hard_stop: no pulse after edge e (a pulse due at e is not emitted); done (no error) after edge e. Also taken
+--              together with an accepted start (the move ends at edge 0 without a pulse).
+--   soft_stop: decided at pulse p, the first pulse whose edge is strictly after e. In ACCEL / RUN the move then
+--              decelerates over m = floor(min(p, sa) * stop_ratio / 2^16) more steps (ignored in DECEL or when
+--              p + m >= L; m = 0 ends the move with pulse p). To meet "strictly after e" with no latency, the
+--              value of interval p + 1 for such a stop (the alternative) is prepared in every ACCEL / RUN interval,
+--              after the normal next value, and only chosen at the pulse edge.
 
 library ieee;
   use ieee.std_logic_1164.all;
@@ -32,6 +41,8 @@ entity stepramp_engine is
     clk        : in    std_logic;
     rst        : in    std_logic;
     start      : in    std_logic;
+    soft_stop  : in    std_logic;
+    hard_stop  : in    std_logic;
     steps      : in    std_logic_vector(30 downto 0);
     direction  : in    std_logic;
     prescale   : in    std_logic_vector(G_PRESCALE_WIDTH - 1 downto 0);
@@ -44,6 +55,7 @@ entity stepramp_engine is
     accel_seed : in    std_logic_vector(47 downto 0);
     decel_seed : in    std_logic_vector(47 downto 0);
     cruise     : in    std_logic_vector(63 downto 0);
+    stop_ratio : in    std_logic_vector(31 downto 0);
     pos_load   : in    std_logic;
     pos_value  : in    std_logic_vector(31 downto 0);
     step       : out   std_logic;
@@ -94,6 +106,14 @@ architecture rtl of stepramp_engine is
   constant C_PC_DECIDE : std_logic_vector(2 downto 0) := "010";
   constant C_PC_WAIT   : std_logic_vector(2 downto 0) := "011";
   constant C_PC_ADD    : std_logic_vector(2 downto 0) := "100";
+  -- The soft-stop alternative of the next interval (see "Soft stop" below).
+  constant C_PC_ALT_WAIT : std_logic_vector(2 downto 0) := "101";
+  constant C_PC_ALT_ADD  : std_logic_vector(2 downto 0) := "110";
+
+  -- What a soft stop decided at the pulse ending the current interval does.
+  constant C_ALT_IGNORE : std_logic_vector(1 downto 0) := "00"; -- nothing: DECEL, last pulse, or p + m >= L
+  constant C_ALT_END    : std_logic_vector(1 downto 0) := "01"; -- m = 0: the move ends with this pulse
+  constant C_ALT_LOAD   : std_logic_vector(1 downto 0) := "10"; -- m >= 1: the next interval is the alternative
 
   constant C_Q16_PAD : unsigned(15 downto 0) := (others => '0');
 
@@ -110,6 +130,7 @@ architecture rtl of stepramp_engine is
   signal p_accel_seed : unsigned(47 downto 0);
   signal p_decel_seed : unsigned(47 downto 0);
   signal p_cruise     : unsigned(63 downto 0);
+  signal p_stop_ratio : unsigned(31 downto 0); -- accel / decel, Q16.16
 
   -- Move sequencer and outputs.
   signal phase        : std_logic_vector(1 downto 0);
@@ -156,8 +177,27 @@ architecture rtl of stepramp_engine is
   -- Recurrence state: A_{j-2} while accelerating, D_{L-j+1} while decelerating (never both in one move).
   signal rec_val : unsigned(47 downto 0);
   signal rec_rem : unsigned(32 downto 0);
-  signal v_r     : unsigned(63 downto 0); -- Q32.32 value of interval pc_j
+  signal v_r     : unsigned(63 downto 0); -- Q32.32 value of interval pc_j (then of the alternative)
   signal v_code  : std_logic_vector(3 downto 0);
+
+  -- Soft stop. sreq: a request waits for its pulse p (the first pulse edge after the edge that sampled it).
+  -- stop_mode: a soft stop is in effect; the precompute then follows the stop's decel ramp, pc_m = L' - pc_j.
+  -- While interval c counts down (ACCEL or RUN), the alternative "soft stop decided at pulse c" is prepared
+  -- after the normal next interval: alt_kind (what it does), and for m >= 1 the value of interval c + 1 in the
+  -- stop (c_last when m = 1, else D_(m-1) from D_m := D), through the same accumulator step as a normal value.
+  signal sreq        : std_logic;
+  signal stop_mode   : std_logic;
+  signal cur_prod    : unsigned(62 downto 0); -- min(c, sa) * stop_ratio, Q47.16, for the interval c now counting
+  signal alt_kind    : std_logic_vector(1 downto 0);
+  signal alt_one     : std_logic;             -- m = 1
+  signal alt_mm1     : unsigned(30 downto 0); -- m - 1
+  signal alt_dval    : unsigned(47 downto 0); -- D: the value of interval c (ACCEL) or cruise >> 16 (RUN)
+  signal alt_ok      : std_logic;
+  signal alt_d       : unsigned(32 downto 0);
+  signal alt_acc     : unsigned(31 downto 0);
+  signal alt_code    : std_logic_vector(3 downto 0);
+  signal alt_rec_val : unsigned(47 downto 0); -- D_(m-1) and its remainder: the stop's recurrence state
+  signal alt_rec_rem : unsigned(32 downto 0);
 
   -- Next-delay unit.
   signal nd_flush     : std_logic;
@@ -165,7 +205,9 @@ architecture rtl of stepramp_engine is
   signal req_seed_r   : std_logic;
   signal req_decel_r  : std_logic;
   signal req_index_r  : unsigned(30 downto 0);
+  signal req_alt_r    : std_logic; -- the request is the soft-stop alternative: value D, remainder 0
   signal nd_req_value : std_logic_vector(47 downto 0);
+  signal nd_req_rem   : std_logic_vector(32 downto 0);
   signal nd_busy      : std_logic;
   signal nd_valid     : std_logic;
   signal nd_value     : std_logic_vector(47 downto 0);
@@ -196,10 +238,14 @@ begin
       tick     => tick
     );
 
-  -- A seed load carries its seed; a recurrence step carries the running value (and its remainder).
+  -- A seed load carries its seed; a recurrence step carries the running value (and its remainder); the first value
+  -- of a soft stop's ramp is a step from D_m := D with remainder 0.
   nd_req_value <= std_logic_vector(p_accel_seed) when req_seed_r = '1' and req_decel_r = '0' else
                   std_logic_vector(p_decel_seed) when req_seed_r = '1' else
+                  std_logic_vector(alt_dval) when req_alt_r = '1' else
                   std_logic_vector(rec_val);
+  nd_req_rem   <= (others => '0') when req_alt_r = '1' else
+                  std_logic_vector(rec_rem);
 
   next_delay_inst : entity work.stepramp_next_delay
     generic map (
@@ -214,7 +260,7 @@ begin
       req_decel => req_decel_r,
       req_index => std_logic_vector(req_index_r),
       req_value => nd_req_value,
-      req_rem   => std_logic_vector(rec_rem),
+      req_rem   => nd_req_rem,
       busy      => nd_busy,
       ans_valid => nd_valid,
       ans_value => nd_value,
@@ -222,14 +268,64 @@ begin
       ans_ovf   => nd_ovf
     );
 
+  -- Parameter check of the latched move: only values the move will really use (rule order of the spec) must be
+  -- >= 1.0. Registered every clock; the sequencer reads it at edge 2 (the parameters are latched at edge 0).
+  check_proc : process (clk) is
+
+    variable v_chk : std_logic_vector(3 downto 0);
+
+  begin
+
+    -- Only while busy: the latched parameters are undefined before the first start, and an idle engine should not
+    -- compare them every clock (simulation speed; the result is only read at edge 2 of a move).
+    if rising_edge(clk) and busy_r = '1' then
+      v_chk := C_ERR_NONE;
+      if (p_prescale = 0) then
+        v_chk := C_ERR_PRESCALE;
+      elsif (p_steps(30 downto 1) /= 0) then
+        -- N >= 2
+        if (p_sa = 0 or p_sd = 0 or p_sa > p_l or p_sd > p_l or p_sa > p_sd) then
+          v_chk := C_ERR_BOUNDS;
+        elsif (p_c_first(47 downto 16) = 0) then
+          v_chk := C_ERR_C_FIRST;
+        elsif (p_l(30 downto 1) /= 0 and p_c_last(47 downto 16) = 0) then
+          v_chk := C_ERR_C_LAST;
+        elsif (p_sa /= 1 and p_sa /= p_l and p_c_sa(47 downto 16) = 0) then
+          v_chk := C_ERR_C_SA;
+        elsif (p_sd /= 1 and p_sd /= p_l and p_sd /= p_sa and p_c_sd(47 downto 16) = 0) then
+          v_chk := C_ERR_C_SD;
+        elsif (p_sd - p_sa >= 2 and p_cruise(63 downto 32) = 0) then
+          v_chk := C_ERR_CRUISE;
+        elsif (p_sa >= 3 and p_accel_seed(47 downto 16) = 0) then
+          v_chk := C_ERR_ACCEL_SEED;
+        elsif (p_l - p_sd >= 2 and p_decel_seed(47 downto 16) = 0) then
+          v_chk := C_ERR_DECEL_SEED;
+        end if;
+      end if;
+      chk_code <= v_chk;
+
+      if (p_steps = 0) then
+        n_zero <= '1';
+      else
+        n_zero <= '0';
+      end if;
+      if (p_steps = 1) then
+        n_one <= '1';
+      else
+        n_one <= '0';
+      end if;
+    end if;
+
+  end process check_proc;
+
   main_proc : process (clk) is
 
-    variable v_chk    : std_logic_vector(3 downto 0);
     variable v_sum    : unsigned(64 downto 0);
     variable v_pulse  : std_logic;
     variable v_load   : std_logic;
     variable v_finish : std_logic;
     variable v_err    : std_logic_vector(3 downto 0);
+    variable v_alt    : std_logic;
 
   begin
 
@@ -243,9 +339,10 @@ begin
       v_pulse     := '0';
       v_load      := '0';
       v_finish    := '0';
+      v_alt       := '0';
       v_err       := C_ERR_NONE;
-      v_chk       := C_ERR_NONE;
-      v_sum       := (others => '0');
+      -- The fractional-carry accumulator step of the value in v_r (used by C_PC_ADD and C_PC_ALT_ADD: one adder).
+      v_sum := ('0' & v_r) + resize(acc, 65);
 
       -- Request handshake: the unit takes req at the first edge where it is not busy (always the first one in
       -- practice: it is flushed at start and serves at most one request per interval).
@@ -275,11 +372,41 @@ begin
           pc_m     <= pc_m - 1;
           pc_state <= C_PC_DECIDE;
 
+          -- The soft stop decided at pulse c = pc_j (the end of the interval now counting, L - c = pc_m):
+          -- m = floor(min(c, sa) * stop_ratio / 2^16); ignored in DECEL, after a stop, and when c + m >= L.
+          alt_kind <= C_ALT_IGNORE;
+          if (stop_mode = '0' and (state_r = C_ST_ACCEL or state_r = C_ST_RUN)) then
+            if (cur_prod(62 downto 47) /= 0 or cur_prod(46 downto 16) >= pc_m) then
+              alt_kind <= C_ALT_IGNORE;
+            elsif (cur_prod(46 downto 16) = 0) then
+              alt_kind <= C_ALT_END;
+            else
+              alt_kind <= C_ALT_LOAD;
+            end if;
+          end if;
+          alt_mm1 <= cur_prod(46 downto 16) - 1;
+          if (cur_prod(46 downto 16) = 1) then
+            alt_one <= '1';
+          else
+            alt_one <= '0';
+          end if;
+          -- D: the value of interval c in ACCEL (c_first, or A_(c-1), still in rec_val), cruise >> 16 in RUN.
+          if (state_r = C_ST_RUN) then
+            alt_dval <= p_cruise(63 downto 16);
+          elsif (pc_j = 1) then
+            alt_dval <= p_c_first;
+          else
+            alt_dval <= rec_val;
+          end if;
+
         when C_PC_DECIDE =>
 
           if (seed_wait = '0') then
-            -- Ramp phase of interval j: ACCEL if j < sa, RUN if sa <= j < sd, DECEL if j >= sd (sa <= sd).
-            if (pc_j < p_sa) then
+            -- Ramp phase of interval j: ACCEL if j < sa, RUN if sa <= j < sd, DECEL if j >= sd (sa <= sd); all
+            -- intervals of a soft stop are DECEL.
+            if (stop_mode = '1') then
+              nxt_state <= C_ST_DECEL;
+            elsif (pc_j < p_sa) then
               nxt_state <= C_ST_ACCEL;
             elsif (pc_j < p_sd) then
               nxt_state <= C_ST_RUN;
@@ -293,12 +420,20 @@ begin
               nxt_last <= '0';
             end if;
 
-            v_code <= C_ERR_NONE;
+            v_code    <= C_ERR_NONE;
+            req_alt_r <= '0';
 
-            -- The spec's rule order (j >= 2 here, so rule 1 never applies).
+            -- The spec's rule order (j >= 2 here, so rule 1 never applies). In a soft stop: c_last at L', before
+            -- it the stop's decel ramp D_(L'-j) from D_(L'-j+1).
             if (pc_m = 0) then
               v_r      <= p_c_last & C_Q16_PAD;
               pc_state <= C_PC_ADD;
+            elsif (stop_mode = '1') then
+              req_r       <= '1';
+              req_seed_r  <= '0';
+              req_decel_r <= '1';
+              req_index_r <= pc_m;
+              pc_state    <= C_PC_WAIT;
             elsif (pc_j = p_sa) then
               v_r      <= p_c_sa & C_Q16_PAD;
               pc_state <= C_PC_ADD;
@@ -341,7 +476,6 @@ begin
         when C_PC_ADD =>
 
           -- The fractional-carry accumulator: s = acc + v, the interval lasts s >> 32 ticks.
-          v_sum   := ('0' & v_r) + resize(acc, 65);
           nxt_d   <= v_sum(64 downto 32);
           nxt_acc <= v_sum(31 downto 0);
           if (v_sum(64) = '1') then
@@ -358,6 +492,49 @@ begin
             nxt_code <= C_ERR_NONE;
           end if;
           nxt_ok   <= '1';
+          pc_state <= C_PC_IDLE;
+
+          -- Then the soft-stop alternative of the same interval (the next-delay unit is free now).
+          v_code <= C_ERR_NONE;
+          if (alt_kind = C_ALT_LOAD) then
+            if (alt_one = '1') then
+              v_r      <= p_c_last & C_Q16_PAD;
+              pc_state <= C_PC_ALT_ADD;
+            else
+              -- D_(m-1) = D + (2 D) div (4 m - 1): the unit's decel step at index m - 1.
+              req_r       <= '1';
+              req_seed_r  <= '0';
+              req_decel_r <= '1';
+              req_alt_r   <= '1';
+              req_index_r <= alt_mm1;
+              pc_state    <= C_PC_ALT_WAIT;
+            end if;
+          end if;
+
+        when C_PC_ALT_WAIT =>
+
+          if (req_r = '0' and nd_valid = '1') then
+            alt_rec_val <= unsigned(nd_value);
+            alt_rec_rem <= unsigned(nd_rem);
+            v_r         <= unsigned(nd_value) & C_Q16_PAD;
+            if (nd_ovf = '1') then
+              v_code <= C_ERR_RANGE;
+            end if;
+            pc_state <= C_PC_ALT_ADD;
+          end if;
+
+        when C_PC_ALT_ADD =>
+
+          alt_d   <= v_sum(64 downto 32);
+          alt_acc <= v_sum(31 downto 0);
+          if (v_code /= C_ERR_NONE) then
+            alt_code <= v_code;
+          elsif (v_sum(64 downto 32) = 0) then
+            alt_code <= C_ERR_ZERO_TICKS;
+          else
+            alt_code <= C_ERR_NONE;
+          end if;
+          alt_ok   <= '1';
           pc_state <= C_PC_IDLE;
 
         when others =>
@@ -384,6 +561,7 @@ begin
             p_accel_seed <= unsigned(accel_seed);
             p_decel_seed <= unsigned(decel_seed);
             p_cruise     <= unsigned(cruise);
+            p_stop_ratio <= unsigned(stop_ratio);
             dir_r        <= direction;
             busy_r       <= '1';
             err_code_r   <= C_ERR_NONE;
@@ -394,46 +572,17 @@ begin
             req_r        <= '0';
             seed_wait    <= '0';
             nxt_ok       <= '0';
+            sreq         <= '0';
+            stop_mode    <= '0';
+            alt_kind     <= C_ALT_IGNORE;
+            alt_ok       <= '0';
             phase        <= C_PH_SETUP;
           end if;
 
         when C_PH_SETUP =>
 
-          -- Parameter check: only values the move will really use (rule order of the spec) must be >= 1.0.
-          if (p_prescale = 0) then
-            v_chk := C_ERR_PRESCALE;
-          elsif (p_steps(30 downto 1) /= 0) then
-            -- N >= 2
-            if (p_sa = 0 or p_sd = 0 or p_sa > p_l or p_sd > p_l or p_sa > p_sd) then
-              v_chk := C_ERR_BOUNDS;
-            elsif (p_c_first(47 downto 16) = 0) then
-              v_chk := C_ERR_C_FIRST;
-            elsif (p_l(30 downto 1) /= 0 and p_c_last(47 downto 16) = 0) then
-              v_chk := C_ERR_C_LAST;
-            elsif (p_sa /= 1 and p_sa /= p_l and p_c_sa(47 downto 16) = 0) then
-              v_chk := C_ERR_C_SA;
-            elsif (p_sd /= 1 and p_sd /= p_l and p_sd /= p_sa and p_c_sd(47 downto 16) = 0) then
-              v_chk := C_ERR_C_SD;
-            elsif (p_sd - p_sa >= 2 and p_cruise(63 downto 32) = 0) then
-              v_chk := C_ERR_CRUISE;
-            elsif (p_sa >= 3 and p_accel_seed(47 downto 16) = 0) then
-              v_chk := C_ERR_ACCEL_SEED;
-            elsif (p_l - p_sd >= 2 and p_decel_seed(47 downto 16) = 0) then
-              v_chk := C_ERR_DECEL_SEED;
-            end if;
-          end if;
-          chk_code <= v_chk;
-
-          if (p_steps = 0) then
-            n_zero <= '1';
-          else
-            n_zero <= '0';
-          end if;
-          if (p_steps = 1) then
-            n_one <= '1';
-          else
-            n_one <= '0';
-          end if;
+          -- The parameter check (check_proc) sees the latched parameters from this edge on: chk_code, n_zero and
+          -- n_one are read at edge 2.
 
           -- Interval 1 is c_first; with acc = 0 its ticks and fraction are plain slices.
           nxt_d     <= resize(p_c_first(47 downto 16), 33);
@@ -457,12 +606,14 @@ begin
           pc_j        <= to_unsigned(1, 31);
           pc_m        <= p_l - 1;
           dec_started <= '0';
+          cur_prod    <= (others => '0');
           -- Load the accel seed A_0 through the unit (at index 0), like the decel seed later: the unit sees the
           -- start of every value sequence, so a closed-form mode can take its constants from the seeds.
           req_r       <= '1';
           req_seed_r  <= '1';
           req_decel_r <= '0';
           req_index_r <= (others => '0');
+          req_alt_r   <= '0';
           seed_wait   <= '1';
           phase       <= C_PH_FIRST;
 
@@ -477,6 +628,9 @@ begin
             v_pulse := '1';
             if (n_one = '1') then
               v_finish := '1';
+            elsif (sreq = '1') then
+              -- A soft stop requested before pulse 0 (p = 0: no speed, m = 0): the move ends with pulse 0.
+              v_finish := '1';
             else
               v_load := '1';
               phase  <= C_PH_RUN;
@@ -489,7 +643,21 @@ begin
           if (tick = '1') then
             if (cnt = 1) then
               v_pulse := '1';
-              if (cur_last = '1') then
+              if (sreq = '1' and alt_kind = C_ALT_END) then
+                -- Soft stop with m = 0: this pulse is the last.
+                v_finish := '1';
+              elsif (sreq = '1' and alt_kind = C_ALT_LOAD) then
+                -- Soft stop: the next interval is the alternative.
+                if (alt_ok = '0') then
+                  v_finish := '1';
+                  v_err    := C_ERR_LATE;
+                elsif (alt_code /= C_ERR_NONE) then
+                  v_finish := '1';
+                  v_err    := alt_code;
+                else
+                  v_alt := '1';
+                end if;
+              elsif (cur_last = '1') then
                 v_finish := '1';
               elsif (nxt_ok = '0') then
                 v_finish := '1';
@@ -511,6 +679,16 @@ begin
 
       end case;
 
+      -- Hard stop: sampled while busy (or with the start it would accept), it ends the move at this edge; a pulse
+      -- due at this edge is not emitted. done without error.
+      if (hard_stop = '1' and (busy_r = '1' or (phase = C_PH_IDLE and start = '1'))) then
+        v_pulse  := '0';
+        v_load   := '0';
+        v_alt    := '0';
+        v_finish := '1';
+        v_err    := C_ERR_NONE;
+      end if;
+
       if (v_pulse = '1') then
         step_r       <= '1';
         step_count_r <= step_count_r + 1;
@@ -521,17 +699,64 @@ begin
         end if;
       end if;
 
-      -- Pulse edge: the next interval starts; only register copies here.
+      -- Pulse edge: the next interval starts; only register copies here (and the running product of the stop).
+      if (v_load = '1' or v_alt = '1') then
+        nxt_ok   <= '0';
+        alt_ok   <= '0';
+        alt_kind <= C_ALT_IGNORE;
+        -- An alternative still being prepared is dropped (the unit is flushed before the next request).
+        if (pc_state /= C_PC_IDLE) then
+          nd_flush <= '1';
+          req_r    <= '0';
+        end if;
+      end if;
+
       if (v_load = '1') then
         cnt         <= nxt_d;
         acc         <= nxt_acc;
         cur_last    <= nxt_last;
         state_r     <= nxt_state;
         cur_delay_r <= nxt_delay;
-        nxt_ok      <= '0';
+        if (pc_j <= p_sa) then
+          cur_prod <= cur_prod + p_stop_ratio;
+        end if;
         if (nxt_last = '0') then
           pc_state <= C_PC_IDX;
+        else
+          pc_state <= C_PC_IDLE;
         end if;
+      end if;
+
+      -- Soft stop takes effect: interval p + 1 is the alternative, L' = p + m; the precompute continues the stop's
+      -- ramp from D_(m-1) (pc_m = L' - (p + 1) = m - 1).
+      if (v_alt = '1') then
+        cnt       <= alt_d;
+        acc       <= alt_acc;
+        cur_last  <= alt_one;
+        state_r   <= C_ST_DECEL;
+        stop_mode <= '1';
+        rec_val   <= alt_rec_val;
+        rec_rem   <= alt_rec_rem;
+        pc_m      <= alt_mm1;
+        if (alt_d(32) = '1') then
+          cur_delay_r <= (others => '1');
+        else
+          cur_delay_r <= alt_d(31 downto 0);
+        end if;
+        if (alt_one = '0') then
+          pc_state <= C_PC_IDX;
+        else
+          pc_state <= C_PC_IDLE;
+        end if;
+      end if;
+
+      -- Soft stop request: taken while busy and no stop is in effect; a pulse consumes the request it decided on
+      -- (a request sampled at a pulse edge is for the next pulse).
+      if (v_pulse = '1') then
+        sreq <= '0';
+      end if;
+      if (soft_stop = '1' and busy_r = '1' and stop_mode = '0' and v_alt = '0') then
+        sreq <= '1';
       end if;
 
       if (v_finish = '1') then
@@ -543,6 +768,8 @@ begin
         pc_state    <= C_PC_IDLE;
         req_r       <= '0';
         seed_wait   <= '0';
+        sreq        <= '0';
+        stop_mode   <= '0';
         if (v_err /= C_ERR_NONE) then
           error_r    <= '1';
           err_code_r <= v_err;
@@ -572,6 +799,10 @@ begin
         req_r        <= '0';
         seed_wait    <= '0';
         nxt_ok       <= '0';
+        sreq         <= '0';
+        stop_mode    <= '0';
+        alt_ok       <= '0';
+        alt_kind     <= C_ALT_IGNORE;
         -- Not state, but it feeds the timer, which then runs defined (as P = 1) from reset on.
         p_prescale <= (others => '0');
       end if;

@@ -12,7 +12,8 @@ from collections.abc import Sequence
 
 import pytest
 
-from stepramp.enginesim import SimResult, simulate
+from stepramp.enginesim import SimResult, Stop, simulate
+from stepramp.model import FIRST_PULSE_LATENCY, edges_with_stop, phase_of, soft_stop_length, soft_stop_pulse
 from stepramp.model import edges as model_edges
 from stepramp.model import phases as model_phases
 from stepramp.plan import Plan, plan_move
@@ -107,3 +108,217 @@ OTHER_PROFILES = [p for p in PROFILES if not any(p.name in names for names in DE
 def test_engine_profiles(chunk: int) -> None:
     """Every other named and random profile (both directions, PRESCALE 1 and > 1, every transition)."""
     run_profiles(f"profiles_{chunk}", OTHER_PROFILES[chunk::CHUNKS])
+
+
+# --------------------------------------------------------------------------------------------------------
+# Stops (docs/algorithm.md "Soft stop", docs/stepramp_engine.md): the model's edges_with_stop is the reference
+# --------------------------------------------------------------------------------------------------------
+
+#: The most cycles one stop test may simulate (each test is one simulation, moves back to back).
+STOP_TEST_CYCLES = 1_000_000
+
+
+def signed_steps(plan: Plan, pulses: int) -> int:
+    return -pulses if plan.direction else pulses
+
+
+def play_stops(tag: str, cases: Sequence[tuple[str, Plan, Stop]]) -> list[SimResult]:
+    """Simulate the cases back to back (one simulation) after checking the cycle budget of the test."""
+    cycles = 0
+    for _, plan, stop in cases:
+        expected = edges_with_stop(plan, stop.kind, stop.at_cycle)
+        cycles += max([stop.at_cycle, *expected]) + 10
+    assert cycles < STOP_TEST_CYCLES, f"{tag}: {cycles} simulated cycles, keep it under {STOP_TEST_CYCLES}"
+    results = simulate([c[1] for c in cases], build_dir(f"engine_{tag}"), stops=[c[2] for c in cases])
+    assert len(results) == len(cases), f"only {len(results)} of {len(cases)} moves finished"
+    return results
+
+
+def check_stopped_move(name: str, plan: Plan, stop: Stop, res: SimResult, position: int) -> list[str]:
+    """Common checks: edges as the model says, done without error, counters exact, back in STOP."""
+    expected = edges_with_stop(plan, stop.kind, stop.at_cycle)
+    what = f"{name} {stop.kind} stop at edge {stop.at_cycle}"
+    problems = []
+    if res.edges != expected:
+        first = next(
+            (k for k, (a, b) in enumerate(zip(res.edges, expected, strict=False)) if a != b),
+            min(len(res.edges), len(expected)),
+        )
+        problems.append(
+            f"{what}: {len(res.edges)} pulses vs {len(expected)} expected; first difference at pulse {first}: "
+            f"rtl {res.edges[first : first + 3]} model {expected[first : first + 3]}"
+        )
+    if not res.done or res.error or res.err_code:
+        problems.append(f"{what}: done={res.done} error={res.error} code={res.err_code}")
+    if res.step_count != len(res.edges) or res.final_position != position:
+        problems.append(
+            f"{what}: step_count {res.step_count}, position {res.final_position} (expected {position}) "
+            f"for {len(res.edges)} pulses seen"
+        )
+    if res.busy_after != 0 or res.state_after != "STOP":
+        problems.append(f"{what}: after done busy={res.busy_after} state={res.state_after}")
+    return problems
+
+
+def hard_stop_cases() -> list[tuple[str, Plan, Stop]]:
+    cases: list[tuple[str, Plan, Stop]] = []
+    for name in ("trap_basic", "trap_prescale_4", "triangle_prescale_3_neg", "run_start_negative", "steps_1"):
+        plan = plan_move(**PROFILES_BY_NAME[name].args())
+        normal = model_edges(plan)
+        if plan.steps < 2:
+            times = [0, 1, 2, 3]
+        else:
+            in_accel = normal[min(5, plan.sa - 1)] + 7
+            in_run = normal[(plan.sa + plan.sd) // 2] + 3
+            in_decel = normal[min(plan.sd + 3, plan.steps - 2)] + 1
+            k = min(12, plan.steps - 1)
+            times = [0, 1, 2, in_accel, in_run, in_decel, normal[k], normal[k] - 1, normal[-1]]
+            if name == "trap_basic":
+                times.append(normal[-1] + 1)  # after the last pulse: not busy any more, ignored
+        cases += [(name, plan, Stop("hard", e)) for e in times]
+    return cases
+
+
+def test_engine_hard_stop() -> None:
+    """Hard stop in ACCEL, RUN, DECEL, at the start edge, at a pulse edge, one cycle before one, after the move."""
+    cases = hard_stop_cases()
+    results = play_stops("hard_stop", cases)
+    position = 0
+    problems: list[str] = []
+    for (name, plan, stop), res in zip(cases, results, strict=True):
+        position += signed_steps(plan, len(res.edges))
+        problems += check_stopped_move(name, plan, stop, res, position)
+        last = model_edges(plan)[-1] if plan.steps else FIRST_PULSE_LATENCY
+        if any(e >= stop.at_cycle for e in res.edges):
+            problems.append(f"{name}: a pulse at or after the hard stop at edge {stop.at_cycle}: {res.edges[-3:]}")
+        # done comes at the request's edge (or with the last pulse when the request comes after the move)
+        if res.done_edge != min(stop.at_cycle, last):
+            problems.append(f"{name}: done at edge {res.done_edge}, hard stop at {stop.at_cycle}")
+    assert not problems, "\n".join(problems)
+    # the cases cover: a pulse suppressed, none at all, and a request after the move (nothing changes)
+    kept = [len(r.edges) for r in results]
+    assert 0 in kept
+    assert any(len(r.edges) == c[1].steps for c, r in zip(cases, results, strict=True))
+
+
+#: Soft stop profiles: P = 1 and > 1, both directions, start in RUN, accel >> decel and decel >> accel, and the
+#: tightest budget (ACCEL intervals near MIN_INTERVAL_CLKS, two divisions per interval).
+SOFT_PROFILES = (
+    "trap_basic",
+    "trap_prescale_4",
+    "triangle_prescale_3_neg",
+    "trap_negative",
+    "run_start",
+    "ratio_decel_50",
+    "trap_speed_limit_edge",
+    "trap_prescale_100",
+    "trap_run_to_stop",
+)
+
+
+SOFT_CHUNKS = 3
+
+
+def soft_stop_cases(chunk: int) -> list[tuple[str, Plan, Stop]]:
+    """Per profile: around the edges of a pulse early in ACCEL, late in ACCEL and in RUN (e = edge - 1, edge,
+    edge + 1), and before pulse 0; in DECEL and at the start edge (full moves, so fewer of them)."""
+    cases: list[tuple[str, Plan, Stop]] = []
+    for j, name in enumerate(SOFT_PROFILES):
+        if j % SOFT_CHUNKS != chunk:
+            continue
+        plan = plan_move(**PROFILES_BY_NAME[name].args())
+        normal = model_edges(plan)
+        length = plan.steps - 1
+        times = {1}
+        for k in (2, plan.sa - 1, min(plan.sa + 2, (plan.sa + plan.sd) // 2)):
+            if 1 <= k <= length:
+                times.update((normal[k] - 1, normal[k], normal[k] + 1))
+        if j % 2 == 0:
+            times.add(normal[min(plan.sd + 1, length)] - 1)  # decided in DECEL: ignored
+        elif plan.sd >= 2:
+            times.add(normal[plan.sd - 1] - 1)  # the last RUN (or ACCEL) pulse: p + m >= L, mostly ignored
+        if j < SOFT_CHUNKS:
+            times.add(0)  # the start edge: not busy, ignored
+        cases += [(name, plan, Stop("soft", e)) for e in sorted(times)]
+    if chunk == SOFT_CHUNKS - 1:
+        # accel = 100 * decel, stop decided at pulse 1 (D = c_first, m = 100), and at pulse 2 (DECEL already)
+        plan = plan_move(**PROFILES_BY_NAME["ratio_accel_100_triangle"].args())
+        cases += [("ratio_accel_100_triangle", plan, Stop("soft", model_edges(plan)[k] - 1)) for k in (1, 2)]
+    return cases
+
+
+@pytest.mark.parametrize("chunk", range(SOFT_CHUNKS))
+def test_engine_soft_stop(chunk: int) -> None:
+    """Soft stop in ACCEL, RUN and DECEL, around pulse edges, P = 1 and > 1, both directions: as the model says."""
+    cases = soft_stop_cases(chunk)
+    results = play_stops(f"soft_stop_{chunk}", cases)
+    position = 0
+    problems: list[str] = []
+    phases_seen: set[str] = set()
+    for (name, plan, stop), res in zip(cases, results, strict=True):
+        position += signed_steps(plan, len(res.edges))
+        problems += check_stopped_move(name, plan, stop, res, position)
+        p = soft_stop_pulse(plan, stop.at_cycle)
+        if p is None or p == 0:
+            continue
+        phase = phase_of(plan, p)
+        m = soft_stop_length(plan, p)
+        if m is not None:
+            phases_seen.add(f"{phase} stopped")
+        elif p < plan.steps - 1:
+            phases_seen.add(f"{phase} ignored")
+        if m and len(res.edges) >= 3:
+            # the stop ends on its slowest interval, and the FSM shows DECEL from interval p + 1 on
+            iv = [b - a for a, b in zip(res.edges, res.edges[1:], strict=False)]
+            if iv[-1] < iv[-2]:
+                problems.append(f"{name} soft stop at edge {stop.at_cycle}: last interval {iv[-1]} < {iv[-2]}")
+            if any(s != "DECEL" for s in res.states[p:-1]):
+                problems.append(f"{name} soft stop at edge {stop.at_cycle}: states {res.states[p:]}")
+    assert not problems, "\n".join(problems)
+    assert {"ACCEL stopped", "RUN stopped"} <= phases_seen, phases_seen
+
+
+def stop_combination_cases() -> list[tuple[str, Plan, list[Stop], list[int]]]:
+    """Two requests in one move, with the pulses expected (composed from the model's single-request edges)."""
+    cases: list[tuple[str, Plan, list[Stop], list[int]]] = []
+    for name in ("trap_basic", "triangle_prescale_3_neg"):
+        plan = plan_move(**PROFILES_BY_NAME[name].args())
+        normal = model_edges(plan)
+        k = plan.sa // 2  # decided in ACCEL
+        e1 = normal[k - 1] + 5
+        soft = edges_with_stop(plan, "soft", e1)
+        assert len(soft) > k + 3, name
+        # a second soft stop while the first waits for its pulse, and one after it took effect: both ignored
+        cases.append((name, plan, [Stop("soft", e1), Stop("soft", normal[k] - 1)], soft))
+        cases.append((name, plan, [Stop("soft", e1), Stop("soft", soft[k + 2] - 1)], soft))
+        # a hard stop during the stop's ramp (one cycle before one of its pulses), and at the edge of its last pulse
+        for e2 in (soft[k + 2] - 1, soft[-1]):
+            cases.append((name, plan, [Stop("soft", e1), Stop("hard", e2)], [x for x in soft if x < e2]))
+        # soft and hard at the same edge: the hard stop wins
+        cases.append((name, plan, [Stop("soft", e1), Stop("hard", e1)], [x for x in normal if x < e1]))
+    return cases
+
+
+def test_engine_stop_combinations() -> None:
+    """A second soft stop is ignored (pending or in effect); a hard stop still ends a soft stop; hard beats soft."""
+    cases = stop_combination_cases()
+    cycles = sum(max([s.at_cycle for s in stops] + expected) for _, _, stops, expected in cases)
+    assert cycles < STOP_TEST_CYCLES
+    results = simulate([c[1] for c in cases], build_dir("engine_stop_combinations"), stops=[c[2] for c in cases])
+    assert len(results) == len(cases), f"only {len(results)} of {len(cases)} moves finished"
+    position = 0
+    problems: list[str] = []
+    for (name, plan, stops, expected), res in zip(cases, results, strict=True):
+        position += signed_steps(plan, len(res.edges))
+        what = f"{name} {[(s.kind, s.at_cycle) for s in stops]}"
+        if res.edges != expected:
+            problems.append(
+                f"{what}: {len(res.edges)} pulses, expected {len(expected)}: {res.edges[-3:]} vs {expected[-3:]}"
+            )
+        if not res.done or res.error or res.step_count != len(res.edges) or res.final_position != position:
+            problems.append(
+                f"{what}: done={res.done} error={res.error} count={res.step_count} pos={res.final_position}"
+            )
+        if res.busy_after != 0 or res.state_after != "STOP":
+            problems.append(f"{what}: after done busy={res.busy_after} state={res.state_after}")
+    assert not problems, "\n".join(problems)

@@ -12,6 +12,7 @@ from typing import Any
 
 from stepramp.hdl import run_cocotb
 from stepramp.model import edges as model_edges
+from stepramp.model import edges_with_stop
 from stepramp.plan import Plan
 
 #: Engine states as the RTL encodes them on its `state` port.
@@ -34,10 +35,31 @@ class SimResult:
     state_after: str | None = None
 
 
-def timeout_cycles(plan: Plan) -> int:
-    """A generous cycle budget for one move: the model's last edge plus slack (a hang fails after this)."""
-    expected = model_edges(plan)
-    return (expected[-1] if expected else 0) + 2000 + 4 * plan.prescale
+@dataclass(frozen=True)
+class Stop:
+    """A stop strobe for one move: kind "soft" or "hard", sampled '1' at edge at_cycle (the start edge is 0)."""
+
+    kind: str
+    at_cycle: int
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("soft", "hard"):
+            raise ValueError(f"Stop.kind must be 'soft' or 'hard', got {self.kind!r}")
+        if self.at_cycle < 0:
+            raise ValueError(f"Stop.at_cycle must be >= 0, got {self.at_cycle}")
+
+
+def timeout_cycles(plan: Plan, stop: Stop | Sequence[Stop] | None = None) -> int:
+    """A generous cycle budget for one move: the model's last edge plus slack (a hang fails after this).
+
+    With stops, the longest of the model's stopped moves (a soft stop can make a move last longer) and the edge of
+    the last request (a hard stop ends the move there, after its last pulse).
+    """
+    stops = [] if stop is None else [stop] if isinstance(stop, Stop) else list(stop)
+    last = max([0, *model_edges(plan)[-1:]])
+    for s in stops:
+        last = max([last, s.at_cycle, *edges_with_stop(plan, s.kind, s.at_cycle)])
+    return last + 2000 + 4 * plan.prescale
 
 
 def simulate(
@@ -46,20 +68,32 @@ def simulate(
     waves: Path | None = None,
     budgets: Sequence[int] | None = None,
     log_file: Path | None = None,
+    stops: Sequence[Stop | Sequence[Stop] | None] | None = None,
 ) -> list[SimResult]:
     """Play the moves back to back in one simulation; one SimResult per move (fewer if the engine hung).
 
-    Under pytest a hang (or any failure inside the simulation) raises SystemExit from the runner.
+    stops: an optional stop (or list of stops) per move (None: no stop). Under pytest a hang (or any failure inside
+    the simulation) raises SystemExit from the runner.
     """
+    if stops is not None and len(stops) != len(plans):
+        raise ValueError(f"{len(stops)} stops for {len(plans)} plans")
     build_dir = build_dir.resolve()
     build_dir.mkdir(parents=True, exist_ok=True)
     request = build_dir / "request.json"
     result_file = build_dir / "result.json"
     result_file.unlink(missing_ok=True)
-    moves = [
-        {"registers": dataclasses.asdict(plan), "timeout_cycles": budgets[i] if budgets else timeout_cycles(plan)}
-        for i, plan in enumerate(plans)
-    ]
+    moves: list[dict[str, Any]] = []
+    for i, plan in enumerate(plans):
+        stop = stops[i] if stops is not None else None
+        move: dict[str, Any] = {
+            "registers": dataclasses.asdict(plan),
+            "timeout_cycles": budgets[i] if budgets else timeout_cycles(plan, stop),
+        }
+        if isinstance(stop, Stop):
+            move["stop"] = {"kind": stop.kind, "at_cycle": stop.at_cycle}
+        elif stop is not None:
+            move["stop"] = [{"kind": s.kind, "at_cycle": s.at_cycle} for s in stop]
+        moves.append(move)
     request.write_text(json.dumps({"moves": moves}))
     run_cocotb(
         "stepramp_engine",

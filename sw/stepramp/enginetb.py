@@ -5,6 +5,11 @@ It is a driver and a monitor, not a checker: the request (a JSON file named by $
 moves as register values; for each move it drives the inputs, pulses start, timestamps every STEP rising edge in
 clock cycles from the edge that sampled start, and writes the observations to $STEPRAMP_SIM_RESULT. The caller
 compares them with the model. Only a hang (no done within the request's cycle budget) fails here.
+
+A move may carry a stop: {"kind": "soft" | "hard", "at_cycle": e}. The strobe soft_stop / hard_stop is then '1'
+for one clock, sampled by the rising edge e cycles after the start edge (the numbering of the step timestamps:
+the start edge is 0, so e = 0 drives it together with start). "stop" may also be a list of such requests (at
+distinct edges for one kind).
 """
 
 from __future__ import annotations
@@ -37,21 +42,52 @@ def _signed(value: Any, bits: int) -> int:
     return raw - (1 << bits) if raw >> (bits - 1) else raw
 
 
+STOP_PORTS = {"soft": "soft_stop", "hard": "hard_stop"}
+
+
+async def _strobe(dut: Any, port: str, at_cycle: int, start_edge: int) -> None:
+    """Drive port '1' for the clock cycle before rising edge start_edge + at_cycle (at_cycle >= 1)."""
+    signal = getattr(dut, port)
+    await Timer(at_cycle * CLK_PERIOD_NS - CLK_PERIOD_NS // 2, unit="ns")  # the falling edge before it
+    signal.value = 1
+    await RisingEdge(dut.clk)
+    sampled = _edge() - start_edge
+    await FallingEdge(dut.clk)
+    signal.value = 0
+    assert sampled == at_cycle, f"{port} sampled at edge {sampled}, requested {at_cycle}"
+
+
 async def _play(dut: Any, move: dict[str, Any]) -> dict[str, Any]:
     regs: dict[str, int] = move["registers"]
     for name in INPUTS:
         getattr(dut, name).value = regs[name]
+    raw_stop = move.get("stop")
+    stops: list[dict[str, Any]] = [] if raw_stop is None else [raw_stop] if isinstance(raw_stop, dict) else raw_stop
+    requests = [(STOP_PORTS[stop["kind"]], int(stop["at_cycle"])) for stop in stops]
+    if any(at_cycle < 0 for _, at_cycle in requests):
+        raise ValueError(f"stop at_cycle must be >= 0: {stops}")
     await FallingEdge(dut.clk)
     dut.start.value = 1
+    for port, at_cycle in requests:
+        if at_cycle == 0:
+            getattr(dut, port).value = 1
     await RisingEdge(dut.clk)
     start_edge = _edge()
+    strobes = [
+        cocotb.start_soon(_strobe(dut, port, at_cycle, start_edge)) for port, at_cycle in requests if at_cycle >= 1
+    ]
     await FallingEdge(dut.clk)
     dut.start.value = 0
+    for port, at_cycle in requests:
+        if at_cycle == 0:
+            getattr(dut, port).value = 0
 
     edges: list[int] = []
     states: list[int] = []
     deadline = int(get_sim_time("ns")) + int(move["timeout_cycles"]) * CLK_PERIOD_NS
-    while True:
+    offset = 0
+    # done may already be high here: a hard stop at the start edge ends the move at edge 0
+    while int(dut.done.value) != 1:
         remaining = deadline - int(get_sim_time("ns"))
         if remaining <= 0:
             return {"edges": edges, "states": states, "done": False}
@@ -61,8 +97,6 @@ async def _play(dut: Any, move: dict[str, Any]) -> dict[str, Any]:
         if int(dut.step.value) == 1 and (not edges or edges[-1] != offset):
             edges.append(offset)
             states.append(int(dut.state.value))
-        if int(dut.done.value) == 1:
-            break
     result = {
         "edges": edges,
         "states": states,
@@ -76,6 +110,8 @@ async def _play(dut: Any, move: dict[str, Any]) -> dict[str, Any]:
     await FallingEdge(dut.clk)
     result["busy_after"] = int(dut.busy.value)
     result["state_after"] = int(dut.state.value)
+    for strobe in strobes:
+        await strobe  # a stop requested after done is still driven (the engine must ignore it) and checked
     return result
 
 
@@ -85,6 +121,8 @@ async def play_moves(dut: Any) -> None:
     request = json.loads(Path(os.environ["STEPRAMP_SIM_REQUEST"]).read_text())
     Clock(dut.clk, CLK_PERIOD_NS, unit="ns").start()
     dut.start.value = 0
+    dut.soft_stop.value = 0
+    dut.hard_stop.value = 0
     dut.pos_load.value = 0
     dut.pos_value.value = 0
     for name in INPUTS:

@@ -6,7 +6,9 @@ The RTL is compared edge for edge with :func:`edges`.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+import bisect
+import itertools
+from collections.abc import Iterable, Iterator
 
 from .plan import FRAC_CRUISE, FRAC_RAMP, Plan
 
@@ -96,3 +98,112 @@ def phases(plan: Plan) -> list[str]:
         else:
             out.append(DECEL)
     return out
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Stops (docs/algorithm.md, "Soft stop"; docs/stepramp_engine.md for the hard stop)
+# ---------------------------------------------------------------------------------------------------------------
+
+SOFT = "soft"
+HARD = "hard"
+
+STOP_RATIO_FRAC = 16
+"""Fraction bits of Plan.stop_ratio (Q16.16, accel / decel)."""
+
+
+def phase_of(plan: Plan, i: int) -> str:
+    """The spec's phase of interval i (also used for pulse i in the soft-stop rule): ACCEL, RUN or DECEL."""
+    if i < min(plan.sa, plan.sd):
+        return ACCEL
+    if plan.sa <= i < plan.sd:
+        return RUN
+    return DECEL
+
+
+def soft_stop_length(plan: Plan, p: int) -> int | None:
+    """m, the number of intervals after pulse p of a soft stop decided at pulse p; None when it is ignored.
+
+    0 means the move ends with pulse p. The new last pulse is p + m.
+    """
+    length = plan.steps - 1
+    if p >= length:  # pulse p is the last one (or there is none): nothing to shorten
+        return None
+    phase = phase_of(plan, p)
+    if phase == DECEL:
+        return None
+    m = (p if phase == ACCEL else plan.sa) * plan.stop_ratio >> STOP_RATIO_FRAC
+    if p + m >= length:  # the plan's own deceleration ends no later
+        return None
+    return m
+
+
+def soft_stop_values(plan: Plan, p: int) -> list[int] | None:
+    """Q32.32 values of intervals 1 .. p + m when a soft stop is decided at pulse p; None when it is ignored.
+
+    Intervals 1 .. p are the plan's. With D the Q32.16 value of interval p (ACCEL) or cruise >> 16 (RUN), the
+    reverse decel recurrence runs from D_m := D, remainder 0; interval p + j gets D_{m-j} (j = 1 .. m-1) and
+    interval p + m gets c_last.
+    """
+    m = soft_stop_length(plan, p)
+    if m is None:
+        return None
+    values = list(itertools.islice(interval_values(plan), p))
+    if m == 0:
+        return values
+    # D: the value of interval p in ACCEL (c_first for p = 1, else A_{p-1}: Q32.16, so the shift is exact), the
+    # Q32.16 truncation of cruise in RUN
+    d_val = (values[p - 1] if phase_of(plan, p) == ACCEL else plan.cruise) >> _SHIFT
+    rem = 0
+    for j in range(m, 1, -1):  # D_{j-1} from D_j
+        q, rem = divmod(2 * d_val + rem, 4 * j - 1)
+        d_val += q
+        values.append(d_val << _SHIFT)
+    values.append(plan.c_last << _SHIFT)
+    return values
+
+
+def _edges_of_values(plan: Plan, values: Iterable[int]) -> list[int]:
+    """Edges of pulse 0 and of the pulse ending each interval value, through the fractional accumulator."""
+    out = [FIRST_PULSE_LATENCY]
+    t = 0
+    acc = 0
+    for value in values:
+        s = acc + value
+        t += s >> FRAC_CRUISE
+        acc = s & _FRAC_MASK
+        out.append(FIRST_PULSE_LATENCY + plan.prescale * t)
+    return out
+
+
+def soft_stop_pulse(plan: Plan, request_edge: int) -> int | None:
+    """p, the pulse at which a soft stop sampled at request_edge is decided; None when the request is ignored.
+
+    The request counts only while the engine is busy (edges 1 .. the last pulse's edge; edge 0, the start edge,
+    is not busy). p is the first pulse whose edge is strictly after request_edge.
+    """
+    return _first_pulse_after(edges(plan), request_edge)
+
+
+def _first_pulse_after(normal: list[int], request_edge: int) -> int | None:
+    if request_edge < 1 or not normal or request_edge >= normal[-1]:
+        return None
+    return bisect.bisect_right(normal, request_edge)
+
+
+def edges_with_stop(plan: Plan, kind: str, request_edge: int) -> list[int]:
+    """Edges of the pulses the engine emits when a stop strobe is sampled '1' at request_edge (edge 0 = start).
+
+    kind "hard": every pulse whose edge is before request_edge (a pulse due at request_edge itself is suppressed);
+    at the start edge (0) the hard stop wins and nothing is emitted; after the move it changes nothing.
+    kind "soft": see soft_stop_pulse and soft_stop_values; pulse 0 is the last when p = 0.
+    """
+    if kind not in (SOFT, HARD):
+        raise ValueError(f"kind must be {SOFT!r} or {HARD!r}, got {kind!r}")
+    normal = edges(plan)
+    if kind == HARD:
+        return normal if request_edge < 0 else normal[: bisect.bisect_left(normal, request_edge)]
+    p = _first_pulse_after(normal, request_edge)
+    values = None if p is None else soft_stop_values(plan, p)
+    if values is None:
+        return normal
+    return _edges_of_values(plan, values)

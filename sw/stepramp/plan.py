@@ -36,6 +36,7 @@ REG_WIDTHS: dict[str, int] = {
     "accel_seed": 48,
     "decel_seed": 48,
     "cruise": 64,
+    "stop_ratio": 32,
 }
 """Width in bits of each register (field of Plan)."""
 
@@ -59,6 +60,7 @@ class Plan:
     accel_seed: int
     decel_seed: int
     cruise: int
+    stop_ratio: int
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -232,7 +234,7 @@ def plan_move_info(
 
     if length < 1:  # N = 0 or 1: no interval, nothing for the engine to compute
         info = MoveInfo(f_tick, max(length, 0), a, d, v, 0.0, 0.0, 0.0, True, 0.0, 0.0, 0, math.inf)
-        return Plan(n, direction, prescale, 0, 0, 0, 0, 0, 0, 0, 0, 0), info
+        return Plan(n, direction, prescale, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0), info
 
     ramp = _Ramp(length, a, d, v, f_tick)
     min_interval = ramp.k_c
@@ -269,6 +271,8 @@ def plan_move_info(
         accel_seed=_to_fixed("accel_seed", SEED_FACTOR * c0, q16, w48),
         decel_seed=_to_fixed("decel_seed", SEED_FACTOR * cd0 * decel_product(m0), q16, w48) if m0 >= 1 else 0,
         cruise=_cruise(f_tick, v),
+        # accel / decel in Q16.16 (rounded, saturated): sizes the decel ramp of a soft stop
+        stop_ratio=min(round(accel / decel * (1 << 16)), (1 << REG_WIDTHS["stop_ratio"]) - 1),
     )
     info = MoveInfo(f_tick, length, a, d, v, ramp.x_a, ramp.x_d, ramp.v_peak, ramp.triangle, c0, cd0, m0, min_interval)
     return plan, info

@@ -191,6 +191,7 @@ def test_rules_on_hand_made_plan() -> None:
         accel_seed=0x30000,  # A_0 = 196608
         decel_seed=0x20002,  # D_2 = 131074
         cruise=0x1_8000_0000,
+        stop_ratio=1 << 16,
     )
     # A_1: num 393216, den 5 -> q 78643, r 1 -> 117965;  A_2: num 235931, den 9 -> q 26214, r 5 -> 91751
     # D_2 = 131074, r = 0 (not the accel remainder 5); D_1: num 262148, den 7 -> q 37449, r 5 -> 168523
@@ -208,7 +209,7 @@ def test_rules_on_hand_made_plan() -> None:
 
 def test_cruise_accumulator_carries_fraction() -> None:
     # RUN intervals of 1.25 ticks: 1, 1, 1, 2, 1, 1, 1, 2 ...
-    plan = Plan(12, 0, 1, 1 << 16, 1 << 16, 1, 1 << 16, 11, 1 << 16, 0, 0, 5 << 30)
+    plan = Plan(12, 0, 1, 1 << 16, 1 << 16, 1, 1 << 16, 11, 1 << 16, 0, 0, 5 << 30, 1 << 16)
     times = tick_times(plan)
     assert times == [0, 1] + [1 + math.floor(1.25 * j) for j in range(1, 10)] + [times[10] + 1]
     assert phases(plan) == [RUN] * 10 + [DECEL]

@@ -40,6 +40,7 @@ TABLE_FIELDS = [
     "accel_seed",
     "decel_seed",
     "cruise",
+    "stop_ratio",
 ]
 
 
@@ -79,6 +80,7 @@ def test_fields_and_widths_match_the_table() -> None:
         "accel_seed": 48,
         "decel_seed": 48,
         "cruise": 64,
+        "stop_ratio": 32,
     }
     plan = plan_move(**_args(100, 1e5, 1e5, 2000.0))
     d = plan.to_dict()

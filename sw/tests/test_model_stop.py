@@ -1,0 +1,279 @@
+# SPDX-License-Identifier: MIT
+"""The stop model (stepramp.model.edges_with_stop) against physics: soft stop and hard stop.
+
+Expected values come from the move's physical inputs (stepramp.ideal: the speed at a position, the ideal last
+interval; the decel in steps/s^2), never from the model's own arithmetic. The stop rules themselves are in
+docs/algorithm.md ("Soft stop") and docs/stepramp_engine.md.
+
+Speed at pulse p: the ideal trajectory's speed at position p (stepramp.ideal.IdealMove.speed_at). The reciprocal
+of interval p is the *mean* speed over that interval; in an acceleration from rest it is half the speed at pulse 1
+(and (sqrt(p) + sqrt(p - 1)) / (2 sqrt(p)) of it in general), which would make the stopping distance of a correct
+stop look 0.5 * accel / decel steps too long.
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+import math
+import random
+from dataclasses import dataclass
+
+import pytest
+
+from stepramp import ideal
+from stepramp.model import (
+    ACCEL,
+    DECEL,
+    FIRST_PULSE_LATENCY,
+    RUN,
+    edges,
+    edges_with_stop,
+    phase_of,
+    soft_stop_pulse,
+    soft_stop_values,
+)
+from stepramp.plan import Plan, plan_move, plan_move_info
+from stepramp.profiles import PROFILES, PROFILES_BY_NAME, Profile
+
+#: Tolerances of the brief: stopping distance 2 steps + 3 %, last interval 2 % + 2 ticks, transition 2 %.
+DIST_STEPS = 2.0
+DIST_REL = 0.03
+LAST_REL = 0.02
+LAST_TICKS = 2.0
+TRANSITION_REL = 0.02
+RANDOM_REQUESTS = 40
+MAX_PULSES_PER_PROFILE = 200
+
+
+@dataclass
+class Physics:
+    """The move's physical quantities (from the inputs only)."""
+
+    move: ideal.IdealMove
+    decel: float  # steps/s^2
+    ratio: float  # accel / decel
+
+    def speed_ticks(self, x: float) -> float:
+        """Ideal speed at position x in steps per tick."""
+        return self.move.speed_at(x) / self.move.f_tick
+
+    def stop_distance(self, x: float) -> float:
+        """Steps needed to stop from the ideal speed at x with the programmed decel: v^2 / (2 d)."""
+        v = self.move.speed_at(x)
+        return v * v / (2.0 * self.decel)
+
+    @functools.cached_property
+    def last_interval(self) -> float:
+        """Exact last interval of a deceleration to rest (ticks): the ideal move's own last interval."""
+        return self.move.time_at(self.move.length) - self.move.time_at(self.move.length - 1)
+
+
+def physics(profile: Profile) -> Physics:
+    move = ideal.ideal_move(**profile.args())
+    return Physics(move, move.d, move.a / move.d)
+
+
+def run_allowance(plan: Plan, phys: Physics, p: int) -> float:
+    """Extra steps the RUN rule may add: it sizes the stop with sa, the first RUN interval, instead of x_a.
+
+    m = floor(sa * accel / decel) where the exact distance is x_a * accel / decel, x_a < sa <= x_a + 1: the stop
+    is softer (longer) than the programmed decel by up to (sa - x_a) * accel / decel steps, never shorter.
+    """
+    if phase_of(plan, p) != RUN:
+        return 0.0
+    return (plan.sa - phys.move.x_a) * phys.ratio
+
+
+def request_edges(plan: Plan, rng: random.Random) -> list[int]:
+    """Request edges: random ones, and around the edges of a few pulses (edge - 1, edge, edge + 1)."""
+    normal = edges(plan)
+    if not normal:
+        return [0, 1, 2, 3]
+    last = normal[-1]
+    out = {0, 1, 2, last - 1, last, last + 1}
+    out.update(rng.randint(1, last) for _ in range(RANDOM_REQUESTS))
+    for k in rng.sample(range(len(normal)), min(len(normal), 8)):
+        out.update((normal[k] - 1, normal[k], normal[k] + 1))
+    return sorted(e for e in out if e >= 0)
+
+
+def tick_intervals(plan: Plan, pulse_edges: list[int]) -> list[int]:
+    """Intervals in ticks between consecutive pulses (index j - 1 holds interval j)."""
+    return [(b - a) // plan.prescale for a, b in itertools.pairwise(pulse_edges)]
+
+
+def check_soft(profile: Profile, plan: Plan, phys: Physics, normal: list[int], e: int) -> tuple[str, str] | None:
+    """All physics checks of one soft stop at edge e (normal: the move's edges); returns (phase, outcome)."""
+    got = edges_with_stop(plan, "soft", e)
+    what = f"{profile.name} soft stop at edge {e}"
+    length = plan.steps - 1
+    assert len(got) <= max(plan.steps, 0), what
+    assert all(x > FIRST_PULSE_LATENCY - 1 for x in got), what
+    p = soft_stop_pulse(plan, e)
+    if p is None:
+        assert got == normal, f"{what}: a request outside the move changed it"
+        return None
+    # p: the first pulse strictly after e; everything up to it is the plan's
+    assert normal[p] > e and (p == 0 or normal[p - 1] <= e), what
+    assert got[: p + 1] == normal[: p + 1], f"{what}: pulses up to p = {p} changed"
+    if p >= length:
+        assert got == normal, what
+        return ("LAST", "ignored")
+    phase = phase_of(plan, p)
+    if phase == DECEL:
+        assert got == normal, f"{what}: a soft stop in DECEL changed the move"
+        return (phase, "ignored")
+    dist = phys.stop_distance(p)
+    tol = DIST_STEPS + DIST_REL * dist
+    extra = run_allowance(plan, phys, p)
+    if got == normal:
+        # Ignored because the plan's own deceleration ends no later: its remaining distance is not longer.
+        assert length - p <= dist + tol + extra, f"{what}: ignored although {length - p} steps > stop {dist:.2f}"
+        return (phase, "ignored")
+    stop_steps = len(got) - 1 - p
+    assert stop_steps < length - p, what
+    assert dist - tol <= stop_steps <= dist + tol + extra, (
+        f"{what}: stopped in {stop_steps} steps after pulse {p}, physics {dist:.2f} (tol {tol:.2f} + {extra:.2f})"
+    )
+    if stop_steps == 0:
+        return (phase, "ends at p")
+    iv = tick_intervals(plan, got)
+    after = iv[p:]  # intervals p + 1 .. p + m
+    # No speed increase once the stop takes effect: the first new interval against the speed at pulse p ...
+    current = 1.0 / phys.speed_ticks(p)
+    assert after[0] >= (1.0 - TRANSITION_REL) * current - 1, (
+        f"{what}: interval {p + 1} = {after[0]} ticks, faster than the speed at pulse {p} ({current:.2f} ticks)"
+    )
+    # ... then never shorter (the emitted ticks may jitter by one from the fractional carry; the values may not)
+    assert all(b >= a - 1 for a, b in itertools.pairwise(after)), f"{what}: intervals shorten: {after}"
+    values = soft_stop_values(plan, p)
+    assert values is not None, what
+    assert all(b >= a for a, b in itertools.pairwise(values[p:])), f"{what}: interval values shorten"
+    # The last interval is the exact last interval of a deceleration to rest.
+    exact_last = phys.last_interval
+    assert abs(after[-1] - exact_last) <= LAST_REL * exact_last + LAST_TICKS, (
+        f"{what}: last interval {after[-1]} ticks, exact {exact_last:.2f}"
+    )
+    if len(after) >= 2:
+        assert after[-1] >= after[-2], what
+    return (phase, "stopped")
+
+
+def check_hard(plan: Plan, normal: list[int], e: int) -> None:
+    got = edges_with_stop(plan, "hard", e)
+    what = f"hard stop at edge {e}"
+    assert got == normal[: len(got)], f"{what}: not a prefix of the move"
+    assert all(x < e for x in got), f"{what}: a pulse at or after the request"
+    if e >= 0:
+        assert len(got) == sum(1 for x in normal if x < e), f"{what}: a pulse before the request is missing"
+
+
+@pytest.mark.parametrize("profile", PROFILES, ids=[p.name for p in PROFILES])
+def test_stops_against_physics(profile: Profile) -> None:
+    """Soft and hard stops at many request times on every profile."""
+    plan = plan_move(**profile.args())
+    phys = physics(profile)
+    rng = random.Random(f"stop-{profile.name}")
+    normal = edges(plan)
+    for e in request_edges(plan, rng):
+        check_soft(profile, plan, phys, normal, e)
+        check_hard(plan, normal, e)
+
+
+def test_soft_stop_at_every_pulse_covers_every_outcome() -> None:
+    """A soft stop decided at (up to 200) pulses of every profile, around sa and sd, and at the last pulse."""
+    seen: set[tuple[str, str]] = set()
+    for profile in PROFILES:
+        plan = plan_move(**profile.args())
+        phys = physics(profile)
+        normal = edges(plan)
+        pulses = set(range(1, len(normal), max(1, len(normal) // MAX_PULSES_PER_PROFILE)))
+        pulses.update(k for b in (plan.sa, plan.sd, len(normal) - 1) for k in (b - 1, b, b + 1) if 1 <= k < len(normal))
+        for k in sorted(pulses):
+            # a request at the edge of pulse k - 1 is decided at pulse k
+            outcome = check_soft(profile, plan, phys, normal, normal[k - 1])
+            if outcome is not None:
+                seen.add(outcome)
+    for phase in (ACCEL, RUN):
+        assert (phase, "stopped") in seen
+        assert (phase, "ignored") in seen
+    assert (ACCEL, "ends at p") in seen
+    assert (DECEL, "ignored") in seen
+    assert ("LAST", "ignored") in seen
+
+
+def test_soft_stop_examples() -> None:
+    """Hand-checked cases on trap_basic (accel == decel, so a stop at pulse p in ACCEL takes p more steps)."""
+    profile = PROFILES_BY_NAME["trap_basic"]
+    plan, info = plan_move_info(**profile.args())
+    assert plan.stop_ratio == 1 << 16
+    normal = edges(plan)
+    # a stop requested in interval 10 is decided at pulse 10 and lasts 10 more steps: 21 pulses in all
+    got = edges_with_stop(plan, "soft", normal[9])
+    assert len(got) == 21
+    assert got[:11] == normal[:11]
+    # requested one edge before pulse 10: still pulse 10; at its edge: pulse 11 (strictly after)
+    assert edges_with_stop(plan, "soft", normal[10] - 1) == got
+    assert len(edges_with_stop(plan, "soft", normal[10])) == 23
+    # the start edge is not busy: ignored; edges 1 and 2 (before pulse 0 is out): the move ends with pulse 0
+    assert edges_with_stop(plan, "soft", 0) == normal
+    assert edges_with_stop(plan, "soft", 1) == [FIRST_PULSE_LATENCY]
+    assert len(edges_with_stop(plan, "soft", FIRST_PULSE_LATENCY)) == 3  # decided at pulse 1: m = 1
+    # in RUN the stop takes floor(sa * ratio) = sa steps: the length of the plan's own ramp (rounded up)
+    k = plan.sa + 40
+    assert phase_of(plan, k) == RUN
+    assert len(edges_with_stop(plan, "soft", normal[k - 1])) == k + plan.sa + 1
+    assert plan.sa == math.floor(info.x_a) + 1
+    # in DECEL, or at the last pulse, or after the move: no change
+    assert edges_with_stop(plan, "soft", normal[plan.sd]) == normal
+    assert edges_with_stop(plan, "soft", normal[-1]) == normal
+    assert edges_with_stop(plan, "soft", normal[-1] + 100) == normal
+    # hard stop: the pulse due at the request's edge is suppressed, the start edge wins, idle edges do nothing
+    assert edges_with_stop(plan, "hard", normal[5]) == normal[:5]
+    assert edges_with_stop(plan, "hard", normal[5] + 1) == normal[:6]
+    assert edges_with_stop(plan, "hard", 0) == []
+    assert edges_with_stop(plan, "hard", FIRST_PULSE_LATENCY) == []
+    assert edges_with_stop(plan, "hard", normal[-1] + 1) == normal
+    with pytest.raises(ValueError, match="kind"):
+        edges_with_stop(plan, "gentle", 10)
+
+
+def test_stop_ratio_field() -> None:
+    """stop_ratio = accel / decel in Q16.16, rounded and saturated; 0 for moves without an interval."""
+    for profile in PROFILES:
+        plan = plan_move(**profile.args())
+        if plan.steps <= 1:
+            assert plan.stop_ratio == 0
+            continue
+        ratio = profile.accel / profile.decel
+        assert abs(plan.stop_ratio - ratio * 2**16) <= 0.5
+    base = PROFILES_BY_NAME["trap_basic"].args()
+    huge = plan_move(**{**base, "accel": base["decel"] * 70_000.0, "steps": 3})
+    assert huge.stop_ratio == 2**32 - 1
+
+
+def test_soft_stop_with_extreme_ratios() -> None:
+    """accel / decel of 1/100 .. 100 on a long ramp: the stop lands within tolerance in every ACCEL interval."""
+    for ratio in (0.01, 0.1, 0.5, 1.0, 2.0, 10.0, 100.0):
+        n_a = 100.0
+        n_d = n_a * ratio
+        fclk, spr, period = 1e6, 200.0, 80.0
+        alpha = 2.0 * math.pi / spr
+        v = fclk / period
+        profile = Profile(
+            f"ratio_{ratio}",
+            int(n_a + n_d + 50),
+            alpha * v * v / (2.0 * n_a),
+            alpha * v * v / (2.0 * n_d),
+            alpha * v,
+            spr,
+            fclk,
+        )
+        plan = plan_move(**profile.args())
+        phys = physics(profile)
+        normal = edges(plan)
+        outcomes = {check_soft(profile, plan, phys, normal, normal[k - 1]) for k in range(1, plan.sa, 3)}
+        assert outcomes <= {(ACCEL, "stopped"), (ACCEL, "ends at p")}, outcomes
+        # with decel = 100 * accel the stopping distance is below one step in all of this ramp: the move ends at p
+        assert ((ACCEL, "stopped") in outcomes) == (ratio >= 0.1), (ratio, outcomes)
