@@ -23,10 +23,11 @@
 --   hard_stop: no pulse after edge e (a pulse due at e is not emitted); done (no error) after edge e. Also taken
 --              together with an accepted start (the move ends at edge 0 without a pulse).
 --   soft_stop: decided at pulse p, the first pulse whose edge is strictly after e. In ACCEL / RUN the move then
---              decelerates over m = floor(min(p, sa) * stop_ratio / 2^16) more steps (ignored in DECEL or when
---              p + m >= L; m = 0 ends the move with pulse p). To meet "strictly after e" with no latency, the
---              value of interval p + 1 for such a stop (the alternative) is prepared in every ACCEL / RUN interval,
---              after the normal next value, and only chosen at the pulse edge.
+--              decelerates over m more steps, m = floor(p * stop_ratio / 2^16) in ACCEL, m = L - sd + 1 in RUN
+--              (ignored in DECEL or when p + m >= L; m = 0 ends the move with pulse p), from D = the plan's value
+--              of interval p + 1. To meet "strictly after e" with no latency, the value of interval p + 1 for
+--              such a stop (the alternative) is prepared in every ACCEL / RUN interval, after the normal next value
+--              (which is D), and only chosen at the pulse edge.
 
 library ieee;
   use ieee.std_logic_1164.all;
@@ -131,6 +132,7 @@ architecture rtl of stepramp_engine is
   signal p_decel_seed : unsigned(47 downto 0);
   signal p_cruise     : unsigned(63 downto 0);
   signal p_stop_ratio : unsigned(31 downto 0); -- accel / decel, Q16.16
+  signal p_run_m      : unsigned(30 downto 0); -- L - sd + 1: m of a soft stop in RUN (set at edge 1)
 
   -- Move sequencer and outputs.
   signal phase        : std_logic_vector(1 downto 0);
@@ -185,13 +187,14 @@ architecture rtl of stepramp_engine is
   -- While interval c counts down (ACCEL or RUN), the alternative "soft stop decided at pulse c" is prepared
   -- after the normal next interval: alt_kind (what it does), and for m >= 1 the value of interval c + 1 in the
   -- stop (c_last when m = 1, else D_(m-1) from D_m := D), through the same accumulator step as a normal value.
+  -- D is the normal value of interval c + 1 just prepared (A_c or c_sa in ACCEL, cruise in RUN), truncated to Q32.16.
   signal sreq        : std_logic;
   signal stop_mode   : std_logic;
-  signal cur_prod    : unsigned(62 downto 0); -- min(c, sa) * stop_ratio, Q47.16, for the interval c now counting
+  signal cur_prod    : unsigned(62 downto 0); -- c * stop_ratio, Q47.16, for the ACCEL interval c now counting
   signal alt_kind    : std_logic_vector(1 downto 0);
   signal alt_one     : std_logic;             -- m = 1
   signal alt_mm1     : unsigned(30 downto 0); -- m - 1
-  signal alt_dval    : unsigned(47 downto 0); -- D: the value of interval c (ACCEL) or cruise >> 16 (RUN)
+  signal alt_dval    : unsigned(47 downto 0); -- D: the Q32.16 value of interval c + 1 in the plan
   signal alt_ok      : std_logic;
   signal alt_d       : unsigned(32 downto 0);
   signal alt_acc     : unsigned(31 downto 0);
@@ -278,7 +281,7 @@ begin
 
     -- Only while busy: the latched parameters are undefined before the first start, and an idle engine should not
     -- compare them every clock (simulation speed; the result is only read at edge 2 of a move).
-    if rising_edge(clk) and busy_r = '1' then
+    if (rising_edge(clk) and busy_r = '1') then
       v_chk := C_ERR_NONE;
       if (p_prescale = 0) then
         v_chk := C_ERR_PRESCALE;
@@ -326,6 +329,8 @@ begin
     variable v_finish : std_logic;
     variable v_err    : std_logic_vector(3 downto 0);
     variable v_alt    : std_logic;
+    variable v_m      : unsigned(30 downto 0);
+    variable v_big    : std_logic;
 
   begin
 
@@ -341,6 +346,8 @@ begin
       v_finish    := '0';
       v_alt       := '0';
       v_err       := C_ERR_NONE;
+      v_m         := (others => '0');
+      v_big       := '0';
       -- The fractional-carry accumulator step of the value in v_r (used by C_PC_ADD and C_PC_ALT_ADD: one adder).
       v_sum := ('0' & v_r) + resize(acc, 65);
 
@@ -373,30 +380,34 @@ begin
           pc_state <= C_PC_DECIDE;
 
           -- The soft stop decided at pulse c = pc_j (the end of the interval now counting, L - c = pc_m):
-          -- m = floor(min(c, sa) * stop_ratio / 2^16); ignored in DECEL, after a stop, and when c + m >= L.
+          -- m = floor(c * stop_ratio / 2^16) in ACCEL, L - sd + 1 in RUN; ignored in DECEL, after a stop, and
+          -- when c + m >= L.
+          if (state_r = C_ST_RUN) then
+            v_m   := p_run_m;
+            v_big := '0';
+          else
+            v_m := cur_prod(46 downto 16);
+            if (cur_prod(62 downto 47) /= 0) then
+              v_big := '1';
+            else
+              v_big := '0';
+            end if;
+          end if;
           alt_kind <= C_ALT_IGNORE;
           if (stop_mode = '0' and (state_r = C_ST_ACCEL or state_r = C_ST_RUN)) then
-            if (cur_prod(62 downto 47) /= 0 or cur_prod(46 downto 16) >= pc_m) then
+            if (v_big = '1' or v_m >= pc_m) then
               alt_kind <= C_ALT_IGNORE;
-            elsif (cur_prod(46 downto 16) = 0) then
+            elsif (v_m = 0) then
               alt_kind <= C_ALT_END;
             else
               alt_kind <= C_ALT_LOAD;
             end if;
           end if;
-          alt_mm1 <= cur_prod(46 downto 16) - 1;
-          if (cur_prod(46 downto 16) = 1) then
+          alt_mm1 <= v_m - 1;
+          if (v_m = 1) then
             alt_one <= '1';
           else
             alt_one <= '0';
-          end if;
-          -- D: the value of interval c in ACCEL (c_first, or A_(c-1), still in rec_val), cruise >> 16 in RUN.
-          if (state_r = C_ST_RUN) then
-            alt_dval <= p_cruise(63 downto 16);
-          elsif (pc_j = 1) then
-            alt_dval <= p_c_first;
-          else
-            alt_dval <= rec_val;
           end if;
 
         when C_PC_DECIDE =>
@@ -494,8 +505,10 @@ begin
           nxt_ok   <= '1';
           pc_state <= C_PC_IDLE;
 
-          -- Then the soft-stop alternative of the same interval (the next-delay unit is free now).
-          v_code <= C_ERR_NONE;
+          -- Then the soft-stop alternative of the same interval (the next-delay unit is free now). Its D is the
+          -- value just added: the plan's interval c + 1 (A_c, c_sa or cruise), Q32.16.
+          v_code   <= C_ERR_NONE;
+          alt_dval <= v_r(63 downto 16);
           if (alt_kind = C_ALT_LOAD) then
             if (alt_one = '1') then
               v_r      <= p_c_last & C_Q16_PAD;
@@ -605,6 +618,7 @@ begin
 
           pc_j        <= to_unsigned(1, 31);
           pc_m        <= p_l - 1;
+          p_run_m     <= p_l - p_sd + 1;
           dec_started <= '0';
           cur_prod    <= (others => '0');
           -- Load the accel seed A_0 through the unit (at index 0), like the decel seed later: the unit sees the

@@ -12,7 +12,6 @@ bus, byte enables included. The C library is built by the pytest function below 
 from __future__ import annotations
 
 import ctypes
-import dataclasses
 import fcntl
 import json
 import os
@@ -74,12 +73,8 @@ def c_plan_move(so: ctypes.CDLL, prof: Profile) -> Plan:
     )
     assert rc == 0, f"{prof.name}: stepramp_plan_move returned {rc}"
     c_values = {name: getattr(out, name) for name, _ in c_plan_t._fields_}
-    # Plan fields that stepramp_plan_t does not have yet (stop_ratio, being added to the C plan) come from
-    # Python's plan_move; they do not change a move that is not stopped early.
     py_plan = plan_move(**prof.args())
-    missing = {f.name: getattr(py_plan, f.name) for f in dataclasses.fields(Plan) if f.name not in c_values}
-    assert set(missing) <= {"stop_ratio"}, f"the C plan lacks {sorted(missing)}"
-    plan = Plan(**c_values, **missing)
+    plan = Plan(**c_values)
     assert plan == py_plan, f"{prof.name}: C plan {plan} differs from Python's {py_plan}"
     return plan
 
@@ -152,8 +147,7 @@ async def c_driver_writes_replayed(dut) -> None:
             await tb.bus.write(addr, value, strobe=strobe)
         status = await drv.wait_done(idle=lambda: tb.irq_or(20_000))
         edges = tb.edges_since(n_steps, n_starts)
-        # The plan_move plan: the C plan is the same (c_plan_move checks it); the STOP_RATIO the C driver writes
-        # (1.0 until stepramp_plan_t has stop_ratio) does not change a move that is not stopped.
+        # The plan_move plan: the C plan is the same (c_plan_move checks it).
         want = model_edges(plan_move(**prof.args()))
         position += prof.steps
         dut._log.info("%s: %d writes replayed, %d edges", name, len(writes), len(edges))

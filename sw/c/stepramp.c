@@ -105,12 +105,7 @@ int stepramp_program(const stepramp_t *dev, const stepramp_plan_t *plan)
     write_wide(dev, STEPRAMP_REG_ACCEL_SEED_LO, STEPRAMP_REG_ACCEL_SEED_HI, plan->accel_seed);
     write_wide(dev, STEPRAMP_REG_DECEL_SEED_LO, STEPRAMP_REG_DECEL_SEED_HI, plan->decel_seed);
     write_wide(dev, STEPRAMP_REG_CRUISE_LO, STEPRAMP_REG_CRUISE_HI, plan->cruise);
-#ifdef STEPRAMP_PLAN_HAS_STOP_RATIO
     write_reg(dev, STEPRAMP_REG_STOP_RATIO, plan->stop_ratio);
-#else
-    /* TODO(lead): write plan->stop_ratio (accel / decel, Q16.16) once stepramp_plan_t has it; until then 1.0 */
-    write_reg(dev, STEPRAMP_REG_STOP_RATIO, STEPRAMP_STOP_RATIO_ONE);
-#endif
     return STEPRAMP_OK;
 }
 
@@ -218,7 +213,8 @@ int stepramp_wait_done(const stepramp_t *dev, uint32_t max_polls)
     X(ZERO_TICKS, "an interval of zero ticks would have been emitted; the move stopped")                               \
     X(RANGE, "a recurrence value left its 48-bit range; the move stopped")                                             \
     X(STEPS, "STEPS is -2^31 (|steps| must be <= 2^31 - 1)")                                                           \
-    X(POS_BUSY, "POSITION written while a move runs (the write was ignored)")
+    X(POS_BUSY, "POSITION written while a move runs (the write was ignored)")                                          \
+    X(CFG_BUSY, "DRIVE, STEP_WIDTH, DIR_TIMING or PWM_PERIOD written while a move runs (ignored)")
 
 #define CORE_TABLE_SIZE 16u /* ERR_CODE is 4 bits */
 #define CAUSE(name, text) [STEPRAMP_ERR_##name] = text,

@@ -119,8 +119,7 @@ int stepramp_plan(const stepramp_t *dev, stepramp_plan_t *plan, int64_t steps, d
  * (the bits above), SA, SD, STOP_RATIO. The core latches them at START, so this is safe during a move (it
  * prepares the next one). Does not start the move.
  *
- * STOP_RATIO: plan->stop_ratio when stepramp_plan_t has it (STEPRAMP_PLAN_HAS_STOP_RATIO defined), otherwise
- * STEPRAMP_STOP_RATIO_ONE (ratio 1.0).
+ * STOP_RATIO: plan->stop_ratio.
  *
  * @return STEPRAMP_OK; STEPRAMP_ENULL (nothing written) if dev or plan is NULL
  */

@@ -246,6 +246,7 @@ stepramp_err_t stepramp_plan_move_info(stepramp_plan_t *plan, stepramp_info_t *i
     out.accel_seed = 0;
     out.decel_seed = 0;
     out.cruise = 0;
+    out.stop_ratio = 0;
     inf.f_tick = f_tick;
     inf.length = (length > 0) ? length : 0;
     inf.a = a;
@@ -328,6 +329,10 @@ stepramp_err_t stepramp_plan_move_info(stepramp_plan_t *plan, stepramp_info_t *i
     }
     if (err == STEPRAMP_OK) { /* plan._cruise: round(f_tick / v * 2^32) < 2^64 */
         err = to_fixed(inf.t_cruise, TWO_POW_32, TWO_POW_64, &out.cruise);
+    }
+    if (err == STEPRAMP_OK) { /* plan._stop_ratio: round(accel / decel * 2^16), saturated at 2^32 - 1 */
+        double ratio = accel / decel * TWO_POW_16;
+        out.stop_ratio = (ratio < 4294967295.0) ? (uint32_t)rint(ratio) : UINT32_MAX;
     }
     if (err != STEPRAMP_OK) {
         return err;

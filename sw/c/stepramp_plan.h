@@ -48,6 +48,7 @@ typedef struct {
     uint64_t accel_seed; /**< accel recurrence value at index 0, Q32.16 */
     uint64_t decel_seed; /**< decel recurrence value at index m0 = L-sd-1, Q32.16; 0 when m0 < 1 */
     uint64_t cruise;     /**< cruise period f_tick / v, Q32.32 */
+    uint32_t stop_ratio; /**< accel / decel, Q16.16 (rounded, saturated): sizes a soft stop's decel ramp */
 } stepramp_plan_t;
 
 /**

@@ -206,6 +206,13 @@ def _cruise(f_tick: float, v: float) -> int:
     return value
 
 
+def _stop_ratio(accel: float, decel: float) -> int:
+    """accel / decel in Q16.16, rounded, saturated at 2^32 - 1 (also when the quotient overflows a double)."""
+    ratio = accel / decel * (1 << 16)
+    top = (1 << REG_WIDTHS["stop_ratio"]) - 1
+    return round(ratio) if ratio < top else top
+
+
 def plan_move_info(
     steps: int, accel: float, decel: float, speed: float, spr: float, fclk: float, prescale: int = 1
 ) -> tuple[Plan, MoveInfo]:
@@ -272,7 +279,7 @@ def plan_move_info(
         decel_seed=_to_fixed("decel_seed", SEED_FACTOR * cd0 * decel_product(m0), q16, w48) if m0 >= 1 else 0,
         cruise=_cruise(f_tick, v),
         # accel / decel in Q16.16 (rounded, saturated): sizes the decel ramp of a soft stop
-        stop_ratio=min(round(accel / decel * (1 << 16)), (1 << REG_WIDTHS["stop_ratio"]) - 1),
+        stop_ratio=_stop_ratio(accel, decel),
     )
     info = MoveInfo(f_tick, length, a, d, v, ramp.x_a, ramp.x_d, ramp.v_peak, ramp.triangle, c0, cd0, m0, min_interval)
     return plan, info

@@ -34,8 +34,6 @@ PLAN_HEADER = C_DIR / "stepramp_plan.h"
 
 FAKEBUS_WORDS = 32
 LOG_MAX = 256
-STOP_RATIO_ONE = 0x10000
-"""What the C driver writes to STOP_RATIO while stepramp_plan_t has no stop_ratio (ratio 1.0)."""
 
 RANDOM_COUNT = 500
 
@@ -158,16 +156,9 @@ def c_plan(plan: Plan) -> CPlan:
     return CPlan(**{name: getattr(plan, name) for name, _ in CPlan._fields_})
 
 
-C_HAS_STOP_RATIO = any(name == "stop_ratio" for name, _ in CPlan._fields_)
-"""Whether stepramp_plan_t has stop_ratio yet (the lead adds it; until then the C driver writes ratio 1.0)."""
-
-
-def expected_motion_writes(plan: Plan, strict: bool = C_HAS_STOP_RATIO) -> list[Write]:
-    """plan_writes(plan) with full byte enables. Not strict: STOP_RATIO is the C driver's interim ratio 1.0."""
-    writes = dict(plan_writes(plan))
-    if not strict:
-        writes[offset("STOP_RATIO")] = STOP_RATIO_ONE
-    return [(addr, value, 0xF) for addr, value in sorted(writes.items())]
+def expected_motion_writes(plan: Plan) -> list[Write]:
+    """plan_writes(plan) with full byte enables."""
+    return [(addr, value, 0xF) for addr, value in plan_writes(plan)]
 
 
 START_WRITE: Write = (offset("CTRL"), 0x1, 0x1)
@@ -243,9 +234,7 @@ def test_host_driver_tests_pass(build: Path) -> None:
 def test_plan_struct_matches_python(lib: ctypes.CDLL) -> None:
     python_fields = [f.name for f in dataclasses.fields(Plan)]
     c_fields = [name for name, _ in CPlan._fields_]
-    # the C struct may lag behind by fields the lead is adding (stop_ratio); it never has others
-    assert c_fields == python_fields[: len(c_fields)], (c_fields, python_fields)
-    assert set(python_fields) - set(c_fields) <= {"stop_ratio"}
+    assert c_fields == python_fields
 
 
 def test_program_random_plans_like_plan_writes(lib: ctypes.CDLL) -> None:
@@ -280,17 +269,12 @@ def test_move_random_valid_moves_like_plan_writes(lib: ctypes.CDLL) -> None:
     assert not mismatches, f"{len(mismatches)} of {len(moves)} moves:\n" + "\n".join(mismatches[:5])
 
 
-@pytest.mark.xfail(
-    not C_HAS_STOP_RATIO,
-    reason="stepramp_plan_t has no stop_ratio yet: the C driver writes STOP_RATIO = 1.0 (TODO in stepramp.c)",
-    strict=True,
-)
 def test_stop_ratio_written_from_the_plan(lib: ctypes.CDLL) -> None:
-    """STOP_RATIO is the plan's accel / decel, like plan_writes (armed as soon as the C plan has stop_ratio)."""
+    """STOP_RATIO is the plan's accel / decel, like plan_writes."""
     for move in [p.args() for p in PROFILES[:50]]:
         assert lib.stepramp_fakebus_move(*_move_args(move)) == 0
         got = bus_writes(lib)
-        assert got == [*expected_motion_writes(plan_move(**move), strict=True), START_WRITE], move
+        assert got == [*expected_motion_writes(plan_move(**move)), START_WRITE], move
 
 
 def test_invalid_move_writes_nothing(lib: ctypes.CDLL) -> None:

@@ -73,6 +73,7 @@ class CPlan(ctypes.Structure):
         ("accel_seed", ctypes.c_uint64),
         ("decel_seed", ctypes.c_uint64),
         ("cruise", ctypes.c_uint64),
+        ("stop_ratio", ctypes.c_uint32),
     ]
 
 

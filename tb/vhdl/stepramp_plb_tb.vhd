@@ -28,7 +28,7 @@ architecture sim of stepramp_plb_tb is
   constant C_STOP_RATIO : natural := 16#54#;
   constant C_POSITION   : natural := 16#58#;
   constant C_STEP_COUNT : natural := 16#60#;
-  constant C_UNMAPPED   : natural := 16#64#;
+  constant C_UNMAPPED   : natural := 16#74#;
 
   constant C_ID_VALUE : std_logic_vector(31 downto 0) := x"5352_0002";
 
@@ -200,7 +200,7 @@ begin
     variable word    : std_logic_vector(31 downto 0);
     variable bus_err : std_logic;
     variable t_wr    : time;
-    variable t_start : time; -- the edge at which the engine samples start (its edge 0)
+    variable t_start : time; -- the engine's edge 0 plus the STEP pin's register (so edges compare with the model)
     variable edge    : integer;
 
     -- One IPIF access, called just after a rising edge of clk. Bus2IP_CS (with RNW, address, data, byte enables)
@@ -326,7 +326,7 @@ begin
     check_reg(C_ID, "ID", C_ID_VALUE);
     bus_read(C_UNMAPPED, word, bus_err);
     assert bus_err = '1'
-      report "no bus error on the read of unmapped offset 0x64"
+      report "no bus error on the read of unmapped offset 0x74"
       severity failure;
 
     -- Program the move, enable the done interrupt (CTRL byte 1), START (CTRL byte 0 only, as the driver does).
@@ -342,7 +342,9 @@ begin
       report "irq is high before the move"
       severity failure;
     bus_write(C_CTRL, x"0000_0001", "0001", t_wr);
-    t_start := t_wr + C_PERIOD;
+    -- The register file's start strobe reaches the stepping logic's start gate one edge after the write, the
+    -- engine one edge later (DIR does not change here), and the STEP pin is one register after the engine's pulse.
+    t_start := t_wr + 2 * C_PERIOD + C_PERIOD;
 
     -- Wait for the done interrupt.
     if (irq /= '1') then
