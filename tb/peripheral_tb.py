@@ -108,8 +108,8 @@ class PeripheralTb:
             await FallingEdge(self.clk)
             self.dut.rst.value = 0
         await ClockCycles(self.clk, 2)
-        cocotb.start_soon(self._monitor(self.dut.step, self.step_edges))
-        cocotb.start_soon(self._monitor(self.dut.core_inst.busy, self.start_edges))
+        cocotb.start_soon(self.watch(self.dut.step, self.step_edges))
+        cocotb.start_soon(self.watch(self.dut.core_inst.busy, self.start_edges))
         self._start_monitors(position=0)
 
     def _start_monitors(self, position: int) -> None:
@@ -145,7 +145,8 @@ class PeripheralTb:
             self.monitors = None
 
     @staticmethod
-    async def _monitor(signal: Any, edges: list[int]) -> None:
+    async def watch(signal: Any, edges: list[int]) -> None:
+        """Record the clock edge (index) of every rising edge of a signal."""
         while True:
             await RisingEdge(signal)
             edges.append(now_cycles())

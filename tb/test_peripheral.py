@@ -10,18 +10,20 @@ enables, bus errors, W1C, interrupt, shadowing, bad values) against the register
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import json
 import os
 import random
 from typing import Any
 
 import pytest
-from cocotb.triggers import ClockCycles
+from cocotb.triggers import ClockCycles, RisingEdge
 
 from peripheral_tb import BusError, PeripheralTb
 from stepramp.driver import Outputs, StepRampError, plan_writes
 from stepramp.hdl import run_cocotb
 from stepramp.model import edges as model_edges
+from stepramp.model import edges_with_stop as model_edges_with_stop
 from stepramp.plan import Plan, plan_move
 from stepramp.profiles import PROFILES, PROFILES_BY_NAME
 from stepramp.regmap import ERROR_CODES, ID_VALUE, REGISTERS, REGISTERS_BY_NAME, RW, offset
@@ -263,6 +265,62 @@ async def start_while_busy_is_ignored(dut) -> None:
     tb.finish()
 
 
+#: (kind, pulses to wait before the command, the phase it then lands in) on trap_long_cruise (ramps of ~40 steps).
+STOP_CASES = [
+    ("soft", 10, "ACCEL"),
+    ("soft", 300, "RUN"),
+    ("soft", 1175, "DECEL"),
+    ("hard", 10, "ACCEL"),
+    ("hard", 300, "RUN"),
+    ("hard", 1175, "DECEL"),
+]
+
+
+@cocotb.test()
+async def soft_and_hard_stop(dut) -> None:
+    """SOFT_STOP and HARD_STOP through the bus in ACCEL, RUN and DECEL: every edge as the model predicts, position
+    equal to the pulses seen, a soft stop ending at the slow end of a decel ramp, no pulse after a hard stop."""
+    tb = make_tb(dut)
+    await tb.reset()
+    await tb.configure(Outputs(mode="half", step_width=4, dir_setup=12, dir_hold=6), enable=True)
+    stop_edges: dict[str, list[int]] = {"soft": [], "hard": []}
+    for kind in stop_edges:
+        cocotb.start_soon(tb.watch(getattr(dut.core_inst, f"{kind}_stop"), stop_edges[kind]))
+    prof = PROFILES_BY_NAME["trap_long_cruise"]
+    drv = tb.driver(prof.args())
+    plan = drv.plan(prof.steps, prof.accel, prof.decel, prof.speed)
+    position = 0
+    for kind, wait_pulses, phase in STOP_CASES:
+        await drv.program(plan)
+        n0, s0, k0 = len(tb.step_edges), len(tb.start_edges), len(stop_edges[kind])
+        await drv.start()
+        while len(tb.step_edges) < n0 + wait_pulses:
+            await RisingEdge(dut.step)
+        assert (await drv.status()).state == phase, f"{kind} stop: not in {phase} after {wait_pulses} pulses"
+        await (drv.soft_stop() if kind == "soft" else drv.hard_stop())
+        await drv.wait_done(idle=lambda: tb.irq_or(5_000))
+        edges = tb.edges_since(n0, s0)
+        start = tb.start_edges[s0]
+        # The register file's strobe is high after edge w; the engine samples it at w + 1.
+        request = stop_edges[kind][k0] + 1 - start
+        assert edges == model_edges_with_stop(plan, kind, request), f"{kind} stop in {phase}: edges differ"
+        position += -len(edges) if plan.direction else len(edges)
+        assert await drv.position() == position, f"{kind} stop in {phase}: position is not the pulses seen"
+        normal = model_edges(plan)
+        if kind == "hard":
+            assert all(e < request for e in edges), "a pulse after the hard stop"
+            assert len(edges) < len(normal)
+        elif phase == "DECEL":
+            assert edges == normal, "a soft stop in DECEL changes nothing"
+        else:
+            assert len(edges) < len(normal), "a soft stop in ACCEL or RUN ends the move early"
+            tail = [b - a for a, b in itertools.pairwise(edges[wait_pulses:])]
+            slow_end = (plan.c_last >> 16) * plan.prescale
+            assert tail[-1] >= 0.95 * slow_end, f"{kind} stop in {phase}: last interval {tail[-1]} < {slow_end}"
+            assert all(b >= a - plan.prescale for a, b in itertools.pairwise(tail)), "speed rose after a soft stop"
+    tb.finish()
+
+
 @cocotb.test()
 async def stepping_configuration(dut) -> None:
     """ENABLE follows CTRL.ENABLE and gates the windings; DRIVE .. PWM_PERIOD are written only while stopped."""
@@ -333,6 +391,7 @@ REGISTER_TESTS = [
     "motion_registers_are_shadowed",
     "start_while_busy_is_ignored",
     "stepping_configuration",
+    "soft_and_hard_stop",
 ]
 
 
