@@ -58,10 +58,13 @@ static void write_wide(const stepramp_t *dev, uint32_t off_lo, uint32_t off_hi, 
     write_reg(dev, off_hi, (uint32_t)(value >> 32));
 }
 
+/* Byte address of CTRL bits 8k+7 .. 8k (byte lane k of the word) on this bus's byte order. */
+#define CTRL_BYTE(dev, k) REG(dev, STEPRAMP_REG_CTRL + (STEPRAMP_CMD_BYTE_LANE == 0u ? (k) : 3u - (k)))
+
 /* A CTRL command (START / SOFT_STOP / HARD_STOP, all in bits 7:0): byte 0 of CTRL only, the enables are kept. */
 static void command(const stepramp_t *dev, uint32_t mask)
 {
-    STEPRAMP_WRITE8(REG(dev, STEPRAMP_REG_CTRL + STEPRAMP_CMD_BYTE_LANE), (uint8_t)mask);
+    STEPRAMP_WRITE8(CTRL_BYTE(dev, 0u), (uint8_t)mask);
 }
 
 int stepramp_init(stepramp_t *dev, uintptr_t base, double fclk, double spr, uint32_t prescale)
@@ -141,7 +144,27 @@ void stepramp_enable_irq(const stepramp_t *dev, int done, int error)
 {
     uint32_t value = (done ? STEPRAMP_CTRL_IRQ_DONE_EN_MASK : 0u) | (error ? STEPRAMP_CTRL_IRQ_ERROR_EN_MASK : 0u);
 
-    write_reg(dev, STEPRAMP_REG_CTRL, value); /* the command bits are written 0: no command */
+    STEPRAMP_WRITE8(CTRL_BYTE(dev, 1u), (uint8_t)(value >> 8)); /* byte 1 only: no command, ENABLE kept */
+}
+
+void stepramp_set_enable(const stepramp_t *dev, int on)
+{
+    STEPRAMP_WRITE8(CTRL_BYTE(dev, 2u), (uint8_t)(on ? (STEPRAMP_CTRL_ENABLE_MASK >> 16) : 0u));
+}
+
+int stepramp_configure_outputs(const stepramp_t *dev, const stepramp_outputs_t *out)
+{
+    if (out == NULL || out->mode > 4u || out->ustep_log2 > 7u) {
+        return STEPRAMP_EOUTPUTS;
+    }
+    write_reg(dev, STEPRAMP_REG_DRIVE,
+              (out->mode << STEPRAMP_DRIVE_MODE_SHIFT) | (out->ustep_log2 << STEPRAMP_DRIVE_USTEP_LOG2_SHIFT));
+    write_reg(dev, STEPRAMP_REG_STEP_WIDTH, out->step_width);
+    write_reg(dev, STEPRAMP_REG_DIR_TIMING,
+              ((uint32_t)out->dir_setup << STEPRAMP_DIR_TIMING_SETUP_SHIFT) |
+                  ((uint32_t)out->dir_hold << STEPRAMP_DIR_TIMING_HOLD_SHIFT));
+    write_reg(dev, STEPRAMP_REG_PWM_PERIOD, out->pwm_period);
+    return STEPRAMP_OK;
 }
 
 uint32_t stepramp_status(const stepramp_t *dev, stepramp_status_t *status)
@@ -242,6 +265,9 @@ const char *stepramp_strresult(int result)
     }
     if (result == STEPRAMP_ETIMEOUT) {
         return "no DONE within the allowed number of status polls";
+    }
+    if (result == STEPRAMP_EOUTPUTS) {
+        return "invalid stepping outputs: mode must be 0 .. 4 and ustep_log2 0 .. 7";
     }
     if (STEPRAMP_IS_ECORE(result)) {
         uint32_t code = STEPRAMP_ECORE_CODE(result);

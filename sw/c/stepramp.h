@@ -55,6 +55,7 @@ extern "C" {
 enum {
     STEPRAMP_EID = 64,        /**< the ID register does not hold STEPRAMP_ID_MAGIC in bits 31:16 */
     STEPRAMP_ETIMEOUT = 65,   /**< stepramp_wait_done: no STATUS.DONE within max_polls reads */
+    STEPRAMP_EOUTPUTS = 66,   /**< stepramp_configure_outputs: NULL, mode > 4 or ustep_log2 > 7 */
     STEPRAMP_ECORE_BASE = 128 /**< STEPRAMP_ECORE(code): the core flagged STATUS.ERROR with ERR_CODE code */
 };
 
@@ -144,11 +145,32 @@ void stepramp_hard_stop(const stepramp_t *dev);
 
 /**
  * Set the interrupt enables (CTRL.IRQ_DONE_EN, CTRL.IRQ_ERROR_EN): the level irq output follows STATUS.DONE /
- * STATUS.ERROR where enabled. A 32-bit write whose command bits are 0, so it starts or stops nothing.
+ * STATUS.ERROR where enabled. A byte write of CTRL byte 1 only: it starts nothing and keeps CTRL.ENABLE.
  *
  * @param done  nonzero: interrupt on DONE; error: nonzero: interrupt on ERROR
  */
 void stepramp_enable_irq(const stepramp_t *dev, int done, int error);
+
+/** CTRL.ENABLE (the ENABLE output; off also switches the H-bridge windings off): a byte write of CTRL byte 2. */
+void stepramp_set_enable(const stepramp_t *dev, int on);
+
+/** The stepping outputs (registers DRIVE, STEP_WIDTH, DIR_TIMING, PWM_PERIOD; docs/registers.md). */
+typedef struct {
+    uint32_t mode;       /**< 0 STEP/DIR only, 1 wave, 2 full step, 3 half step, 4 sine/cosine PWM */
+    uint32_t ustep_log2; /**< PWM microsteps per full step = 2^ustep_log2 (0 .. 7, at most the core's G_MICROSTEPS) */
+    uint16_t step_width; /**< STEP high time, clocks (0 acts as 1); must be below the shortest step interval */
+    uint16_t dir_setup;  /**< DIR setup before a STEP rising edge, clocks */
+    uint16_t dir_hold;   /**< DIR hold after a STEP rising edge, clocks */
+    uint16_t pwm_period; /**< PWM carrier period, clocks (0 or 1: windings off in mode 4) */
+} stepramp_outputs_t;
+
+/**
+ * Write the stepping output registers. Only while stopped: the core ignores these writes during a move and flags
+ * ERROR with ERR_CODE CFG_BUSY.
+ *
+ * @return STEPRAMP_OK, or STEPRAMP_EOUTPUTS (nothing written) for a NULL pointer, mode > 4 or ustep_log2 > 7
+ */
+int stepramp_configure_outputs(const stepramp_t *dev, const stepramp_outputs_t *out);
 
 /**
  * Read and decode STATUS.

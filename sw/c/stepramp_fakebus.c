@@ -71,7 +71,7 @@ static long window_offset(uintptr_t addr)
 
 static int mapped(uint32_t word)
 {
-    return word <= WORD(STEP_COUNT);
+    return word <= WORD(PWM_PERIOD);
 }
 
 static uint32_t merge(uint32_t old, uint32_t data, uint32_t be)
@@ -106,8 +106,11 @@ static void write_word(uint32_t off, uint32_t data, uint32_t be)
         f->starts += (bits & STEPRAMP_CTRL_START_MASK) != 0u;
         f->soft_stops += (bits & STEPRAMP_CTRL_SOFT_STOP_MASK) != 0u;
         f->hard_stops += (bits & STEPRAMP_CTRL_HARD_STOP_MASK) != 0u;
-        if (be & 2u) { /* the enables live in byte 1 */
-            *reg = bits & CTRL_EN_MASK;
+        if (be & 2u) { /* the interrupt enables live in byte 1 */
+            *reg = (*reg & ~CTRL_EN_MASK) | (bits & CTRL_EN_MASK);
+        }
+        if (be & 4u) { /* ENABLE in byte 2 */
+            *reg = (*reg & ~STEPRAMP_CTRL_ENABLE_MASK) | (bits & STEPRAMP_CTRL_ENABLE_MASK);
         }
     } else if (word == WORD(STATUS)) {
         *reg &= ~(bits & FLAGS_MASK);
@@ -121,6 +124,14 @@ static void write_word(uint32_t off, uint32_t data, uint32_t be)
         }
     } else if (word >= WORD(STEPS) && word <= WORD(STOP_RATIO)) {
         *reg = merge(*reg, data, be);
+    } else if (word >= WORD(DRIVE) && word <= WORD(PWM_PERIOD)) {
+        if (status & STEPRAMP_STATUS_BUSY_MASK) { /* stepping configuration: only while stopped */
+            stepramp_fakebus_set_status((status & STEPRAMP_STATUS_STATE_MASK) >> STEPRAMP_STATUS_STATE_SHIFT, 1u,
+                                        (status & STEPRAMP_STATUS_DIR_MASK) != 0u, STEPRAMP_ERR_CFG_BUSY,
+                                        STEPRAMP_STATUS_ERROR_MASK);
+        } else {
+            *reg = merge(*reg, data, be);
+        }
     } /* ID, CUR_DELAY, STEP_COUNT: read only */
 }
 

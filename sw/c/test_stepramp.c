@@ -326,6 +326,38 @@ static void test_commands_keep_irq_enables(void)
     }
 }
 
+static void test_enable_and_outputs(void)
+{
+    stepramp_t dev = fresh(1e6, 200.0, 1u);
+    stepramp_outputs_t out = {4u, 4u, 7u, 20u, 9u, 40u};
+
+    stepramp_enable_irq(&dev, 1, 1);
+    stepramp_set_enable(&dev, 1);
+    CHECK_EQ(reg(O_CTRL), 0x10300u);
+    CHECK_EQ(bus->log[1].be, 0x4u); /* byte 2 only */
+    stepramp_enable_irq(&dev, 0, 1);
+    CHECK_EQ(reg(O_CTRL), 0x10200u); /* ENABLE kept */
+    stepramp_start(&dev);
+    CHECK_EQ(reg(O_CTRL), 0x10200u);
+    stepramp_set_enable(&dev, 0);
+    CHECK_EQ(reg(O_CTRL), 0x00200u);
+    CHECK_EQ(bus->starts, 1u);
+
+    CHECK_EQ(stepramp_configure_outputs(&dev, &out), STEPRAMP_OK);
+    CHECK_EQ(reg(0x64u), 4u | (4u << 4));
+    CHECK_EQ(reg(0x68u), 7u);
+    CHECK_EQ(reg(0x6Cu), 20u | (9u << 16));
+    CHECK_EQ(reg(0x70u), 40u);
+    out.mode = 5u;
+    CHECK_EQ(stepramp_configure_outputs(&dev, &out), STEPRAMP_EOUTPUTS);
+    out.mode = 3u;
+    out.ustep_log2 = 8u;
+    CHECK_EQ(stepramp_configure_outputs(&dev, &out), STEPRAMP_EOUTPUTS);
+    CHECK_EQ(stepramp_configure_outputs(&dev, NULL), STEPRAMP_EOUTPUTS);
+    CHECK_EQ(reg(0x64u), 4u | (4u << 4)); /* nothing written on error */
+    CHECK(strstr(stepramp_strresult(STEPRAMP_EOUTPUTS), "mode") != NULL);
+}
+
 static void test_status_decoding(void)
 {
     stepramp_t dev = fresh(1e6, 200.0, 1u);
@@ -545,6 +577,7 @@ int main(void)
     test_move_writes();
     test_program_splits_wide_values();
     test_commands_keep_irq_enables();
+    test_enable_and_outputs();
     test_status_decoding();
     test_clear_flags();
     test_wait_done();
