@@ -7,7 +7,10 @@ timing here). Writes build/synth/report.json as
     {"<top>": {"ice40_hx8k": {"lut4", "ff", "carry", "fmax_mhz"}, "ice40_up5k": {...}, "xc7": {"lut", "ff"}}}
 and build/synth/report.md.
 
-    python -m stepramp.synth [--out DIR] [--no-pnr] [TOP ...]
+    python -m stepramp.synth [--out DIR] [--no-pnr] [--record] [TOP ...]
+
+--record writes the iCE40 LUT4 / FF counts to scripts/synth_baseline.json, the figure the regression's size test
+(tb/test_synth_size.py) holds the PLB-like top to (it fails above +10 %).
 """
 
 from __future__ import annotations
@@ -24,6 +27,9 @@ from typing import Any
 
 from stepramp.hdl import SYNTH_TOPS
 from stepramp.rtlcheck import analyse, synth
+
+#: The recorded size the regression holds the tops to.
+BASELINE = Path(__file__).resolve().parents[2] / "scripts" / "synth_baseline.json"
 
 #: The tops of the report (the peripheral as users instantiate it).
 REPORT_TOPS = ("stepramp_plb", "stepramp_axil")
@@ -203,6 +209,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--out", type=Path, default=Path("build/synth"))
     parser.add_argument("--no-pnr", action="store_true", help="skip nextpnr (no fmax)")
+    parser.add_argument("--record", action="store_true", help=f"record the iCE40 sizes in {BASELINE.name}")
     parser.add_argument("tops", nargs="*", default=list(REPORT_TOPS))
     args = parser.parse_args(argv)
     missing = [t for t in ("yosys", *(() if args.no_pnr else ("nextpnr-ice40",))) if shutil.which(t) is None]
@@ -214,6 +221,10 @@ def main(argv: list[str] | None = None) -> int:
     report = {top: report_top(top, out, pnr=not args.no_pnr) for top in args.tops}
     (out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
     (out / "report.md").write_text(markdown(report))
+    if args.record:
+        sizes = {top: {k: e["ice40_hx8k"][k] for k in ("lut4", "ff")} for top, e in report.items()}
+        BASELINE.write_text(json.dumps(sizes, indent=2) + "\n")
+        print(f"recorded: {BASELINE}")
     print(markdown(report), end="")
     print(f"written: {out / 'report.json'}, {out / 'report.md'}")
     return 0
