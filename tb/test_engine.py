@@ -241,7 +241,7 @@ def soft_stop_cases(chunk: int) -> list[tuple[str, Plan, Stop]]:
             times.add(0)  # the start edge: not busy, ignored
         cases += [(name, plan, Stop("soft", e)) for e in sorted(times)]
     if chunk == SOFT_CHUNKS - 1:
-        # accel = 100 * decel, stop decided at pulse 1 (D = c_first, m = 100), and at pulse 2 (DECEL already)
+        # accel = 100 * decel, stop decided at pulse 1 (D = A_1, m = 100), and at pulse 2 (DECEL already)
         plan = plan_move(**PROFILES_BY_NAME["ratio_accel_100_triangle"].args())
         cases += [("ratio_accel_100_triangle", plan, Stop("soft", model_edges(plan)[k] - 1)) for k in (1, 2)]
     return cases

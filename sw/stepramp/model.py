@@ -131,7 +131,8 @@ def soft_stop_length(plan: Plan, p: int) -> int | None:
     phase = phase_of(plan, p)
     if phase == DECEL:
         return None
-    m = (p if phase == ACCEL else plan.sa) * plan.stop_ratio >> STOP_RATIO_FRAC
+    # ACCEL: v^2 / (2 d) = p * accel / decel; RUN: the plan's own decel ramp from cruise (intervals sd .. L)
+    m = p * plan.stop_ratio >> STOP_RATIO_FRAC if phase == ACCEL else length - plan.sd + 1
     if p + m >= length:  # the plan's own deceleration ends no later
         return None
     return m
@@ -140,19 +141,19 @@ def soft_stop_length(plan: Plan, p: int) -> int | None:
 def soft_stop_values(plan: Plan, p: int) -> list[int] | None:
     """Q32.32 values of intervals 1 .. p + m when a soft stop is decided at pulse p; None when it is ignored.
 
-    Intervals 1 .. p are the plan's. With D the Q32.16 value of interval p (ACCEL) or cruise >> 16 (RUN), the
+    Intervals 1 .. p are the plan's. D is the Q32.16 value of interval p + 1 in the plan (which exists: p + m < L
+    with m >= 1): A_p (ACCEL, p + 1 < sa), c_sa (ACCEL, p + 1 = sa), cruise >> 16 (RUN; p + 1 < sd there). The
     reverse decel recurrence runs from D_m := D, remainder 0; interval p + j gets D_{m-j} (j = 1 .. m-1) and
     interval p + m gets c_last.
     """
     m = soft_stop_length(plan, p)
     if m is None:
         return None
-    values = list(itertools.islice(interval_values(plan), p))
+    values = list(itertools.islice(interval_values(plan), p + 1))
+    # D: Q32.16 (c_sa and A_p are Q32.16, so the shift is exact; cruise is truncated)
+    d_val = values.pop() >> _SHIFT
     if m == 0:
         return values
-    # D: the value of interval p in ACCEL (c_first for p = 1, else A_{p-1}: Q32.16, so the shift is exact), the
-    # Q32.16 truncation of cruise in RUN
-    d_val = (values[p - 1] if phase_of(plan, p) == ACCEL else plan.cruise) >> _SHIFT
     rem = 0
     for j in range(m, 1, -1):  # D_{j-1} from D_j
         q, rem = divmod(2 * d_val + rem, 4 * j - 1)
