@@ -186,9 +186,19 @@ def report_top(top: str, out: Path, pnr: bool = True) -> dict[str, Any]:
     for device in ICE40_DEVICES:
         entry[device] = dict(ice40_summary(cells))
         if wrapped is not None:
-            entry[device]["fmax_mhz"] = fmax(top, wrapped, device, out)
+            try:
+                entry[device]["fmax_mhz"] = fmax(top, wrapped, device, out)
+            except RuntimeError as exc:  # e.g. more logic cells than the device has: no fmax, said so
+                entry[device]["fmax_mhz"] = None
+                entry[device]["pnr_error"] = str(exc).splitlines()[-1][:200]
     entry["xc7"] = xc7(top, verilog, out)
     return entry
+
+
+def _fmax(entry: dict[str, Any]) -> str:
+    if "pnr_error" in entry:
+        return "does not place"
+    return str(entry.get("fmax_mhz", "-"))
 
 
 def markdown(report: dict[str, Any]) -> str:
@@ -199,8 +209,8 @@ def markdown(report: dict[str, Any]) -> str:
     for top, e in report.items():
         hx, up, x = e["ice40_hx8k"], e["ice40_up5k"], e["xc7"]
         lines.append(
-            f"| {top} | {hx['lut4']} | {hx['ff']} | {hx['carry']} | {hx.get('fmax_mhz', '-')} | "
-            f"{up.get('fmax_mhz', '-')} | {x['lut']} | {x['ff']} |"
+            f"| {top} | {hx['lut4']} | {hx['ff']} | {hx['carry']} | {_fmax(hx)} | {_fmax(up)} | "
+            f"{x['lut']} | {x['ff']} |"
         )
     return "\n".join(lines) + "\n"
 
