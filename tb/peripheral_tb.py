@@ -130,11 +130,14 @@ class PeripheralTb:
 
     async def configure(self, outputs: Outputs, enable: bool = True) -> None:
         """Program the stepping outputs (while stopped) and restart the monitors with the new settings."""
+        self.finish()
         drv = self.driver()
         await drv.configure_outputs(outputs)
         await drv.set_enable(enable)
-        self.finish()
         self.outputs, self.enabled = outputs, enable
+        # The PWM duty follows a new mode after the serial multipliers (stepramp.stepper.winding_latency, < 40
+        # clocks): let the outputs settle before the monitors look at them.
+        await ClockCycles(self.clk, 100)
         self._start_monitors(position=await drv.position())
 
     def finish(self) -> None:
