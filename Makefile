@@ -7,8 +7,9 @@ VENV  := .venv
 PY    := $(VENV)/bin/python
 JOBS  ?= auto
 VHDL  := $(wildcard hdl/*.vhd)
-# The LLVM back end runs simulations about twice as fast; use it when it is installed.
-export GHDL_BACKEND ?= $(if $(wildcard /usr/bin/ghdl-llvm),llvm,mcode)
+# The LLVM back end runs simulations about twice as fast: bootstrap installs it when it can, and the recipes
+# pick it when it is there (decided when the recipe runs, after bootstrap). GHDL_BACKEND=mcode make test forces.
+BACKEND = GHDL_BACKEND=$${GHDL_BACKEND:-$$(test -x /usr/bin/ghdl-llvm && echo llvm || echo mcode)}
 
 .DEFAULT_GOAL := test
 .PHONY: setup test lint synth-check synth demo clean help
@@ -33,14 +34,14 @@ synth-check: setup
 	$(PY) -m stepramp.rtlcheck --out build/synth_check
 
 test: lint
-	$(PY) -m pytest -n $(JOBS) -rA --durations=5
+	$(BACKEND) $(PY) -m pytest -n $(JOBS) -rA --durations=5
 
 synth:
 	@scripts/bootstrap.sh $(VENV) synth
 	$(PY) -m stepramp.synth --out build/synth
 
 demo: setup
-	$(PY) -m stepramp.demo --out build/demo
+	$(BACKEND) $(PY) -m stepramp.demo --out build/demo
 
 clean:
 	rm -rf build .pytest_cache

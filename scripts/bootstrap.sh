@@ -14,6 +14,11 @@ command -v ghdl >/dev/null 2>&1 || need_apt+=(ghdl)
 command -v yosys >/dev/null 2>&1 || need_apt+=(yosys)
 command -v make >/dev/null 2>&1 || need_apt+=(make)
 command -v gcc >/dev/null 2>&1 || need_apt+=(gcc)
+# GHDL's LLVM back end simulates about twice as fast as mcode: worth its install time, but optional.
+want_llvm=0
+if [ ! -x /usr/bin/ghdl-llvm ] && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+  want_llvm=1
+fi
 if [ "$what" = synth ]; then
   command -v nextpnr-ice40 >/dev/null 2>&1 || need_apt+=(nextpnr-ice40 fpga-icestorm)
 fi
@@ -30,6 +35,13 @@ if [ ${#need_apt[@]} -gt 0 ]; then
     echo "  (GHDL 2.0 or newer with its VPI library, and yosys: Debian 12's packages are what this project is tested with.)" >&2
     exit 1
   fi
+fi
+
+if [ "$want_llvm" = 1 ]; then
+  echo "bootstrap: installing Debian's ghdl-llvm (faster simulation; optional)"
+  export DEBIAN_FRONTEND=noninteractive
+  { apt-get install -y -q ghdl-llvm >/dev/null 2>&1 || { apt-get update -q >/dev/null 2>&1 && apt-get install -y -q ghdl-llvm >/dev/null 2>&1; }; } ||
+    echo "bootstrap: ghdl-llvm not available; simulating with GHDL's default back end"
 fi
 
 if [ ! -f "$venv/.stamp" ] || [ pyproject.toml -nt "$venv/.stamp" ]; then

@@ -31,13 +31,41 @@ class AxilError(Exception):
 
 
 class AxilAccess:
-    """The driver's register access over cocotbext-axi's AxiLiteMaster (strobes as runs of byte writes)."""
+    """The driver's register access over cocotbext-axi's AxiLiteMaster (strobes as runs of byte writes).
 
-    def __init__(self, master: Any) -> None:
+    With `seed`, every channel gets random idle / backpressure cycles while an access is in flight (the pause
+    generators run a coroutine per clock, so they are switched off between accesses: long moves stay fast).
+    """
+
+    def __init__(self, master: Any, seed: int | None = None) -> None:
         self.master = master
+        self.seed = seed
+        self.in_flight = 0
+        self.channels = [
+            master.write_if.aw_channel,
+            master.write_if.w_channel,
+            master.write_if.b_channel,
+            master.read_if.ar_channel,
+            master.read_if.r_channel,
+        ]
+
+    def _pauses(self, on: bool) -> None:
+        if self.seed is None:
+            return
+        self.in_flight += 1 if on else -1
+        if on and self.in_flight == 1:
+            for i, ch in enumerate(self.channels):
+                ch.set_pause_generator(pauses(self.seed + i))
+        elif not on and self.in_flight == 0:
+            for ch in self.channels:
+                ch.set_pause_generator(None)
 
     async def read(self, addr: int) -> int:
-        resp = await self.master.read(addr, 4)
+        self._pauses(True)
+        try:
+            resp = await self.master.read(addr, 4)
+        finally:
+            self._pauses(False)
         if int(resp.resp) != 0:
             raise AxilError(f"read {addr:#x}: resp {int(resp.resp)}")
         return int.from_bytes(resp.data, "little")
@@ -53,7 +81,11 @@ class AxilAccess:
             else:
                 runs.append([b])
         for run in runs:
-            resp = await self.master.write(addr + run[0], data[run[0] : run[-1] + 1])
+            self._pauses(True)
+            try:
+                resp = await self.master.write(addr + run[0], data[run[0] : run[-1] + 1])
+            finally:
+                self._pauses(False)
             if int(resp.resp) != 0:
                 raise AxilError(f"write {addr:#x}: resp {int(resp.resp)}")
 
@@ -91,14 +123,7 @@ class PeripheralTb:
             from cocotbext.axi import AxiLiteBus, AxiLiteMaster
 
             master = AxiLiteMaster(AxiLiteBus.from_prefix(self.dut, "s_axil"), self.clk, self.dut.aresetn, False)
-            if self.idle:
-                for i, ch in enumerate(
-                    (master.write_if.aw_channel, master.write_if.w_channel, master.write_if.b_channel)
-                ):
-                    ch.set_pause_generator(pauses(self.seed + i))
-                for i, ch in enumerate((master.read_if.ar_channel, master.read_if.r_channel)):
-                    ch.set_pause_generator(pauses(self.seed + 10 + i))
-            self.bus = AxilAccess(master)
+            self.bus = AxilAccess(master, seed=self.seed if self.idle else None)
             await FallingEdge(self.clk)
             self.dut.aresetn.value = 1
         else:
