@@ -33,6 +33,10 @@ library ieee;
   use ieee.std_logic_1164.all;
   use ieee.numeric_std.all;
 
+library work;
+  -- C_ERR_* (the err_code values): one source with STATUS.ERR_CODE, the C header and the docs.
+  use work.stepramp_regs_pkg.all;
+
 entity stepramp_engine is
   generic (
     G_DIV_WIDTH      : positive := 50;
@@ -80,20 +84,7 @@ architecture rtl of stepramp_engine is
   constant C_ST_RUN   : std_logic_vector(1 downto 0) := "10";
   constant C_ST_DECEL : std_logic_vector(1 downto 0) := "11";
 
-  -- Error codes on err_code (the lowest code wins when several parameters are bad).
-  constant C_ERR_NONE       : std_logic_vector(3 downto 0) := x"0";
-  constant C_ERR_PRESCALE   : std_logic_vector(3 downto 0) := x"1";
-  constant C_ERR_BOUNDS     : std_logic_vector(3 downto 0) := x"2";
-  constant C_ERR_C_FIRST    : std_logic_vector(3 downto 0) := x"3";
-  constant C_ERR_C_LAST     : std_logic_vector(3 downto 0) := x"4";
-  constant C_ERR_C_SA       : std_logic_vector(3 downto 0) := x"5";
-  constant C_ERR_C_SD       : std_logic_vector(3 downto 0) := x"6";
-  constant C_ERR_CRUISE     : std_logic_vector(3 downto 0) := x"7";
-  constant C_ERR_ACCEL_SEED : std_logic_vector(3 downto 0) := x"8";
-  constant C_ERR_DECEL_SEED : std_logic_vector(3 downto 0) := x"9";
-  constant C_ERR_LATE       : std_logic_vector(3 downto 0) := x"A";
-  constant C_ERR_ZERO_TICKS : std_logic_vector(3 downto 0) := x"B";
-  constant C_ERR_RANGE      : std_logic_vector(3 downto 0) := x"C";
+  -- Error codes on err_code: C_ERR_* of stepramp_regs_pkg (the lowest code wins when several parameters are bad).
 
   -- Move sequencer (constants, not an enum, so that GHDL's VPI shows a plain vector).
   constant C_PH_IDLE  : std_logic_vector(1 downto 0) := "00";

@@ -12,18 +12,16 @@ bus, byte enables included. The C library is built by the pytest function below 
 from __future__ import annotations
 
 import ctypes
-import fcntl
 import json
 import os
 import re
-import shutil
-import subprocess
 from pathlib import Path
 from typing import Any
 
 import pytest
 
 from peripheral_tb import PeripheralTb
+from stepramp import clib
 from stepramp.hdl import run_cocotb
 from stepramp.model import edges as model_edges
 from stepramp.plan import Plan, plan_move
@@ -164,19 +162,8 @@ TESTCASES = ["c_plans_through_the_bus", "c_driver_writes_replayed"]
 
 
 def _build_c_library() -> Path:
-    """make -C sw/c lib (a missing toolchain is a failure); one make at a time across pytest workers."""
-    for tool in ("make", "gcc"):
-        if shutil.which(tool) is None:
-            pytest.fail(f"'{tool}' is not on PATH: the C library (sw/c) cannot be built; install {tool}")
-    with (C_DIR / "Makefile").open() as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        try:
-            result = subprocess.run(
-                ["make", "-C", str(C_DIR), "lib"], capture_output=True, text=True, check=False, timeout=120
-            )
-        finally:
-            fcntl.flock(lock, fcntl.LOCK_UN)
-    assert result.returncode == 0, f"make -C sw/c lib failed:\n{result.stdout}\n{result.stderr}"
+    """make -C sw/c lib (a missing toolchain is a failure, not a skip)."""
+    clib.build("lib")
     return C_LIB
 
 

@@ -12,17 +12,16 @@ from __future__ import annotations
 
 import ctypes
 import dataclasses
-import fcntl
 import math
 import random
 import re
-import shutil
 import subprocess
 from pathlib import Path
 from typing import Any
 
 import pytest
 
+from stepramp import clib
 from stepramp.driver import plan_writes
 from stepramp.plan import MAX_PRESCALE, MAX_STEPS, REG_WIDTHS, Plan, plan_move
 from stepramp.profiles import INVALID_INPUTS, PROFILES
@@ -51,19 +50,8 @@ def _run(cmd: list[str]) -> subprocess.CompletedProcess[str]:
 
 @pytest.fixture(scope="module")
 def build() -> Path:
-    """Build the C library and run its host tests with ``make -C sw/c``; returns the build directory."""
-    for tool in ("make", "gcc"):
-        if shutil.which(tool) is None:
-            pytest.fail(f"'{tool}' is not on PATH: the C driver (sw/c) cannot be built; install {tool}")
-    # pytest-xdist workers share sw/c/build: one make at a time (as in test_c_plan.py)
-    with (C_DIR / "Makefile").open() as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        try:
-            result = _run(["make", "-C", str(C_DIR)])
-        finally:
-            fcntl.flock(lock, fcntl.LOCK_UN)
-    assert result.returncode == 0, f"make -C sw/c failed:\n{result.stdout}\n{result.stderr}"
-    return BUILD_DIR
+    """Build the C library and run its host tests (make -C sw/c); a missing toolchain fails, it is not skipped."""
+    return clib.build()
 
 
 def plan_struct_fields() -> list[tuple[str, Any]]:
