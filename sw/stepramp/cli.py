@@ -3,6 +3,7 @@
 
     stepramp sim   --steps N --accel A --decel D --speed V --spr S --fclk F [--prescale P] [--waves FILE] [--json FILE]
     stepramp model (same options, no --waves)
+    stepramp plot FILE.json [-o FILE.png]
 
 Both print (or write with --json) one JSON object:
     {"tool": "sim"|"model", "inputs": {...}, "registers": {...}, "edges": [...], "final_position": int, "error": null}
@@ -44,7 +45,24 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--build", type=Path, help="simulation build directory (default: a temporary one)")
     model = sub.add_parser("model", help="the same move from the bit-exact Python model")
     _move_args(model)
+    plot = sub.add_parser("plot", help="draw a `stepramp sim` or `stepramp model` JSON file to a PNG")
+    plot.add_argument("file", type=Path, help="the JSON written by `stepramp sim|model --json FILE`")
+    plot.add_argument("-o", "--out", type=Path, help="PNG to write (default: FILE with .png)")
     return parser
+
+
+def plot_file(path: Path, png: Path | None) -> int:
+    """`stepramp plot`: step rate against time (with the bit-exact model and the ideal) and the deviation."""
+    from stepramp.plot import plot_move  # needs matplotlib
+
+    move = json.loads(path.read_text())
+    if move.get("error") or not move.get("registers"):
+        print(f"stepramp plot: {path} holds no move ({move.get('error')})", file=sys.stderr)
+        return 2
+    png = png or path.with_suffix(".png")
+    plot_move(move, png, model_edges=model_edges(plan_move(**move["inputs"])))
+    print(png)
+    return 0
 
 
 def run_move(tool: str, args: argparse.Namespace) -> tuple[dict[str, Any], int]:
@@ -88,6 +106,8 @@ def run_move(tool: str, args: argparse.Namespace) -> tuple[dict[str, Any], int]:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    if args.command == "plot":
+        return plot_file(args.file, args.out)
     if args.command in ("sim", "model"):
         out, status = run_move(args.command, args)
         text = json.dumps(out, indent=None)

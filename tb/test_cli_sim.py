@@ -1,0 +1,55 @@
+# SPDX-License-Identifier: MIT
+"""`stepramp sim` (the RTL under GHDL) and `stepramp model` give identical JSON edges, through the command line."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+BIN = Path(sys.executable).parent / "stepramp"
+
+MOVES = [
+    ["--steps", "-90", "--accel", "2000", "--decel", "600", "--speed", "60", "--spr", "200", "--fclk", "1e6"],
+    [
+        "--steps",
+        "40",
+        "--accel",
+        "50",
+        "--decel",
+        "80",
+        "--speed",
+        "5",
+        "--spr",
+        "400",
+        "--fclk",
+        "2e6",
+        "--prescale",
+        "3",
+    ],
+]
+
+
+@pytest.mark.parametrize("move", MOVES, ids=["trapezoid", "triangle_prescale_3"])
+def test_sim_equals_model(move: list[str], tmp_path: Path) -> None:
+    model = json.loads(subprocess.run([BIN, "model", *move], capture_output=True, text=True, check=True).stdout)
+    waves = tmp_path / "move.ghw"
+    run = subprocess.run([BIN, "sim", *move, "--waves", str(waves)], capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stderr[-2000:]
+    sim = json.loads(run.stdout)
+    assert sim["tool"] == "sim"
+    assert sim["error"] is None
+    assert sim["registers"] == model["registers"]
+    assert sim["edges"] == model["edges"]
+    assert sim["final_position"] == model["final_position"]
+    assert waves.stat().st_size > 0
+
+
+def test_sim_invalid_input_simulates_nothing() -> None:
+    bad = [*MOVES[0][:-2], "--fclk=-1e6"]
+    run = subprocess.run([BIN, "sim", *bad], capture_output=True, text=True, check=False)
+    assert run.returncode == 2
+    assert "fclk must be finite and > 0" in json.loads(run.stdout)["error"]
