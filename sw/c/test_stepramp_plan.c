@@ -11,17 +11,7 @@
 #include <stdio.h>
 #include <string.h>
 
-static int g_checks;
-static int g_failures;
-
-#define CHECK(cond)                                                                                                    \
-    do {                                                                                                               \
-        g_checks++;                                                                                                    \
-        if (!(cond)) {                                                                                                 \
-            g_failures++;                                                                                              \
-            printf("%s:%d: %s: check failed: %s\n", __FILE__, __LINE__, __func__, #cond);                              \
-        }                                                                                                              \
-    } while (0)
+#include "test_check.h"
 
 #define PI 3.141592653589793
 #define Q16 65536.0
