@@ -84,6 +84,13 @@ architecture rtl of stepramp_engine is
   constant C_ST_RUN   : std_logic_vector(1 downto 0) := "10";
   constant C_ST_DECEL : std_logic_vector(1 downto 0) := "11";
 
+  -- The same state by name, for waveform viewers only: a GHW waveform shows the literal (GHDL's VPI would show
+  -- its position, hence the vector port). Nothing reads it, so synthesis removes it.
+
+  type t_state_name is (stop, accel, run, decel);
+
+  signal state_name : t_state_name;
+
   -- Error codes on err_code: C_ERR_* of stepramp_regs_pkg (the lowest code wins when several parameters are bad).
 
   -- Move sequencer (constants, not an enum, so that GHDL's VPI shows a plain vector).
@@ -209,6 +216,8 @@ architecture rtl of stepramp_engine is
   signal nd_ovf       : std_logic;
 
 begin
+
+  state_name <= t_state_name'val(to_integer(unsigned(state_r)));
 
   -- The numerator 2 * Q32.16 + remainder needs 50 bits; the divider stops at 64.
   assert G_DIV_WIDTH >= 50 and G_DIV_WIDTH <= 64

@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: MIT
 """Testbench for the peripheral tops (stepramp_plb, stepramp_axil): clock, reset, a bus master, monitors.
 
-The bus master is tb/ipif.py's IpifMaster for the PLB-like top, or cocotbext-axi's AxiLiteMaster (wrapped to the
+The bus master is stepramp/ipif.py's IpifMaster for the PLB-like top, or cocotbext-axi's AxiLiteMaster (wrapped to the
 driver's read/write interface) for the AXI4-Lite top; with `idle` the masters insert idle cycles and, on AXI,
 backpressure on every channel. The engine's own start edge (edge 0 of the model) is taken from the rising edge of
 the core's (engine's) busy, so step edges are compared with stepramp.model whatever the bus timing and whatever
@@ -18,9 +18,9 @@ from typing import Any
 from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, First, RisingEdge, Timer
 
-from ipif import IpifError, IpifMaster
 from monitors import MotionMonitors
 from stepramp.driver import MODES, Outputs, Status, StepRamp
+from stepramp.ipif import IpifError, IpifMaster
 from stepramp.plan import Plan
 from stepramp.stepper import STEP_LATENCY
 from tbutil import CLK_PERIOD_NS, cocotb, now_cycles

@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: MIT
 """The peripheral through its bus, played the way MicroBlaze would, with the driver: both tops.
 
-stepramp_plb (PLB-like IPIF, tb/ipif.py master) and stepramp_axil (AXI4-Lite, cocotbext-axi master with idle
+stepramp_plb (PLB-like IPIF, stepramp/ipif.py master) and stepramp_axil (AXI4-Lite, cocotbext-axi master with idle
 cycles and backpressure on every channel) run the same tests: register behaviour (reset values, read/write, byte
 enables, bus errors, W1C, interrupt, shadowing, bad values) against the register map (stepramp.regmap), and motion
 (every profile, programmed through the bus by stepramp.driver.StepRamp) against the bit-exact model.

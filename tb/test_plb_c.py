@@ -3,7 +3,7 @@
 
 For a few profiles, stepramp_plan_move of build/libstepramp.so plans the move; its stepramp_plan_t becomes a
 stepramp.plan.Plan, which the Python driver writes over the bus (StepRamp.program / start / wait_done through
-peripheral_tb.PeripheralTb): the PLB-like top stepramp_plb with tb/ipif.py's master, and the AXI4-Lite top as well.
+peripheral_tb.PeripheralTb): the PLB-like top stepramp_plb with stepramp.ipif's master, and the AXI4-Lite top too.
 The STEP edges must be those of the bit-exact model for that plan, and the position must follow. Then the C driver
 itself: the bus writes stepramp_move makes into the fake register bank (sw/c/stepramp_fakebus.c) are replayed on the
 bus, byte enables included. The C library is built by the pytest function below (``make -C sw/c lib``).

@@ -4,6 +4,7 @@
     stepramp sim   --steps N --accel A --decel D --speed V --spr S --fclk F [--prescale P] [--waves FILE] [--json FILE]
     stepramp model (same options, no --waves)
     stepramp plot FILE.json [-o FILE.png]
+    stepramp shell [--model] [--waves FILE.ghw] [--build DIR]   (the AVR446 demo's commands, from stdin)
 
 Both print (or write with --json) one JSON object:
     {"tool": "sim"|"model", "inputs": {...}, "registers": {...}, "edges": [...], "final_position": int, "error": null}
@@ -48,6 +49,10 @@ def build_parser() -> argparse.ArgumentParser:
     plot = sub.add_parser("plot", help="draw a `stepramp sim` or `stepramp model` JSON file to a PNG")
     plot.add_argument("file", type=Path, help="the JSON written by `stepramp sim|model --json FILE`")
     plot.add_argument("-o", "--out", type=Path, help="PNG to write (default: FILE with .png)")
+    shell = sub.add_parser("shell", help="the AVR446 demo application's commands on the RTL, read from stdin")
+    shell.add_argument("--model", action="store_true", help="run the bit-exact model instead of the RTL")
+    shell.add_argument("--waves", type=Path, help="write the session's waveform (.ghw, or .fst)")
+    shell.add_argument("--build", type=Path, help="simulation build directory (default: a temporary one)")
     return parser
 
 
@@ -108,6 +113,10 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     if args.command == "plot":
         return plot_file(args.file, args.out)
+    if args.command == "shell":
+        from stepramp.shell import main as shell_main
+
+        return shell_main(model=args.model, waves=args.waves, build=args.build)
     if args.command in ("sim", "model"):
         out, status = run_move(args.command, args)
         text = json.dumps(out, indent=None)

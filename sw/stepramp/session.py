@@ -1,0 +1,301 @@
+# SPDX-License-Identifier: MIT
+"""One simulation of the whole peripheral for a session of moves: the RTL as a MicroBlaze program would see it.
+
+`RtlSession` (front end, any Python process) builds stepramp_plb with GHDL, starts one simulation through cocotb's
+runner in a thread, and talks to the cocotb test in this module (`session`, running inside the simulator) over a
+Unix socket: one JSON request per line, one JSON answer per line. The test plays the soft CPU: it programs the core
+through the PLB-like IPIF with the Python driver (`stepramp.driver.StepRamp`), starts each move, waits for DONE on
+the interrupt and reads POSITION back, while coroutines timestamp every STEP edge. `make demo` and
+`stepramp shell` both use it, so a whole shell session is one simulation (and one waveform).
+
+Requests: {"op": "move", "steps", "accel", "decel", "speed"} (rad/s^2, rad/s), {"op": "signals", "paths":
+[[path, width], ...]} (which of these design signals are missing) and {"op": "quit"}.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import json
+import os
+import socket
+import tempfile
+import threading
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from stepramp.driver import Outputs, StepRamp, StepRampError
+from stepramp.hdl import run_cocotb
+from stepramp.plan import Plan
+from stepramp.stepper import STEP_LATENCY
+
+#: Default physical setting: the AVR446 demo's motor (200 steps/rev, half-stepped: 400 steps/rev) on a 1 MHz clock.
+DEFAULT_CONFIG: dict[str, Any] = {"fclk": 1e6, "spr": 400.0, "prescale": 1, "mode": "half", "dir_setup": 2}
+
+
+@dataclass(frozen=True)
+class MoveResult:
+    """What the RTL did for one move: STEP edges in the model's convention (clock edges from the engine's start
+    edge, less the stepping logic's register stage), POSITION read back, the plan, and the move's time span."""
+
+    plan: Plan
+    edges: list[int]
+    position: int
+    start_s: float
+    end_s: float
+
+
+class SessionError(RuntimeError):
+    """The simulation failed, hung or went away."""
+
+
+class RtlSession:
+    """Front end of one simulation of stepramp_plb (use as a context manager)."""
+
+    def __init__(
+        self,
+        build_dir: Path,
+        config: dict[str, Any] | None = None,
+        waves: Path | None = None,
+        log_file: Path | None = None,
+        timeout_s: float = 3600.0,
+    ) -> None:
+        self.build_dir = build_dir.resolve()
+        self.config = {**DEFAULT_CONFIG, **(config or {})}
+        self.waves = waves
+        self.log_file = log_file if log_file is not None else self.build_dir / "sim.log"
+        self.timeout_s = timeout_s
+        self.failure: BaseException | None = None
+        self.simulations = 0  # how many simulator runs this session started (one)
+        self._thread: threading.Thread | None = None
+        self._conn: socket.socket | None = None
+        self._buffer = b""
+        self._tmp: tempfile.TemporaryDirectory[str] | None = None
+
+    def __enter__(self) -> RtlSession:
+        self.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def start(self) -> None:
+        self.build_dir.mkdir(parents=True, exist_ok=True)
+        # A short path: Unix socket names are limited to about 100 bytes.
+        self._tmp = tempfile.TemporaryDirectory(prefix="stepramp-")
+        path = os.path.join(self._tmp.name, "s")
+        server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        server.bind(path)
+        server.listen(1)
+        server.settimeout(0.2)
+        env = {"STEPRAMP_SESSION_SOCKET": path, "STEPRAMP_SESSION_CONFIG": json.dumps(self.config)}
+        self._thread = threading.Thread(target=self._run, args=(env,), daemon=True)
+        self._thread.start()
+        self.simulations += 1
+        try:
+            while True:
+                try:
+                    conn, _ = server.accept()
+                    break
+                except TimeoutError:
+                    if not self._thread.is_alive():
+                        raise SessionError(f"the simulation did not start; see {self.log_file}") from self.failure
+        finally:
+            server.close()
+        conn.settimeout(0.2)
+        self._conn = conn
+
+    def _run(self, env: dict[str, str]) -> None:
+        try:
+            run_cocotb(
+                "stepramp_plb",
+                "stepramp.session",
+                self.build_dir,
+                waves=self.waves,
+                extra_env=env,
+                log_file=self.log_file,
+            )
+        except BaseException as exc:  # the runner raises SystemExit under pytest: report it later
+            self.failure = exc
+
+    def request(self, req: dict[str, Any]) -> dict[str, Any]:
+        """Send one request and wait for its answer (SessionError if the simulation ends or hangs first)."""
+        if self._conn is None or self._thread is None:
+            raise SessionError("the session is not started")
+        self._conn.sendall(json.dumps(req).encode() + b"\n")
+        waited = 0.0
+        while b"\n" not in self._buffer:
+            try:
+                chunk = self._conn.recv(1 << 16)
+            except TimeoutError:
+                waited += 0.2
+                if not self._thread.is_alive() or waited > self.timeout_s:
+                    raise SessionError(f"no answer from the simulation; see {self.log_file}") from self.failure
+                continue
+            if not chunk:
+                raise SessionError(f"the simulation ended; see {self.log_file}") from self.failure
+            self._buffer += chunk
+        line, self._buffer = self._buffer.split(b"\n", 1)
+        answer: dict[str, Any] = json.loads(line)
+        if "fault" in answer:
+            raise SessionError(f"the simulation failed: {answer['fault']}")
+        return answer
+
+    def move(self, steps: int, accel: float, decel: float, speed: float) -> MoveResult:
+        """One move on the RTL. ValueError (the driver's reason) if it is not a valid move; StepRampError if the
+        core flags an error."""
+        answer = self.request({"op": "move", "steps": steps, "accel": accel, "decel": decel, "speed": speed})
+        if "value_error" in answer:
+            raise ValueError(answer["value_error"])
+        if "core_error" in answer:
+            raise StepRampError(answer["core_error"])
+        return MoveResult(
+            Plan(**answer["plan"]), answer["edges"], answer["position"], answer["start_s"], answer["end_s"]
+        )
+
+    def missing_signals(self, paths: list[tuple[str, int]]) -> list[str]:
+        """Which of these (dotted path below the top, width) design signals the simulator does not have."""
+        missing: list[str] = self.request({"op": "signals", "paths": paths})["missing"]
+        return missing
+
+    def close(self) -> None:
+        """End the simulation (it writes the waveform) and wait for it; SessionError if it failed."""
+        if self._conn is not None:
+            with contextlib.suppress(OSError):
+                self._conn.sendall(b'{"op": "quit"}\n')
+            self._conn.close()
+            self._conn = None
+        if self._thread is not None:
+            self._thread.join()
+            self._thread = None
+        if self._tmp is not None:
+            self._tmp.cleanup()
+            self._tmp = None
+        if self.failure is not None and not (isinstance(self.failure, SystemExit) and not self.failure.code):
+            raise SessionError(f"the simulation failed; see {self.log_file}") from self.failure
+
+
+# ---- inside the simulator -------------------------------------------------------------------------------------
+
+try:
+    import cocotb
+    from cocotb.clock import Clock
+    from cocotb.triggers import ClockCycles, FallingEdge, First, RisingEdge, Timer
+    from cocotb.utils import get_sim_time
+except ImportError:  # the front end does not need cocotb
+    cocotb = None  # type: ignore[assignment]
+
+
+def _resolve(dut: Any, path: str) -> Any:
+    handle = dut
+    for part in path.split("."):
+        handle = getattr(handle, part)
+    return handle
+
+
+if cocotb is not None:
+
+    @cocotb.test()
+    async def session(dut: Any) -> None:
+        """Serve the front end's requests until it quits or goes away."""
+        from stepramp.ipif import IpifMaster  # needs cocotb-bus
+
+        cfg: dict[str, Any] = json.loads(os.environ["STEPRAMP_SESSION_CONFIG"])
+        period_ps = round(1e12 / cfg["fclk"])
+        Clock(dut.clk, period_ps, unit="ps").start()
+
+        def now_edge() -> int:
+            return round(get_sim_time("ps") / period_ps)
+
+        step_edges: list[int] = []
+        start_edges: list[int] = []
+
+        async def watch(signal: Any, edges: list[int]) -> None:
+            while True:
+                await RisingEdge(signal)
+                edges.append(now_edge())
+
+        bus = IpifMaster(dut, dut.clk, period_ps // 1000 or 1)
+        dut.rst.value = 1
+        await ClockCycles(dut.clk, 3)
+        await FallingEdge(dut.clk)
+        dut.rst.value = 0
+        await ClockCycles(dut.clk, 2)
+        cocotb.start_soon(watch(dut.step, step_edges))
+        cocotb.start_soon(watch(dut.core_inst.busy, start_edges))
+
+        drv = StepRamp(bus, fclk=cfg["fclk"], spr=cfg["spr"], prescale=cfg["prescale"])
+        await drv.check_id()
+        await drv.configure_outputs(Outputs(mode=cfg["mode"], dir_setup=cfg["dir_setup"], dir_hold=cfg["dir_setup"]))
+        await drv.set_enable(True)
+        await drv.enable_irq()
+        poll_wait = 20_000 * period_ps
+
+        async def idle() -> None:
+            await First(RisingEdge(dut.irq), Timer(poll_wait, unit="ps"))
+
+        async def do_move(req: dict[str, Any]) -> dict[str, Any]:
+            try:
+                plan = drv.plan(req["steps"], req["accel"], req["decel"], req["speed"])
+            except ValueError as exc:
+                return {"value_error": str(exc)}
+            n_steps, n_starts = len(step_edges), len(start_edges)
+            start_s = get_sim_time("ps") * 1e-12
+            await drv.program(plan)
+            await drv.start()
+            try:
+                await drv.wait_done(idle=idle)
+            except StepRampError as exc:
+                return {"core_error": str(exc)}
+            end_s = get_sim_time("ps") * 1e-12
+            position = await drv.position()
+            edges: list[int] = []
+            if len(start_edges) > n_starts:
+                start = start_edges[n_starts]
+                edges = [e - start - STEP_LATENCY for e in step_edges[n_steps:]]
+            return {
+                "plan": dataclasses.asdict(plan),
+                "edges": edges,
+                "position": position,
+                "start_s": start_s,
+                "end_s": end_s,
+            }
+
+        def missing(paths: list[list[Any]]) -> list[str]:
+            out = []
+            for path, width in paths:
+                try:
+                    handle = _resolve(dut, path)
+                except AttributeError:
+                    out.append(path)
+                    continue
+                if width > 1 and len(handle) != width:
+                    out.append(f"{path} (width {len(handle)}, not {width})")
+            return out
+
+        sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        sock.connect(os.environ["STEPRAMP_SESSION_SOCKET"])
+        stream = sock.makefile("rwb")
+        while True:
+            line = stream.readline()  # blocks the simulator: no simulated time passes while the user thinks
+            if not line:
+                break
+            req = json.loads(line)
+            if req["op"] == "quit":
+                break
+            try:
+                if req["op"] == "move":
+                    answer = await do_move(req)
+                elif req["op"] == "signals":
+                    answer = {"missing": missing(req["paths"])}
+                else:
+                    answer = {"fault": f"unknown request {req['op']!r}"}
+            except Exception as exc:  # tell the front end, then fail the test
+                stream.write(json.dumps({"fault": repr(exc)}).encode() + b"\n")
+                stream.flush()
+                raise
+            stream.write(json.dumps(answer).encode() + b"\n")
+            stream.flush()
+        await ClockCycles(dut.clk, 10)
+        sock.close()

@@ -1,0 +1,246 @@
+# SPDX-License-Identifier: MIT
+"""`stepramp shell`: the command language of the AVR446 demo application, on the simulated RTL.
+
+The commands, units, ranges and info line of AVR446 section 3.1 (accel/decel in 0.01 rad/s^2, speed in 0.01 rad/s,
+steps signed), read line by line from stdin, so a session can be typed or piped:
+
+    printf 'a 4000\\nm 400\\n\\n' | stepramp shell
+
+Each move runs on stepramp_plb, programmed over its bus by the Python driver, and the whole session is one
+simulation (`stepramp.session.RtlSession`); POSITION is read back from the core after each move. `--model` runs the
+bit-exact model instead (no simulator, instant). Bad commands print the reason and the help text; the session goes
+on. `q` (or end of input) ends it.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import tempfile
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Protocol, TextIO
+
+from stepramp.model import edges as model_edges
+from stepramp.plan import MIN_INTERVAL_CLKS, Plan, plan_move
+
+if TYPE_CHECKING:
+    from stepramp.session import RtlSession
+
+#: The shell's motor and clock (stepramp.session's defaults): a 200-step motor half-stepped (400 steps/rev), the
+#: core at 250 kHz with PRESCALE 1 (4 us ticks). An FPGA clocked at f with PRESCALE f / 250 kHz emits the same pulses;
+#: the low simulated clock keeps each move to a few seconds of simulation.
+SHELL_CONFIG = {"fclk": 250e3, "spr": 400.0, "prescale": 1}
+
+#: AVR446's ranges (the speed's upper bound is this core's limit at the shell's clock, see speed_limit).
+ACCEL_RANGE = (71, 32000)
+STEPS_RANGE = (-64000, 64000)
+SPEED_MIN = 12
+
+
+def speed_limit(fclk: float, spr: float, prescale: int) -> int:
+    """The highest speed (0.01 rad/s) the engine sustains: one step per MIN_INTERVAL_CLKS clocks."""
+    alpha = 2 * math.pi / spr
+    shortest_ticks = math.ceil(MIN_INTERVAL_CLKS / prescale)
+    return math.floor(100 * alpha * fclk / prescale / shortest_ticks)
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """One move as a back end ran it: the plan, its STEP edges (model convention) and the position after it."""
+
+    plan: Plan
+    edges: list[int]
+    position: int
+
+
+class Backend(Protocol):
+    def move(self, steps: int, accel: float, decel: float, speed: float) -> Outcome: ...
+
+
+class ModelBackend:
+    """The bit-exact model in place of the RTL (no simulator)."""
+
+    def __init__(self, fclk: float, spr: float, prescale: int = 1) -> None:
+        self.fclk, self.spr, self.prescale = fclk, spr, prescale
+        self.position = 0
+
+    def move(self, steps: int, accel: float, decel: float, speed: float) -> Outcome:
+        plan = plan_move(steps, accel, decel, speed, self.spr, self.fclk, self.prescale)
+        self.position += steps
+        return Outcome(plan, model_edges(plan), self.position)
+
+
+class RtlBackend:
+    """Moves on the RTL, all in one simulation (a stepramp.session.RtlSession, started by the caller)."""
+
+    def __init__(self, session: RtlSession) -> None:
+        self.session = session
+        self.outcomes: list[Outcome] = []
+
+    def move(self, steps: int, accel: float, decel: float, speed: float) -> Outcome:
+        res = self.session.move(steps, accel, decel, speed)
+        outcome = Outcome(res.plan, res.edges, res.position)
+        self.outcomes.append(outcome)
+        return outcome
+
+
+class CommandError(ValueError):
+    """A command the shell does not understand, or a value out of its range."""
+
+
+class Shell:
+    """The AVR446 demo's menu and command interface over a back end; output goes to `out`."""
+
+    def __init__(self, backend: Backend, out: TextIO, fclk: float, spr: float, prescale: int = 1) -> None:
+        self.backend = backend
+        self.out = out
+        self.accel, self.decel, self.speed, self.steps = 4000, 4000, 2000, 400
+        self.position = 0
+        self.moves = 0
+        self.config = {"spr": spr, "fclk": fclk, "prescale": prescale}
+        self.speed_max = speed_limit(fclk, spr, prescale)
+
+    def help_text(self) -> str:
+        return "\n".join(
+            [
+                "-----",
+                "stepramp shell - the AVR446 demo application, on the simulated stepramp core",
+                "",
+                "?        - Show help",
+                f"a [data] - Set acceleration (range: {ACCEL_RANGE[0]} - {ACCEL_RANGE[1]})",
+                f"d [data] - Set deceleration (range: {ACCEL_RANGE[0]} - {ACCEL_RANGE[1]})",
+                f"s [data] - Set speed (range: {SPEED_MIN} - {self.speed_max}, the motor limit)",
+                f"m [data] - Move [data] steps (range: {STEPS_RANGE[0]} - {STEPS_RANGE[1]})",
+                "move [steps] [accel] [decel] [speed]",
+                "         - Move with all parameters given",
+                "<enter>  - Repeat last move",
+                "q        - Quit (or end of input)",
+                "",
+                "         acc/dec data given in 0.01*rad/sec^2 (100 = 1 rad/sec^2)",
+                "         speed data given in 0.01*rad/sec (100 = 1 rad/sec)",
+                "-----",
+            ]
+        )
+
+    def info_line(self) -> str:
+        return f"Motor pos: {self.position}   a:{self.accel} d:{self.decel} s:{self.speed} m:{self.steps}"
+
+    def say(self, text: str) -> None:
+        print(text, file=self.out, flush=True)
+
+    def start(self) -> None:
+        self.say(self.help_text())
+        self.say(self.info_line())
+
+    @staticmethod
+    def _int(token: str, name: str, lo: int, hi: int) -> int:
+        try:
+            value = int(token)
+        except ValueError:
+            raise CommandError(f"{name} must be an integer, got {token!r}") from None
+        if not lo <= value <= hi:
+            raise CommandError(f"{name} {value} is out of range {lo} - {hi}")
+        return value
+
+    def _args(self, tokens: list[str], count: int) -> list[str]:
+        if len(tokens) - 1 != count:
+            raise CommandError(f"{tokens[0]!r} takes {count} value{'s' if count > 1 else ''}, got {len(tokens) - 1}")
+        return tokens[1:]
+
+    def execute(self, line: str) -> bool:
+        """Run one command line; False when the session should end."""
+        tokens = line.split()
+        try:
+            if not tokens:
+                self._move()
+            elif tokens[0] == "?":
+                self.say(self.help_text())
+            elif tokens[0] == "q":
+                return False
+            elif tokens[0] in ("a", "d"):
+                (value,) = self._args(tokens, 1)
+                number = self._int(value, "acceleration" if tokens[0] == "a" else "deceleration", *ACCEL_RANGE)
+                if tokens[0] == "a":
+                    self.accel = number
+                else:
+                    self.decel = number
+            elif tokens[0] == "s":
+                (value,) = self._args(tokens, 1)
+                self.speed = self._int(value, "speed", SPEED_MIN, self.speed_max)
+            elif tokens[0] == "m":
+                (value,) = self._args(tokens, 1)
+                self.steps = self._int(value, "steps", *STEPS_RANGE)
+                self._move()
+            elif tokens[0] == "move":
+                steps, accel, decel, speed = self._args(tokens, 4)
+                values = (
+                    self._int(steps, "steps", *STEPS_RANGE),
+                    self._int(accel, "acceleration", *ACCEL_RANGE),
+                    self._int(decel, "deceleration", *ACCEL_RANGE),
+                    self._int(speed, "speed", SPEED_MIN, self.speed_max),
+                )
+                self.steps, self.accel, self.decel, self.speed = values
+                self._move()
+            else:
+                raise CommandError(f"unknown command {tokens[0]!r}")
+        except CommandError as exc:
+            self.say(f"error: {exc}")
+            self.say(self.help_text())
+        self.say(self.info_line())
+        return True
+
+    def _move(self) -> None:
+        if self.steps == 0:
+            return  # as AVR446: nothing to move
+        args = (self.steps, self.accel / 100, self.decel / 100, self.speed / 100)
+        try:
+            plan_move(*args, **self.config)  # the driver's checks, before anything starts
+        except ValueError as exc:
+            raise CommandError(str(exc)) from None
+        self.out.write("Running... ")
+        self.out.flush()
+        outcome = self.backend.move(*args)
+        self.position = outcome.position
+        self.moves += 1
+        self.say("OK")
+
+    def run(self, lines: Iterable[str], prompt: bool = False) -> None:
+        """The help and info line, then every line until 'q' or the end of input."""
+        self.start()
+        if prompt:
+            self.out.write("> ")
+            self.out.flush()
+        for line in lines:
+            if not self.execute(line.rstrip("\r\n")):
+                break
+            if prompt:
+                self.out.write("> ")
+                self.out.flush()
+
+
+def main(model: bool = False, waves: Path | None = None, build: Path | None = None, stdin: TextIO | None = None) -> int:
+    """`stepramp shell`: one simulation (or the model) for the whole session, commands from stdin."""
+    lines = stdin if stdin is not None else sys.stdin
+    interactive = lines.isatty()
+    cfg = SHELL_CONFIG
+    if model:
+        Shell(ModelBackend(**cfg), sys.stdout, **cfg).run(lines, prompt=interactive)
+        return 0
+
+    from stepramp.session import RtlSession, SessionError
+
+    with tempfile.TemporaryDirectory(prefix="stepramp-shell-") as tmp:
+        build_dir = build if build is not None else Path(tmp)
+        log = build_dir.resolve() / "sim.log"
+        print(f"stepramp shell: starting one simulation of stepramp_plb for the session (log: {log})", file=sys.stderr)
+        try:
+            with RtlSession(build_dir, config=cfg, waves=waves, log_file=log) as session:
+                Shell(RtlBackend(session), sys.stdout, **cfg).run(lines, prompt=interactive)
+        except SessionError as exc:
+            print(f"\nstepramp shell: {exc}", file=sys.stderr)
+            return 1
+    if waves is not None:
+        print(f"stepramp shell: the session's waveform is {waves}", file=sys.stderr)
+    return 0
