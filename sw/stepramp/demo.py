@@ -1,10 +1,13 @@
 # SPDX-License-Identifier: MIT
-"""`make demo`: the AVR446 demo's default move, simulated on the RTL, written to build/demo/.
+"""`make demo`: the AVR446 demo's default move, run on the RTL through the bus with the Python driver.
 
-The move of the AVR446 demo application (a 200-step motor half-stepping, so 400 steps/rev; accel and decel
-40 rad/s^2, speed 20 rad/s, 400 steps) on a 1 MHz core clock with PRESCALE 1 (1 us ticks). Writes:
-move.json (the `stepramp sim` JSON), the waveform, profile.png (step rate against time: RTL, model, ideal) and
-report.txt; prints a short summary.
+The move of the AVR446 demo application (its info line `Motor pos: 0   a:4000 d:4000 s:2000 m:400`: a 200-step
+motor half-stepped, so 400 steps/rev; accel and decel 40 rad/s^2, speed 20 rad/s, 400 steps) on stepramp_plb
+clocked at 250 kHz with PRESCALE 1 (4 us ticks), programmed over the PLB-like IPIF by stepramp.driver.StepRamp, as
+`stepramp shell` does (stepramp.session). Writes to build/demo/: the GHW waveform and a GTKWave save file that lays
+it out (stepramp.gtkw), move.json (the `stepramp sim` JSON contract), profile.png (step rate against time: RTL,
+bit-exact model, ideal trapezoid; and each pulse's deviation from the ideal), report.txt and report.json; prints a
+short table and the paths.
 """
 
 from __future__ import annotations
@@ -17,20 +20,14 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from stepramp.gtkw import signal_paths, write_gtkw
 from stepramp.ideal import c0, ideal_move
 from stepramp.model import FIRST_PULSE_LATENCY
 from stepramp.model import edges as model_edges
 from stepramp.plan import plan_move
+from stepramp.shell import SHELL_CONFIG
 
-DEMO_MOVE: dict[str, Any] = {
-    "steps": 400,
-    "accel": 40.0,
-    "decel": 40.0,
-    "speed": 20.0,
-    "spr": 400.0,
-    "fclk": 1e6,
-    "prescale": 1,
-}
+DEMO_MOVE: dict[str, Any] = {"steps": 400, "accel": 40.0, "decel": 40.0, "speed": 20.0, **SHELL_CONFIG}
 
 
 def summarise(move: dict[str, Any], edges: list[int]) -> dict[str, Any]:
@@ -64,33 +61,47 @@ def main(argv: list[str] | None = None) -> int:
     out: Path = args.out.resolve()
     out.mkdir(parents=True, exist_ok=True)
 
-    from stepramp.enginesim import simulate  # needs cocotb and GHDL
+    from stepramp.session import RtlSession, SessionError  # needs cocotb and GHDL
 
     plan = plan_move(**DEMO_MOVE)
     waves = out / "stepramp_demo.ghw"
-    print("stepramp demo: AVR446 default move (400 steps, 40 rad/s^2, 20 rad/s, 400 steps/rev), 1 MHz clock")
-    print("  simulating the RTL with GHDL ...")
-    results = simulate([plan], out / "sim", waves=waves, log_file=out / "sim.log")
-    if not results or not results[0].done or results[0].error:
-        print(f"  the simulation failed; see {out / 'sim.log'}", file=sys.stderr)
+    print(
+        "stepramp demo: the AVR446 demo move (400 steps, 40 rad/s^2, 20 rad/s, 400 steps/rev) on stepramp_plb at "
+        f"{DEMO_MOVE['fclk'] / 1e3:g} kHz,\n  programmed over the PLB-like bus by the Python driver; simulating ..."
+    )
+    try:
+        with RtlSession(out / "sim", config=SHELL_CONFIG, waves=waves, log_file=out / "sim.log") as session:
+            missing = session.missing_signals(signal_paths())
+            rtl = session.move(DEMO_MOVE["steps"], DEMO_MOVE["accel"], DEMO_MOVE["decel"], DEMO_MOVE["speed"])
+    except (SessionError, ValueError) as exc:
+        print(f"  the simulation failed: {exc}", file=sys.stderr)
         return 1
-    rtl = results[0]
+    gtkw = write_gtkw(
+        out / "stepramp_demo.gtkw",
+        waves,
+        duration_s=rtl.end_s * 1.02,
+        marker_s=(rtl.start_s + rtl.end_s) / 2,
+        title="stepramp demo: the AVR446 demo move",
+    )
     model = model_edges(plan)
     move_json = {
         "tool": "sim",
         "inputs": DEMO_MOVE,
-        "registers": dataclasses.asdict(plan),
+        "registers": dataclasses.asdict(rtl.plan),
         "edges": rtl.edges,
-        "final_position": rtl.final_position,
+        "final_position": rtl.position,
         "error": None,
     }
     (out / "move.json").write_text(json.dumps(move_json) + "\n")
     figures = summarise(DEMO_MOVE, rtl.edges)
-    figures["rtl_equals_model"] = rtl.edges == model
+    figures["final_position"] = rtl.position
+    figures["rtl_equals_model"] = rtl.edges == model and rtl.plan == plan
+    figures["start_to_done_s"] = rtl.end_s - rtl.start_s
+    figures["missing_waveform_signals"] = missing
     lines = [
         "stepramp demo report",
         f"move                  {DEMO_MOVE}",
-        f"steps emitted         {figures['steps']} (position {rtl.final_position})",
+        f"steps emitted         {figures['steps']} (POSITION read back: {rtl.position})",
         f"move time             {figures['move_time_s'] * 1e3:.3f} ms "
         f"(ideal {figures['ideal_move_time_s'] * 1e3:.3f} ms)",
         f"peak speed            {figures['peak_speed_rad_s']:.3f} rad/s "
@@ -99,6 +110,7 @@ def main(argv: list[str] | None = None) -> int:
         f"{figures['max_deviation_c0']:.4f} c0 at pulse {figures['max_deviation_pulse']} "
         f"(c0 = {figures['c0_slow_ticks']:.0f} ticks)",
         f"RTL edges == model    {figures['rtl_equals_model']}",
+        f"bus, program to DONE  {figures['start_to_done_s'] * 1e3:.3f} ms (register writes, move, interrupt, status)",
     ]
     (out / "report.txt").write_text("\n".join(lines) + "\n")
     (out / "report.json").write_text(json.dumps(figures, indent=2) + "\n")
@@ -111,9 +123,12 @@ def main(argv: list[str] | None = None) -> int:
         png = "(matplotlib missing: no plot)"
     print("\n".join("  " + line for line in lines[2:]))
     print(
-        f"  waveform   {waves}\n  json       {out / 'move.json'}\n  report     {out / 'report.txt'}\n  plot       {png}"
+        f"  waveform   {waves}\n  layout     {gtkw}  (gtkwave {gtkw}, or make waves)\n"
+        f"  plot       {png}\n  report     {out / 'report.txt'}\n  json       {out / 'move.json'}"
     )
-    return 0 if figures["rtl_equals_model"] else 1
+    if missing:
+        print(f"  the waveform layout names signals the RTL does not have: {missing}", file=sys.stderr)
+    return 0 if figures["rtl_equals_model"] and not missing else 1
 
 
 if __name__ == "__main__":

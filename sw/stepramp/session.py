@@ -30,8 +30,9 @@ from stepramp.hdl import run_cocotb
 from stepramp.plan import Plan
 from stepramp.stepper import STEP_LATENCY
 
-#: Default physical setting: the AVR446 demo's motor (200 steps/rev, half-stepped: 400 steps/rev) on a 1 MHz clock.
-DEFAULT_CONFIG: dict[str, Any] = {"fclk": 1e6, "spr": 400.0, "prescale": 1, "mode": "half", "dir_setup": 2}
+#: Default setting: the AVR446 demo's motor (200 steps/rev, half-stepped: 400 steps/rev) with the windings driven in
+#: half steps, on a 250 kHz core clock (the clock's period sets the waveform's time axis).
+DEFAULT_CONFIG: dict[str, Any] = {"fclk": 250e3, "spr": 400.0, "prescale": 1, "mode": "half", "dir_setup": 2}
 
 
 @dataclass(frozen=True)
@@ -68,6 +69,7 @@ class RtlSession:
         self.timeout_s = timeout_s
         self.failure: BaseException | None = None
         self.simulations = 0  # how many simulator runs this session started (one)
+        self.end_s = 0.0  # simulated time at the end of the last move
         self._thread: threading.Thread | None = None
         self._conn: socket.socket | None = None
         self._buffer = b""
@@ -150,6 +152,7 @@ class RtlSession:
             raise ValueError(answer["value_error"])
         if "core_error" in answer:
             raise StepRampError(answer["core_error"])
+        self.end_s = answer["end_s"]
         return MoveResult(
             Plan(**answer["plan"]), answer["edges"], answer["position"], answer["start_s"], answer["end_s"]
         )

@@ -20,7 +20,7 @@ import tempfile
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Protocol, TextIO
+from typing import TYPE_CHECKING, Any, Protocol, TextIO
 
 from stepramp.model import edges as model_edges
 from stepramp.plan import MIN_INTERVAL_CLKS, Plan, plan_move
@@ -31,7 +31,7 @@ if TYPE_CHECKING:
 #: The shell's motor and clock (stepramp.session's defaults): a 200-step motor half-stepped (400 steps/rev), the
 #: core at 250 kHz with PRESCALE 1 (4 us ticks). An FPGA clocked at f with PRESCALE f / 250 kHz emits the same pulses;
 #: the low simulated clock keeps each move to a few seconds of simulation.
-SHELL_CONFIG = {"fclk": 250e3, "spr": 400.0, "prescale": 1}
+SHELL_CONFIG: dict[str, Any] = {"fclk": 250e3, "spr": 400.0, "prescale": 1}
 
 #: AVR446's ranges (the speed's upper bound is this core's limit at the shell's clock, see speed_limit).
 ACCEL_RANGE = (71, 32000)
@@ -241,6 +241,11 @@ def main(model: bool = False, waves: Path | None = None, build: Path | None = No
         except SessionError as exc:
             print(f"\nstepramp shell: {exc}", file=sys.stderr)
             return 1
-    if waves is not None:
+    if waves is not None and waves.suffix == ".ghw":  # the layout is written for GHW's facility names
+        from stepramp.gtkw import write_gtkw
+
+        gtkw = write_gtkw(waves.with_suffix(".gtkw"), waves, duration_s=session.end_s * 1.02 or None)
+        print(f"stepramp shell: the session's waveform is {waves}; open it with  gtkwave {gtkw}", file=sys.stderr)
+    elif waves is not None:
         print(f"stepramp shell: the session's waveform is {waves}", file=sys.stderr)
     return 0
