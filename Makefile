@@ -12,12 +12,13 @@ VHDL  := $(wildcard hdl/*.vhd)
 BACKEND = GHDL_BACKEND=$${GHDL_BACKEND:-$$(test -x /usr/bin/ghdl-llvm && echo llvm || echo mcode)}
 
 .DEFAULT_GOAL := test
-.PHONY: setup test lint synth-check synth demo waves clean help
+.PHONY: setup test lint synth-check synth demo shell waves clean help
 
 help:
 	@echo "make test         lint, synthesis check and the whole regression (pytest -n $(JOBS))"
 	@echo "make demo         simulate the AVR446 demo move on the RTL, write build/demo/"
-	@echo "make waves        open the demo's waveform (GTKWave or Surfer if installed; else print the command)"
+	@echo "make waves        open the demo's waveform laid out (GTKWave; else Surfer; else print the command)"
+	@echo "make shell        the AVR446 demo's command shell on the simulated core (type ? for help)"
 	@echo "make lint         ruff check, ruff format --check, vsg"
 	@echo "make synth-check  every RTL file under --std=93c and --std=08, ghdl synth of each top, no latch"
 	@echo "make synth        size and fmax: yosys iCE40 / xc7, nextpnr HX8K / UP5K -> build/synth/report.json"
@@ -44,12 +45,16 @@ synth:
 demo: setup
 	$(BACKEND) $(PY) -m stepramp.demo --out build/demo
 
+shell: setup
+	$(BACKEND) $(VENV)/bin/stepramp shell
+
 WAVE := build/demo/stepramp_demo.ghw
+GTKW := build/demo/stepramp_demo.gtkw
 waves:
-	@test -f $(WAVE) || $(MAKE) demo
-	@if command -v gtkwave >/dev/null 2>&1; then gtkwave $(WAVE); \
+	@test -f $(GTKW) || $(MAKE) demo
+	@if command -v gtkwave >/dev/null 2>&1; then gtkwave $(GTKW); \
 	elif command -v surfer >/dev/null 2>&1; then surfer $(WAVE); \
-	else echo "no viewer here: open it with  gtkwave $(WAVE)  or  surfer $(WAVE)"; fi
+	else echo "no viewer here: open the laid-out view with  gtkwave $(GTKW)  (or the raw waveform: surfer $(WAVE))"; fi
 
 clean:
 	rm -rf build .pytest_cache

@@ -1,0 +1,66 @@
+# SPDX-License-Identifier: MIT
+"""`stepramp shell` on the RTL: a scripted session through the command line (the issue's example), and a session
+in-process whose every move is checked pulse for pulse against the bit-exact model, all in one simulation."""
+
+from __future__ import annotations
+
+import io
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+from stepramp.model import edges as model_edges
+from stepramp.plan import plan_move
+from stepramp.session import RtlSession
+from stepramp.shell import SHELL_CONFIG, RtlBackend, Shell
+from tbutil import build_dir
+
+BIN = Path(sys.executable).parent / "stepramp"
+INFO = re.compile(r"^Motor pos: (-?\d+)   a:(\d+) d:(\d+) s:(\d+) m:(-?\d+)$")
+
+
+def positions(text: str) -> list[int]:
+    return [int(m.group(1)) for m in map(INFO.match, text.splitlines()) if m]
+
+
+def test_cli_session_from_stdin(tmp_path: Path) -> None:
+    """printf 'a 4000\\nm 400\\n\\n' | stepramp shell: two moves of 400 steps, positions read back from the core."""
+    waves = tmp_path / "session.ghw"
+    run = subprocess.run(
+        [BIN, "shell", "--waves", str(waves), "--build", str(build_dir("shell_cli"))],
+        input="a 4000\nm 400\n\n",
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+    )
+    assert run.returncode == 0, run.stderr[-3000:]
+    assert positions(run.stdout) == [0, 0, 400, 800]
+    assert run.stdout.count("Running... OK") == 2
+    assert "Motor pos: 800   a:4000 d:4000 s:2000 m:400" in run.stdout.splitlines()
+    assert waves.stat().st_size > 0
+    assert waves.with_suffix(".gtkw").read_text().count("top.stepramp_plb.") > 20
+
+
+def test_session_moves_equal_the_model() -> None:
+    script = "m -60\nmove 150 3000 1200 3500\nbogus\ns 99999\n\nd 71\nm 3\n"
+    out = io.StringIO()
+    with RtlSession(build_dir("shell_session")) as session:
+        backend = RtlBackend(session)
+        Shell(backend, out, **SHELL_CONFIG).run(io.StringIO(script))
+    lines = out.getvalue().splitlines()
+    assert session.simulations == 1
+    # -60, +150, bad command, bad speed, repeat (+150), d 71, +3
+    assert positions(out.getvalue()) == [0, -60, 90, 90, 90, 240, 240, 243]
+    assert [line for line in lines if line.startswith("error:")] == [
+        "error: unknown command 'bogus'",
+        "error: speed 99999 is out of range 12 - 6135",
+    ]
+    expected = [(-60, 40.0, 40.0, 20.0), (150, 30.0, 12.0, 35.0), (150, 30.0, 12.0, 35.0), (3, 30.0, 0.71, 35.0)]
+    assert len(backend.outcomes) == len(expected)
+    for outcome, args in zip(backend.outcomes, expected, strict=True):
+        plan = plan_move(*args, **SHELL_CONFIG)
+        assert outcome.plan == plan
+        assert outcome.edges == model_edges(plan), args
+        assert len(outcome.edges) == abs(args[0])
