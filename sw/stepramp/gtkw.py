@@ -76,7 +76,7 @@ LAYOUT: list[tuple[str, list[Trace]]] = [
         "Current delay (ticks between steps)",
         [
             Trace(_ENGINE + "cur_delay", 32, "dec", "cur_delay"),
-            Trace(_ENGINE + "cur_delay", 32, "analog", "cur_delay (analog)", rows=8),
+            Trace(_ENGINE + "cur_delay", 32, "analog", "cur_delay (analog)", rows=6),
         ],
     ),
     (
@@ -101,7 +101,7 @@ def signal_paths(layout: list[tuple[str, list[Trace]]] = LAYOUT) -> list[tuple[s
 
 
 def zoom_for(duration_s: float) -> float:
-    """GTKWave's zoom that shows duration_s across the wave pane of a [size] 1500 900 window.
+    """GTKWave's zoom that shows duration_s across the wave pane of a [size] 1500 1000 window.
 
     The visible span is 2^-zoom times a constant; measured with GTKWave 3.3.118 on a GHW file (femtoseconds):
     Zoom Full on a 795 ms dump gives -47.42, so the constant is 4.2 fs.
@@ -131,20 +131,20 @@ def write_gtkw(
         f'[dumpfile] "{dumpfile.resolve()}"',
         f'[savefile] "{path.resolve()}"',
         "[timestart] 0",
-        "[size] 1500 900",
+        "[size] 1500 1000",
         "[pos] -1 -1",
     ]
     if duration_s is not None:
         marker = round((marker_s or 0.0) * 1e15)
         lines.append(f"*{zoom_for(duration_s):.6f} {marker} " + " ".join(["-1"] * 26))
-    lines += ["[sst_width] 230", "[signals_width] 280", "[sst_expanded] 1", "[sst_vpaned_height] 250"]
+    lines += ["[sst_width] 180", "[signals_width] 330", "[sst_expanded] 1", "[sst_vpaned_height] 250"]
     for group, traces in layout:
         lines += [f"@{_GRP_BEGIN | _BLANK:x}", f"-{group}"]
         for t in traces:
             lines.append(f"@{FORMATS[t.fmt]:x}")
             name = f"top.{top}.{t.path}"
             if t.width == 1:
-                lines.append(name)
+                lines.append(f"+{{{t.label}}} {name}" if t.label else name)
             else:
                 bits = " ".join(f"{name}[{i}]" for i in reversed(range(t.width)))
                 lines.append(f"#{{{t.label or t.path}}} {bits}")
