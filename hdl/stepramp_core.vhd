@@ -40,46 +40,48 @@ end entity stepramp_core;
 
 architecture rtl of stepramp_core is
 
-  signal start_req  : std_logic;
-  signal start      : std_logic;
-  signal start_dir  : std_logic;
-  signal gate_busy  : std_logic;
-  signal busy_any   : std_logic;
-  signal dir_fault  : std_logic;
-  signal eng_step   : std_logic;
-  signal enable_cfg : std_logic;
-  signal mode       : std_logic_vector(2 downto 0);
-  signal ustep_log2 : std_logic_vector(2 downto 0);
-  signal step_width : std_logic_vector(15 downto 0);
-  signal dir_setup  : std_logic_vector(15 downto 0);
-  signal dir_hold   : std_logic_vector(15 downto 0);
-  signal pwm_period : std_logic_vector(15 downto 0);
-  signal soft_stop  : std_logic;
-  signal hard_stop  : std_logic;
-  signal steps      : std_logic_vector(30 downto 0);
-  signal direction  : std_logic;
-  signal prescale   : std_logic_vector(15 downto 0);
-  signal c_first    : std_logic_vector(47 downto 0);
-  signal c_last     : std_logic_vector(47 downto 0);
-  signal sa         : std_logic_vector(30 downto 0);
-  signal c_sa       : std_logic_vector(47 downto 0);
-  signal sd         : std_logic_vector(30 downto 0);
-  signal c_sd       : std_logic_vector(47 downto 0);
-  signal accel_seed : std_logic_vector(47 downto 0);
-  signal decel_seed : std_logic_vector(47 downto 0);
-  signal cruise     : std_logic_vector(63 downto 0);
-  signal stop_ratio : std_logic_vector(31 downto 0);
-  signal pos_load   : std_logic;
-  signal pos_value  : std_logic_vector(31 downto 0);
-  signal busy       : std_logic;
-  signal done       : std_logic;
-  signal error      : std_logic;
-  signal err_code   : std_logic_vector(3 downto 0);
-  signal state      : std_logic_vector(1 downto 0);
-  signal dir_i      : std_logic;
-  signal position   : std_logic_vector(31 downto 0);
-  signal step_count : std_logic_vector(30 downto 0);
-  signal cur_delay  : std_logic_vector(31 downto 0);
+  signal start_req     : std_logic;
+  signal start         : std_logic;
+  signal start_dir     : std_logic;
+  signal gate_busy     : std_logic;
+  signal busy_any      : std_logic;
+  signal dir_fault     : std_logic;
+  signal eng_step      : std_logic;
+  signal enable_cfg    : std_logic;
+  signal mode          : std_logic_vector(2 downto 0);
+  signal ustep_log2    : std_logic_vector(2 downto 0);
+  signal step_width    : std_logic_vector(15 downto 0);
+  signal dir_setup     : std_logic_vector(15 downto 0);
+  signal dir_hold      : std_logic_vector(15 downto 0);
+  signal pwm_period    : std_logic_vector(15 downto 0);
+  signal soft_stop     : std_logic;
+  signal hard_stop     : std_logic;
+  signal gate_stop     : std_logic;
+  signal eng_hard_stop : std_logic;
+  signal steps         : std_logic_vector(30 downto 0);
+  signal direction     : std_logic;
+  signal prescale      : std_logic_vector(15 downto 0);
+  signal c_first       : std_logic_vector(47 downto 0);
+  signal c_last        : std_logic_vector(47 downto 0);
+  signal sa            : std_logic_vector(30 downto 0);
+  signal c_sa          : std_logic_vector(47 downto 0);
+  signal sd            : std_logic_vector(30 downto 0);
+  signal c_sd          : std_logic_vector(47 downto 0);
+  signal accel_seed    : std_logic_vector(47 downto 0);
+  signal decel_seed    : std_logic_vector(47 downto 0);
+  signal cruise        : std_logic_vector(63 downto 0);
+  signal stop_ratio    : std_logic_vector(31 downto 0);
+  signal pos_load      : std_logic;
+  signal pos_value     : std_logic_vector(31 downto 0);
+  signal busy          : std_logic;
+  signal done          : std_logic;
+  signal error         : std_logic;
+  signal err_code      : std_logic_vector(3 downto 0);
+  signal state         : std_logic_vector(1 downto 0);
+  signal dir_i         : std_logic;
+  signal position      : std_logic_vector(31 downto 0);
+  signal step_count    : std_logic_vector(30 downto 0);
+  signal cur_delay     : std_logic_vector(31 downto 0);
 
 begin
 
@@ -136,6 +138,9 @@ begin
   -- STATUS.BUSY covers a start held back by the stepping logic for DIR setup/hold.
   busy_any <= busy or gate_busy;
 
+  -- A hard stop that cancels a start held by the stepping logic reaches the engine with that start (done, no pulse).
+  eng_hard_stop <= hard_stop or gate_stop;
+
   stepper_inst : entity work.stepramp_stepper
     generic map (
       G_MICROSTEPS => G_MICROSTEPS
@@ -152,7 +157,9 @@ begin
       pwm_period => pwm_period,
       start_req  => start_req,
       new_dir    => direction,
+      hard_stop  => hard_stop,
       start_out  => start,
+      stop_out   => gate_stop,
       start_dir  => start_dir,
       gate_busy  => gate_busy,
       eng_step   => eng_step,
@@ -175,7 +182,7 @@ begin
       rst        => rst,
       start      => start,
       soft_stop  => soft_stop,
-      hard_stop  => hard_stop,
+      hard_stop  => eng_hard_stop,
       steps      => steps,
       direction  => start_dir,
       prescale   => prescale,

@@ -15,6 +15,10 @@
 --       S + 3 and step_o rises at S + 4, so the first STEP rising edge comes exactly max(dir_setup, 5) clocks
 --       after the DIR change.
 --     A start_req while the gate is busy (gate_busy = '1') or while eng_busy = '1' is dropped.
+--   * Hard stop: hard_stop sampled at edge H while the gate holds a start (waiting for DIR hold or setup), or
+--     together with the start_req it accepts: no DIR change from H on, and start_out and stop_out are both high
+--     after edge H, so that the engine accepts the move and ends it at once (done, no pulse). The core ORs stop_out
+--     into the engine's hard_stop. (A hard stop in the cycle start_out is high reaches the engine directly.)
 --   * Windings: modes 1 .. 3 follow position at the edge where step_o rises (position is already updated in the
 --     cycle eng_step is high). Mode 4 (PWM): the duty is recomputed continuously by a serial multiplier (rounds of
 --     G_DUTY_BITS + 3 clocks); the pins show the duty of a new position from edge E + G_DUTY_BITS + 4 to
@@ -42,7 +46,9 @@ entity stepramp_stepper is
     pwm_period : in    std_logic_vector(15 downto 0);
     start_req  : in    std_logic;
     new_dir    : in    std_logic;
+    hard_stop  : in    std_logic;
     start_out  : out   std_logic;
+    stop_out   : out   std_logic;
     start_dir  : out   std_logic;
     gate_busy  : out   std_logic;
     eng_step   : in    std_logic;
@@ -145,6 +151,7 @@ architecture rtl of stepramp_stepper is
   signal dir_r       : std_logic;
   signal pend_dir    : std_logic;
   signal start_r     : std_logic;
+  signal stop_r      : std_logic;
   signal gate_busy_r : std_logic;
   signal fault_r     : std_logic;
   signal setup_cnt   : unsigned(15 downto 0);
@@ -264,18 +271,24 @@ begin
         dir_r       <= '0';
         pend_dir    <= '0';
         start_r     <= '0';
+        stop_r      <= '0';
         gate_busy_r <= '0';
         fault_r     <= '0';
         setup_cnt   <= (others => '0');
       else
         start_r <= '0';
+        stop_r  <= '0';
         v_next  := gstate;
 
         case gstate is
 
           when C_GS_HOLD =>
 
-            if (hold_ok = '1' and eng_step = '0') then
+            if (hard_stop = '1') then
+              start_r <= '1';
+              stop_r  <= '1';
+              v_next  := C_GS_FIRED;
+            elsif (hold_ok = '1' and eng_step = '0') then
               dir_r     <= pend_dir;
               setup_cnt <= setup_wait;
               v_next    := C_GS_SETUP;
@@ -283,7 +296,11 @@ begin
 
           when C_GS_SETUP =>
 
-            if (setup_cnt = 0) then
+            if (hard_stop = '1') then
+              start_r <= '1';
+              stop_r  <= '1';
+              v_next  := C_GS_FIRED;
+            elsif (setup_cnt = 0) then
               start_r <= '1';
               v_next  := C_GS_FIRED;
             else
@@ -299,7 +316,11 @@ begin
           when others =>
 
             if (start_req = '1' and eng_busy = '0') then
-              if (new_dir = dir_r) then
+              if (hard_stop = '1') then
+                start_r <= '1';
+                stop_r  <= '1';
+                v_next  := C_GS_FIRED;
+              elsif (new_dir = dir_r) then
                 start_r <= '1';
                 v_next  := C_GS_FIRED;
               else
@@ -514,6 +535,7 @@ begin
   step_o    <= step_r;
   dir_o     <= dir_r;
   start_out <= start_r;
+  stop_out  <= stop_r;
   start_dir <= dir_r;
   gate_busy <= gate_busy_r;
   dir_fault <= fault_r;

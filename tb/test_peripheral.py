@@ -348,6 +348,50 @@ async def soft_and_hard_stop(dut) -> None:
     tb.finish()
 
 
+def _ctrl_bits(*fields: str) -> int:
+    ctrl = REGISTERS_BY_NAME["CTRL"]
+    return sum(1 << ctrl.field(f).lsb for f in fields)
+
+
+@cocotb.test()
+async def hard_stop_cancels_a_held_start(dut) -> None:
+    """HARD_STOP while the stepping logic holds a START for DIR setup, or in the same CTRL write as START: DONE
+    without error, no STEP pulse, POSITION unchanged; the next move runs as the model says."""
+    tb = make_tb(dut)
+    await tb.reset()
+    await tb.configure(Outputs(mode="half", step_width=4, dir_setup=3000, dir_hold=10), enable=True)
+    drv = tb.driver()
+    backwards = plan_move(**{**PROFILES_BY_NAME["trap_basic"].args(), "steps": -40})
+    assert backwards.direction == 1 and int(dut.dir.value) == 0
+    # 1: a direction change: DIR changes, then the start waits 3000 clocks for DIR setup; stop it meanwhile.
+    await drv.program(backwards)
+    n0 = len(tb.step_edges)
+    await drv.start()
+    await ClockCycles(tb.clk, 200)
+    assert (await drv.status()).busy, "the held start shows as BUSY"
+    await drv.hard_stop()
+    status = await drv.wait_done(idle=lambda: tb.irq_or(500))
+    assert not status.error and not status.busy
+    await ClockCycles(tb.clk, 4000)
+    assert len(tb.step_edges) == n0, "a STEP pulse after the hard stop cancelled the held start"
+    assert await drv.position() == 0
+    assert int(dut.dir.value) == 1, "DIR had changed before the stop; it stays"
+    # 2: START and HARD_STOP in one write: the stop wins.
+    forwards = valid_plan()
+    await drv.program(forwards)
+    await tb.bus.write(offset("CTRL"), _ctrl_bits("START", "HARD_STOP"), strobe=0x1)
+    status = await drv.wait_done(idle=lambda: tb.irq_or(500))
+    assert not status.error
+    await ClockCycles(tb.clk, 4000)
+    assert len(tb.step_edges) == n0 and await drv.position() == 0
+    # 3: the core goes on: the backwards move, edge for edge (DIR is already set: no setup wait).
+    await tb.configure(Outputs(mode="half", step_width=4, dir_setup=20, dir_hold=10), enable=True)
+    edges, status = await tb.run_plan(drv, backwards)
+    assert edges == model_edges(backwards) and not status.error
+    assert await drv.position() == -40
+    tb.finish()
+
+
 @cocotb.test()
 async def stepping_configuration(dut) -> None:
     """ENABLE follows CTRL.ENABLE and gates the windings; DRIVE .. PWM_PERIOD are written only while stopped."""
@@ -420,6 +464,7 @@ REGISTER_TESTS = [
     "start_while_busy_is_ignored",
     "stepping_configuration",
     "soft_and_hard_stop",
+    "hard_stop_cancels_a_held_start",
 ]
 
 

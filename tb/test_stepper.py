@@ -171,6 +171,7 @@ async def setup(dut: Any, cfg: Config, position: int = 0) -> FakeEngine:
     apply(dut, cfg)
     dut.start_req.value = 0
     dut.new_dir.value = 0
+    dut.hard_stop.value = 0
     eng = FakeEngine(dut, position=position).start()
     _CLOCK_T0_PS[0] = round(get_sim_time("ps"))
     await start_clock_and_reset(dut)
@@ -664,6 +665,65 @@ async def start_dropped_while_busy(dut) -> None:
 
 
 @cocotb.test()
+async def hard_stop_cancels_a_held_start(dut) -> None:
+    """hard_stop while the gate holds a start (DIR hold, DIR setup) or with the start_req it accepts: start_out and
+    stop_out together after that edge (the engine accepts and ends the move at once), no DIR change from then on."""
+    cfg = Config(mode=sm.MODE_HALF, dir_setup=200, dir_hold=100)
+    eng = await setup(dut, cfg)
+    rec = GateRecorder(dut)
+    stops: list[int] = []
+
+    async def watch_stop() -> None:
+        while True:
+            await RisingEdge(dut.stop_out)
+            await ReadOnly()
+            assert int(dut.start_out.value) == 1, "stop_out without start_out"
+            stops.append(edge_now())
+
+    watcher = cocotb.start_soon(watch_stop())
+
+    async def stop_at(h: int) -> None:
+        await after_edge(h - 1)
+        dut.hard_stop.value = 1
+        await after_edge(h)
+        dut.hard_stop.value = 0
+
+    # A normal move in direction 0 first: stop_out stays low.
+    await run_move(dut, eng, 2, 0)
+    assert stops == []
+    # DIR hold: direction 1 requested right after the last pulse waits for dir_hold; stopped meanwhile.
+    n_starts = len(rec.start_edges)
+    q = await request_start(dut, 1)
+    assert int(dut.gate_busy.value) == 1
+    await stop_at(q + 20)
+    await ClockCycles(dut.clk, 400)
+    assert stops == [q + 20] and rec.start_edges[n_starts:] == [q + 20], (stops, rec.start_edges)
+    assert rec.dir_edges == [] and int(dut.dir_o.value) == 0, "DIR changed after a stop during its hold"
+    assert int(dut.gate_busy.value) == 0
+    # DIR setup: DIR changes at once (no pulse for a while), the start waits 195 clocks; stopped meanwhile.
+    q = await request_start(dut, 1)
+    await stop_at(q + 50)
+    await ClockCycles(dut.clk, 400)
+    assert stops[-1] == q + 50 and rec.start_edges[-1] == q + 50
+    assert rec.dir_edges == [q + 1] and int(dut.dir_o.value) == 1
+    # start_req and hard_stop at one edge, with a direction change: no DIR change, start_out with stop_out.
+    await FallingEdge(dut.clk)
+    dut.start_req.value = 1
+    dut.new_dir.value = 0
+    dut.hard_stop.value = 1
+    q = edge_now() + 1
+    await after_edge(q)
+    dut.start_req.value = 0
+    dut.hard_stop.value = 0
+    await ClockCycles(dut.clk, 400)
+    assert stops[-1] == q and rec.start_edges[-1] == q
+    assert len(rec.dir_edges) == 1 and int(dut.dir_o.value) == 1
+    assert len(eng.step_edges) == 2, "only the first move pulsed"
+    watcher.cancel()
+    rec.stop()
+
+
+@cocotb.test()
 async def dir_fault_flags_engine_direction(dut) -> None:
     """An engine pulse whose direction differs from DIR (engine started around the gate) sets dir_fault until the
     next accepted start_req."""
@@ -789,6 +849,7 @@ ALL_TESTS: Sequence[str] = (
     "step_overlap_restarts_width",
     "start_gate_timing",
     "start_dropped_while_busy",
+    "hard_stop_cancels_a_held_start",
     "dir_fault_flags_engine_direction",
     "monitors_fail_on_wrong_settings",
 )

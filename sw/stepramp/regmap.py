@@ -100,7 +100,9 @@ REGISTERS: tuple[Register, ...] = (
         (
             Field("START", 0, 1, WS, 0, "start the move programmed in STEPS .. STOP_RATIO (ignored while busy)"),
             Field("SOFT_STOP", 1, 1, WS, 0, "decelerate at the programmed decel to zero, then done"),
-            Field("HARD_STOP", 2, 1, WS, 0, "no further step pulse from the next clock on, then done"),
+            Field(
+                "HARD_STOP", 2, 1, WS, 0, "no step pulse from the next clock on, then done; also cancels a held START"
+            ),
             Field("IRQ_DONE_EN", 8, 1, RW, 0, "irq follows STATUS.DONE"),
             Field("IRQ_ERROR_EN", 9, 1, RW, 0, "irq follows STATUS.ERROR"),
             Field("ENABLE", 16, 1, RW, 0, "ENABLE output to the motor driver; '0' also switches the windings off"),
