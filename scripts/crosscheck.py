@@ -68,8 +68,8 @@ def main() -> int:
         alpha = 2 * math.pi / move["spr"]
         c0_slow = move["fclk"] / move["prescale"] * math.sqrt(2 * alpha / min(move["accel"], move["decel"]))
         err = max((abs(t - i) for t, i in zip(ticks, ideal, strict=True)), default=0.0)
-        assert err <= 0.03 * c0_slow + 2, f"bound exceeded: {move}"
-        worst_use = max(worst_use, err / (0.03 * c0_slow + 2))
+        assert err <= 0.008 * c0_slow + 2, f"bound exceeded: {move}"
+        worst_use = max(worst_use, err / (0.008 * c0_slow + 2))
         worst_ticks = max(worst_ticks, err)
         if c0_slow >= 1000:  # where the 2-tick allowance does not dominate
             worst_c0 = max(worst_c0, err / c0_slow)

@@ -302,12 +302,31 @@ stepramp_err_t stepramp_plan_move_info(stepramp_plan_t *plan, stepramp_info_t *i
     inf.cd0 = ramp.k_d;
     inf.m0 = m0;
     inf.min_interval = min_interval;
-    inf.t_first = ramp_interval(&ramp, 1);
-    inf.t_last = ramp_interval(&ramp, length);
-    inf.t_sa = ramp_interval(&ramp, sa);
-    inf.t_sd = ramp_interval(&ramp, sd);
-    inf.t_accel_seed = stepramp_seed_factor * ramp.k_a;
-    inf.t_decel_seed = (m0 >= 1) ? stepramp_seed_factor * ramp.k_d * stepramp_decel_product(m0) : 0.0;
+    /* plan.register_doubles: exact intervals and seeds with the recurrences' time deficits put back (half into
+     * each seed, the accel ramp's other half into interval 1), the same doubles in the same order */
+    {
+        double seed_a = stepramp_seed_factor * ramp.k_a;
+        double seed_d = (m0 >= 1) ? stepramp_seed_factor * ramp.k_d * stepramp_decel_product(m0) : 0.0;
+        double first_extra = 0.0;
+        int64_t n_a = sa - 2;
+        if (n_a >= 1) {
+            double unit_a = 2.0 * ((double)n_a + 0.75) * stepramp_decel_product(n_a) - 1.5;
+            double half_a = (ramp.k_a * (sqrt((double)n_a + 1.0) - 1.0) - seed_a * unit_a) / 2.0;
+            first_extra = half_a;
+            seed_a = seed_a + half_a / unit_a;
+        }
+        if (m0 >= 1) {
+            double unit_d = 2.0 * ((double)m0 + 0.75) - 1.5 / stepramp_decel_product(m0);
+            double half_d = (ramp.k_d * (sqrt((double)m0 + 1.0) - 1.0) - seed_d * unit_d) / 2.0;
+            seed_d = seed_d + half_d / unit_d;
+        }
+        inf.t_first = ramp_interval(&ramp, 1) + first_extra;
+        inf.t_last = ramp_interval(&ramp, length);
+        inf.t_sa = ramp_interval(&ramp, sa);
+        inf.t_sd = ramp_interval(&ramp, sd);
+        inf.t_accel_seed = seed_a;
+        inf.t_decel_seed = seed_d;
+    }
     inf.t_cruise = f_tick / v;
 
     /* Plan's fields in the order Python evaluates them (the first overflow wins; all are EOVERFLOW) */

@@ -39,7 +39,7 @@ typedef struct {
     uint32_t steps;      /**< N = |steps| (0 .. 2^31-1) */
     uint32_t direction;  /**< 0: position counts up, 1: down (steps < 0) */
     uint32_t prescale;   /**< base timer period in clocks (1 .. 65535) */
-    uint64_t c_first;    /**< exact interval 1, Q32.16 */
+    uint64_t c_first;    /**< exact interval 1 plus half the accel recurrence deficit, Q32.16 */
     uint64_t c_last;     /**< exact interval L = N-1, Q32.16 */
     uint32_t sa;         /**< accel-side boundary interval index, floor(x_a)+1 clamped to [1, L] */
     uint64_t c_sa;       /**< exact interval sa, Q32.16 */
@@ -71,12 +71,12 @@ typedef struct {
     int64_t m0;          /**< decel recurrence start index L - sd - 1 (0 for N <= 1) */
     double min_interval; /**< shortest interval f_tick / v_peak, ticks (inf for N <= 1) */
     /* C extras: the register values before rounding, in ticks (0 where the register is 0) */
-    double t_first;      /**< exact interval 1 */
+    double t_first;      /**< exact interval 1, plus half the accel recurrence's deficit */
     double t_last;       /**< exact interval L */
     double t_sa;         /**< exact interval sa */
     double t_sd;         /**< exact interval sd */
-    double t_accel_seed; /**< SEED_FACTOR * c0 */
-    double t_decel_seed; /**< SEED_FACTOR * cd0 * decel_product(m0), 0 when m0 < 1 */
+    double t_accel_seed; /**< SEED_FACTOR * c0, plus half the accel deficit spread over A_1 .. A_(sa-2) */
+    double t_decel_seed; /**< SEED_FACTOR * cd0 * decel_product(m0) plus half the decel deficit; 0 when m0 < 1 */
     double t_cruise;     /**< f_tick / v */
 } stepramp_info_t;
 

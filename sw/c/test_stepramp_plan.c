@@ -78,6 +78,22 @@ static double asymptotic_product(double m)
     return tgamma(1.25) / tgamma(0.75) / sqrt(m) * (1.0 - 0.25 / m);
 }
 
+/* The recurrence deficit by direct summation (not the closed form of stepramp_plan.c): the ideal time of a ramp's
+ * intervals 2 .. n+1 from rest, c0 (sqrt(n+1) - 1), less the continuous recurrence values seed prod(4k-1)/(4k+1)
+ * summed one by one. *unit gets the sum for seed 1. */
+static double deficit_by_sum(double c0, double seed, int64_t n, double *unit)
+{
+    double p = 1.0;
+    double sum = 0.0;
+    int64_t k;
+    for (k = 1; k <= n; k++) {
+        p *= (4.0 * (double)k - 1.0) / (4.0 * (double)k + 1.0);
+        sum += p;
+    }
+    *unit = sum;
+    return c0 * (sqrt((double)n + 1.0) - 1.0) - seed * sum;
+}
+
 static void test_long_symmetric_trapezoid(void)
 {
     /* 200 steps/rev, 1 MHz: a = d = 3183 steps/s^2, v = 1592 steps/s, n_a = n_d = 397.9 steps, L = 99999 */
@@ -89,15 +105,24 @@ static void test_long_symmetric_trapezoid(void)
     stepramp_plan_t plan;
     int64_t m0;
 
+    double unit;
+    double deficit;
+    double seed;
+
     CHECK(stepramp_plan_move(&plan, steps, accel, accel, speed, spr, fclk, 1) == STEPRAMP_OK);
     CHECK(plan.steps == 100000 && plan.direction == 0 && plan.prescale == 1);
-    /* interval 1 of a long ramp is exactly c0 = f_tick sqrt(2 / a) (AVR446's c0, without its 0.676 factor) */
-    CHECK(near((double)plan.c_first, p.c0 * Q16, 1.0));
-    CHECK(plan.c_last == plan.c_first); /* mirror image */
     CHECK(plan.sa == (uint32_t)floor(n_a) + 1 && plan.sa == 398);
     CHECK(plan.sd == (uint32_t)floor(x_d) + 1);
+    /* the accel recurrence (intervals 2 .. sa-1) runs 0.01397 c0 short of the ideal ramp; half of that goes into
+     * interval 1, whose ideal value is c0 = f_tick sqrt(2 / a) (AVR446's c0, without its 0.676 factor), and half
+     * into the seed 0.676 c0, spread over the recurrence values */
+    seed = 0.6759782400672847 * p.c0;
+    deficit = deficit_by_sum(p.c0, seed, (int64_t)plan.sa - 2, &unit);
+    CHECK(rel_near_d(deficit / p.c0, 0.01397, 2e-3));
+    CHECK(near((double)plan.c_first, (p.c0 + deficit / 2.0) * Q16, 1.0));
+    CHECK(near((double)plan.c_last, p.c0 * Q16, 1.0)); /* interval L stays the ideal one, cd0 = c0 */
     CHECK(near((double)plan.cruise, p.f_tick / p.v * Q32, 1.0));
-    CHECK(near((double)plan.accel_seed, 0.6759782400672847 * p.c0 * Q16, 1.0));
+    CHECK(near((double)plan.accel_seed, (seed + deficit / 2.0 / unit) * Q16, 1.0));
     /* interval sa: the end of the ramp from sa-1 to n_a, then cruise from n_a to sa */
     CHECK(rel_near((double)plan.c_sa,
                    (p.c0 * (sqrt(n_a) - sqrt((double)plan.sa - 1.0)) + ((double)plan.sa - n_a) * p.f_tick / p.v) * Q16,
@@ -109,14 +134,18 @@ static void test_long_symmetric_trapezoid(void)
                        Q16,
                    1e-9));
     /* decel recurrence value at m0 = L - sd - 1, from the Gamma-function form of the product */
+    /* plus half the decel recurrence's deficit (the same one by symmetry), spread over D_m0 .. D_1 */
     m0 = (int64_t)p.length - plan.sd - 1;
     CHECK(m0 == 396);
-    CHECK(rel_near((double)plan.decel_seed,
-                   0.6759782400672847 * p.cd0 *
-                       exp(lgamma(m0 + 0.75) - lgamma(m0 + 1.25) + lgamma(1.25) - lgamma(0.75)) * Q16,
-                   1e-11));
-    /* the seeds decay like cd0 / sqrt(m): 0.676 Gamma(5/4)/Gamma(3/4) = 1/2 */
-    CHECK(rel_near((double)plan.decel_seed, 0.5 * p.cd0 / sqrt((double)m0) * Q16, 1e-3));
+    {
+        double prod_m0 = exp(lgamma(m0 + 0.75) - lgamma(m0 + 1.25) + lgamma(1.25) - lgamma(0.75));
+        double d_m0 = 0.6759782400672847 * p.cd0 * prod_m0;
+        double deficit_d = deficit_by_sum(p.cd0, 0.6759782400672847 * p.cd0, m0, &unit);
+        CHECK(rel_near_d(deficit_d, deficit, 1e-12));
+        CHECK(rel_near((double)plan.decel_seed, (d_m0 + deficit_d / 2.0 / (unit / prod_m0)) * Q16, 1e-11));
+        /* the seeds decay like cd0 / sqrt(m): 0.676 Gamma(5/4)/Gamma(3/4) = 1/2 */
+        CHECK(rel_near((double)plan.decel_seed, 0.5 * p.cd0 / sqrt((double)m0) * Q16, 1e-3));
+    }
 }
 
 static void test_asymmetric_trapezoids(void)
@@ -139,12 +168,15 @@ static void test_asymmetric_trapezoids(void)
         CHECK(plan.sa == (uint32_t)floor(n_a) + 1);
         CHECK(plan.sd == (uint32_t)floor(p.length - n_d) + 1);
         CHECK(plan.sa < plan.sd);
-        CHECK(near((double)plan.c_first, p.c0 * Q16, 1.0));
+        double unit;
+        double deficit = deficit_by_sum(p.c0, 0.6759782400672847 * p.c0, (int64_t)plan.sa - 2, &unit);
+        CHECK(near((double)plan.c_first, (p.c0 + deficit / 2.0) * Q16, 1.0));
         CHECK(near((double)plan.c_last, p.cd0 * Q16, 1.0));
         CHECK(near((double)plan.cruise, p.f_tick / p.v * Q32, 1.0));
-        CHECK(near((double)plan.accel_seed, 0.6759782400672847 * p.c0 * Q16, 1.0));
-        /* ratio of the first intervals: sqrt(decel / accel) */
-        CHECK(rel_near_d((double)plan.c_last / (double)plan.c_first, sqrt(accel / decel), 1e-6));
+        CHECK(near((double)plan.accel_seed, (0.6759782400672847 * p.c0 + deficit / 2.0 / unit) * Q16, 1.0));
+        /* ratio of the first and last ideal intervals: sqrt(decel / accel) */
+        CHECK(rel_near_d((double)plan.c_last / ((double)plan.c_first - deficit / 2.0 * Q16), sqrt(accel / decel),
+                         1e-6));
     }
 }
 
@@ -167,10 +199,22 @@ static void test_triangle(void)
     CHECK(rel_near((double)plan.c_sa, peak_interval * Q16, 1e-9));
     /* the peak interval is at least 1 / v_peak */
     CHECK((double)plan.c_sa >= p.f_tick / sqrt(2.0 * p.a * x_p) * Q16);
-    CHECK(near((double)plan.c_first, p.c0 * Q16, 1.0));
+    /* interval 1: c0 plus half the deficit of the accel recurrence (intervals 2 .. 76); c_last: cd0 */
+    {
+        double unit;
+        double deficit = deficit_by_sum(p.c0, 0.6759782400672847 * p.c0, 75, &unit);
+        CHECK(near((double)plan.c_first, (p.c0 + deficit / 2.0) * Q16, 1.0));
+    }
     CHECK(near((double)plan.c_last, p.cd0 * Q16, 1.0));
-    /* m0 = L - sd - 1 = 24: D_24 = 0.676 cd0 prod_{k=1..24} (4k-1)/(4k+1) */
-    CHECK(near((double)plan.decel_seed, 0.6759782400672847 * p.cd0 * naive_product(24) * Q16, 1.0));
+    /* m0 = L - sd - 1 = 24: D_24 = 0.676 cd0 prod_{k=1..24} (4k-1)/(4k+1), plus half the decel deficit spread over
+     * D_24 .. D_1 */
+    {
+        double unit;
+        double deficit = deficit_by_sum(p.cd0, 0.6759782400672847 * p.cd0, 24, &unit);
+        CHECK(near((double)plan.decel_seed,
+                   (0.6759782400672847 * p.cd0 * naive_product(24) + deficit / 2.0 / (unit / naive_product(24))) * Q16,
+                   1.0));
+    }
     /* cruise is unused in a triangle but still f_tick / v (here below the MIN_INTERVAL limit: not checked) */
     CHECK(near((double)plan.cruise, p.f_tick / p.v * Q32, 1.0));
 }
@@ -184,8 +228,18 @@ static void test_triangle_symmetric_even(void)
     CHECK(plan.sa == 6 && plan.sd == 6);
     /* interval 6 (position 5 -> 6) is all decel: cd0 (sqrt(5) - sqrt(4)) */
     CHECK(rel_near((double)plan.c_sa, p.cd0 * (sqrt(5.0) - 2.0) * Q16, 1e-12));
-    CHECK(plan.c_first == plan.c_last);
-    CHECK(near((double)plan.decel_seed, 0.6759782400672847 * p.cd0 * naive_product(3) * Q16, 1.0));
+    /* mirror image but for the deficits: interval 1 takes half the accel one (intervals 2 .. 5), the decel seed
+     * half the decel one (intervals 7 .. 9, m0 = 3) */
+    {
+        double unit;
+        double deficit_a = deficit_by_sum(p.c0, 0.6759782400672847 * p.c0, 4, &unit);
+        double deficit_d = deficit_by_sum(p.cd0, 0.6759782400672847 * p.cd0, 3, &unit);
+        CHECK(near((double)plan.c_first, (p.cd0 + deficit_a / 2.0) * Q16, 1.0));
+        CHECK(near((double)plan.c_last, p.cd0 * Q16, 1.0));
+        CHECK(near((double)plan.decel_seed,
+                   (0.6759782400672847 * p.cd0 * naive_product(3) + deficit_d / 2.0 / (unit / naive_product(3))) * Q16,
+                   1.0));
+    }
 }
 
 static void test_empty_and_tiny_moves(void)

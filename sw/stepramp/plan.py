@@ -187,6 +187,42 @@ class _Ramp:
         return t
 
 
+def register_doubles(ramp: _Ramp, sa: int, sd: int, m0: int) -> dict[str, float]:
+    """The unrounded values (ticks) of the ramp registers: the exact intervals and the seeds, with the recurrences'
+    time deficits put back (docs/algorithm.md, "Recurrence deficit"). The C driver computes the same doubles.
+
+    The recurrence values are A_j = A_0 P(j) (accel) and D_m = D_m0 P(m) / P(m0) (decel), P = decel_product, and their
+    sums telescope (sum_{j<=n} Gamma(j + 3/4) / Gamma(j + 5/4) = 2 (Gamma(n + 7/4) / Gamma(n + 5/4) - Gamma(7/4) /
+    Gamma(5/4))): A_1 + .. + A_n = A_0 (2 (n + 3/4) P(n) - 3/2). The ideal time of the same intervals is
+    c0 (sqrt(n + 1) - 1). Half of each deficit (about 0.007 c0 on a long ramp) goes into the ramp's seed, spread over
+    its recurrence values; the other half into interval 1 for the accel ramp (c_first) and nowhere for the decel ramp
+    (c_last stays exact), which halves the largest error again. c_sa and c_sd stay exact: a soft stop starts from c_sa.
+    """
+    c0 = ramp.k_a
+    cd0 = ramp.k_d
+    seed_a = SEED_FACTOR * c0
+    seed_d = SEED_FACTOR * cd0 * decel_product(m0) if m0 >= 1 else 0.0
+    first_extra = 0.0
+    n_a = sa - 2  # intervals 2 .. sa-1 take the accel recurrence values A_1 .. A_n
+    if n_a >= 1:
+        unit_a = 2.0 * (n_a + 0.75) * decel_product(n_a) - 1.5  # (A_1 + .. + A_n) / A_0
+        half_a = (c0 * (math.sqrt(n_a + 1.0) - 1.0) - seed_a * unit_a) / 2.0
+        first_extra = half_a
+        seed_a = seed_a + half_a / unit_a
+    if m0 >= 1:  # intervals sd+1 .. L-1 take the decel recurrence values D_m0 .. D_1
+        unit_d = 2.0 * (m0 + 0.75) - 1.5 / decel_product(m0)  # (D_1 + .. + D_m0) / D_m0
+        half_d = (cd0 * (math.sqrt(m0 + 1.0) - 1.0) - seed_d * unit_d) / 2.0
+        seed_d = seed_d + half_d / unit_d
+    return {
+        "t_first": ramp.interval(1) + first_extra,
+        "t_last": ramp.interval(ramp.length),
+        "t_sa": ramp.interval(sa),
+        "t_sd": ramp.interval(sd),
+        "t_accel_seed": seed_a,
+        "t_decel_seed": seed_d,
+    }
+
+
 def _cruise(f_tick: float, v: float) -> int:
     """round(f_tick / v * 2^32): the cruise period in Q32.32, from the same doubles as every other field.
 
@@ -265,18 +301,19 @@ def plan_move_info(
     cd0 = ramp.k_d
     q16 = FRAC_RAMP
     w48 = REG_WIDTHS["c_first"]
+    raw = register_doubles(ramp, sa, sd, m0)
     plan = Plan(
         steps=n,
         direction=direction,
         prescale=prescale,
-        c_first=_to_fixed("c_first", ramp.interval(1), q16, w48),
-        c_last=_to_fixed("c_last", ramp.interval(length), q16, w48),
+        c_first=_to_fixed("c_first", raw["t_first"], q16, w48),
+        c_last=_to_fixed("c_last", raw["t_last"], q16, w48),
         sa=sa,
-        c_sa=_to_fixed("c_sa", ramp.interval(sa), q16, w48),
+        c_sa=_to_fixed("c_sa", raw["t_sa"], q16, w48),
         sd=sd,
-        c_sd=_to_fixed("c_sd", ramp.interval(sd), q16, w48),
-        accel_seed=_to_fixed("accel_seed", SEED_FACTOR * c0, q16, w48),
-        decel_seed=_to_fixed("decel_seed", SEED_FACTOR * cd0 * decel_product(m0), q16, w48) if m0 >= 1 else 0,
+        c_sd=_to_fixed("c_sd", raw["t_sd"], q16, w48),
+        accel_seed=_to_fixed("accel_seed", raw["t_accel_seed"], q16, w48),
+        decel_seed=_to_fixed("decel_seed", raw["t_decel_seed"], q16, w48) if m0 >= 1 else 0,
         cruise=_cruise(f_tick, v),
         # accel / decel in Q16.16 (rounded, saturated): sizes the decel ramp of a soft stop
         stop_ratio=_stop_ratio(accel, decel),

@@ -23,7 +23,7 @@ import pytest
 
 from stepramp import clib
 from stepramp import plan as pyplan
-from stepramp.plan import MAX_PRESCALE, MAX_STEPS, SEED_FACTOR, MoveInfo, Plan, decel_product, plan_move, plan_move_info
+from stepramp.plan import MAX_PRESCALE, MAX_STEPS, MoveInfo, Plan, decel_product, plan_move, plan_move_info
 from stepramp.profiles import INVALID_INPUTS, PROFILES
 
 C_DIR = Path(__file__).resolve().parents[1] / "c"
@@ -206,12 +206,7 @@ def py_outcome_info(move: Move) -> tuple[Outcome, dict[str, int | str]]:
     raw = dict.fromkeys(RAW_FIELDS, 0.0)
     if info.length >= 1:
         ramp = pyplan._Ramp(info.length, info.a, info.d, info.v, info.f_tick)
-        raw["t_first"] = ramp.interval(1)
-        raw["t_last"] = ramp.interval(info.length)
-        raw["t_sa"] = ramp.interval(plan.sa)
-        raw["t_sd"] = ramp.interval(plan.sd)
-        raw["t_accel_seed"] = SEED_FACTOR * info.c0
-        raw["t_decel_seed"] = SEED_FACTOR * info.cd0 * decel_product(info.m0) if info.m0 >= 1 else 0.0
+        raw |= pyplan.register_doubles(ramp, plan.sa, plan.sd, info.m0)
         raw["t_cruise"] = info.f_tick / info.v
     return plan.to_dict(), {name: _bits(value) for name, value in (values | raw).items()}
 

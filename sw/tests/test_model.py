@@ -34,7 +34,7 @@ from stepramp.profiles import (
     Profile,
 )
 
-BOUND_C0 = 0.03  # in units of c0_slow
+BOUND_C0 = 0.008  # in units of c0_slow: half of the recurrence's 0.014 c0 per ramp is left (docs/algorithm.md)
 BOUND_TICKS = 2.0
 
 
@@ -165,10 +165,12 @@ def test_random_moves_cover_the_space() -> None:
 
 
 def test_the_bound_is_tight_for_long_ramps() -> None:
-    # the recurrence error sums to -0.01397 c0 per ramp: a long symmetric move ends ~0.028 c0 early
+    # the recurrence values sum to 0.01397 c0 less than the ideal ramp; half of that is put back in interval 1 and
+    # half in the seed (accel), half in the seed (decel): the worst pulse is ~0.007 c0 off (it was 0.028 c0, the
+    # move ending early by both deficits, before they were put back)
     args = _design(100_001, 70.0, 20_000.0, 20_000.0, 200.0, 1e6, 1)
     res = check_move(args)
-    assert -0.0285 < res.worst_c0 < -0.0275
+    assert 0.0065 < abs(res.worst_c0) < 0.0075
 
 
 # --------------------------------------------------------------------------------------------------------
@@ -356,7 +358,7 @@ def test_decel_ramp_not_shifted() -> None:
         _, c0_slow, _ = _physics(args)
         # the move does not end early or late, and the final speed is the ideal one
         end = sum(iv)
-        assert abs(end - ideal_t[-1]) <= 0.03 * c0_slow + 2, name
+        assert abs(end - ideal_t[-1]) <= BOUND_C0 * c0_slow + BOUND_TICKS, name
         assert abs(iv[-1] - ideal_iv[-1]) <= 1.0, name
         # every decel interval matches the ideal interval at the same distance from the end
         for i in range(plan.sd + 1, length):

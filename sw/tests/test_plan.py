@@ -11,6 +11,7 @@ from fractions import Fraction
 import pytest
 
 from stepramp import ideal
+from stepramp.model import tick_times
 from stepramp.plan import (
     FRAC_CRUISE,
     FRAC_RAMP,
@@ -166,24 +167,51 @@ def test_sa_sd_decel_before_speed_reached() -> None:
     assert info.m0 == length - plan.sd - 1
 
 
+def _recurrence_by_sum(seed: float, n: int) -> list[float]:
+    """The continuous recurrence values A_1 .. A_n from A_0 = seed, one multiplication at a time."""
+    values = []
+    for k in range(1, n + 1):
+        seed *= (4 * k - 1) / (4 * k + 1)
+        values.append(seed)
+    return values
+
+
 def test_exact_intervals_and_seeds() -> None:
+    """c_last, c_sa, c_sd are the ideal intervals; c_first is the ideal interval 1 plus half the accel recurrence's
+    time deficit (ideal time of intervals 2 .. sa-1 less the recurrence values there), and each seed carries half
+    its ramp's deficit spread over its recurrence values: recomputed here by plain summation, from ideal.py."""
     for args in (_args(700, 40000.0, 25000.0, 3000.0), _args(-350, 1000.0, 90000.0, 800.0, 8e6, 3)):
         plan, info = plan_move_info(**args)
         move = ideal.ideal_move(**args)
         iv = move.intervals()
         length = len(iv)
-        for field, i in (("c_first", 1), ("c_last", length), ("c_sa", plan.sa), ("c_sd", plan.sd)):
-            assert getattr(plan, field) == pytest.approx(iv[i - 1] * 2**16, abs=2), field
-        f_tick = args["fclk"] / args["prescale"]
         c0 = ideal.c0(args["accel"], SPR, args["fclk"], args["prescale"])
         cd0 = ideal.cd0(args["decel"], SPR, args["fclk"], args["prescale"])
-        assert plan.accel_seed == round(0.6759782400672847 * c0 * 2**16)
+        # accel: intervals 2 .. sa-1 take A_1 .. A_(sa-2)
+        seed_a = 0.6759782400672847 * c0
+        accel_values = _recurrence_by_sum(seed_a, plan.sa - 2)
+        deficit_a = sum(iv[1 : plan.sa - 1]) - sum(accel_values)
+        assert 0.01 * c0 < deficit_a < 0.014 * c0  # the recurrence runs fast near rest
+        for field, i, extra in (
+            ("c_first", 1, deficit_a / 2),
+            ("c_last", length, 0.0),
+            ("c_sa", plan.sa, 0.0),
+            ("c_sd", plan.sd, 0.0),
+        ):
+            assert getattr(plan, field) == pytest.approx((iv[i - 1] + extra) * 2**16, abs=2), field
+        scale_a = 1 + deficit_a / 2 / sum(accel_values)
+        assert plan.accel_seed == pytest.approx(seed_a * scale_a * 2**16, abs=1)
+        f_tick = args["fclk"] / args["prescale"]
         assert plan.cruise == pytest.approx(f_tick * ALPHA / args["speed"] * 2**32, rel=1e-15, abs=1)
-        # the decel recurrence run forward from cd0' for m0 steps, in floating point
-        d_m = 0.6759782400672847 * cd0
-        for k in range(1, info.m0 + 1):
-            d_m *= (4 * k - 1) / (4 * k + 1)
-        assert plan.decel_seed == pytest.approx(d_m * 2**16, abs=1)
+        # decel: intervals sd+1 .. L-1 take D_m0 .. D_1, the recurrence run forward from cd0' for m0 steps
+        decel_values = _recurrence_by_sum(0.6759782400672847 * cd0, info.m0)
+        assert info.m0 == length - plan.sd - 1 >= 1
+        deficit_d = sum(iv[plan.sd : length - 1]) - sum(decel_values)
+        assert 0.01 * cd0 < deficit_d < 0.014 * cd0
+        scale_d = 1 + deficit_d / 2 / sum(decel_values)
+        assert plan.decel_seed == pytest.approx(decel_values[-1] * scale_d * 2**16, abs=1)
+        # the plan's model: the move ends half the decel deficit early, never more than half a deficit off
+        assert tick_times(plan)[-1] - move.time_at(length) == pytest.approx(-deficit_d / 2, abs=2)
 
 
 def test_decel_seed_unused_is_zero() -> None:

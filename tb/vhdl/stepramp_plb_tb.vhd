@@ -51,7 +51,7 @@ architecture sim of stepramp_plb_tb is
   (
     (16#0C#, x"0000_0014"), -- STEPS = 20 (direction 0)
     (16#10#, x"0000_0001"), -- PRESCALE = 1
-    (16#14#, x"1EF6_A794"), -- C_FIRST_LO  (c_first = 519481236)
+    (16#14#, x"1F2B_B8EF"), -- C_FIRST_LO  (c_first = 522959087)
     (16#18#, x"0000_0000"), -- C_FIRST_HI
     (16#1C#, x"1EF6_A794"), -- C_LAST_LO   (c_last = 519481236)
     (16#20#, x"0000_0000"), -- C_LAST_HI
@@ -61,9 +61,9 @@ architecture sim of stepramp_plb_tb is
     (16#30#, x"0000_000A"), -- SD = 10
     (16#34#, x"0517_40C5"), -- C_SD_LO     (c_sd = 85409989)
     (16#38#, x"0000_0000"), -- C_SD_HI
-    (16#3C#, x"14EE_3EFB"), -- ACCEL_SEED_LO (accel_seed = 351158011)
+    (16#3C#, x"1500_4DA2"), -- ACCEL_SEED_LO (accel_seed = 352341410)
     (16#40#, x"0000_0000"), -- ACCEL_SEED_HI
-    (16#44#, x"054F_1DE1"), -- DECEL_SEED_LO (decel_seed = 89071073)
+    (16#44#, x"0553_B26A"), -- DECEL_SEED_LO (decel_seed = 89371242)
     (16#48#, x"0000_0000"), -- DECEL_SEED_HI
     (16#4C#, x"518B_3AA8"), -- CRUISE_LO   (cruise = 2698607540904)
     (16#50#, x"0000_0274"), -- CRUISE_HI
@@ -74,8 +74,8 @@ architecture sim of stepramp_plb_tb is
   -- samples start (one clock after the edge at which the slave samples the bus write of START).
   constant C_EDGES : t_naturals(0 to 19) :=
   (
-    2, 7928, 11143, 13644, 15759, 17626, 19315, 20869, 22316, 23675,
-    24979, 26338, 27784, 29338, 31028, 32894, 35010, 37511, 40726, 48652
+    2, 7981, 11207, 13716, 15839, 17712, 19407, 20966, 22418, 23781,
+    25085, 26448, 27900, 29459, 31154, 33027, 35150, 37659, 40885, 48812
   );
 
   constant C_STEPS        : natural := C_EDGES'length;
