@@ -27,6 +27,7 @@ from typing import Any
 
 from stepramp.driver import Outputs, StepRamp, StepRampError
 from stepramp.hdl import run_cocotb
+from stepramp.model import edges as model_edges
 from stepramp.plan import Plan
 from stepramp.stepper import STEP_LATENCY
 
@@ -247,8 +248,11 @@ if cocotb is not None:
             start_s = get_sim_time("ps") * 1e-12
             await drv.program(plan)
             await drv.start()
+            # A hang fails the move instead of the session waiting for ever: the model's last edge, plus DIR
+            # setup/hold and slack, in polls of at most poll_wait.
+            budget = max([0, *model_edges(plan)[-1:]]) + 2 * cfg["dir_setup"] + 20_000
             try:
-                await drv.wait_done(idle=idle)
+                await drv.wait_done(idle=idle, polls=budget // 20_000 + 10)
             except StepRampError as exc:
                 return {"core_error": str(exc)}
             end_s = get_sim_time("ps") * 1e-12

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol, TextIO
 
+from stepramp.driver import StepRampError
 from stepramp.model import edges as model_edges
 from stepramp.plan import MIN_INTERVAL_CLKS, Plan, plan_move
 
@@ -201,7 +202,11 @@ class Shell:
             raise CommandError(str(exc)) from None
         self.out.write("Running... ")
         self.out.flush()
-        outcome = self.backend.move(*args)
+        try:
+            outcome = self.backend.move(*args)
+        except StepRampError as exc:  # the core flagged an error or never said DONE: report it and go on
+            self.say(f"failed: {exc}")
+            return
         self.position = outcome.position
         self.moves += 1
         self.say("OK")

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 
+from stepramp.driver import StepRampError
 from stepramp.gtkw import LAYOUT, signal_paths, write_gtkw, zoom_for
 from stepramp.model import edges as model_edges
 from stepramp.plan import MIN_INTERVAL_CLKS, plan_move
@@ -144,3 +145,19 @@ def test_gtkw_layout(tmp_path: Path) -> None:
     # The zoom doubles the visible span for each step of -1.
     assert zoom_for(1.6) == pytest.approx(zoom_for(0.8) - 1)
     assert any("state_name" in p for p, _ in signal_paths())
+
+
+def test_a_failed_move_is_reported_and_the_session_goes_on() -> None:
+    """A core error (or a move that never ends) from the back end: 'failed: reason', position kept, session goes on."""
+
+    class Flaky(ModelBackend):
+        def move(self, steps: int, accel: float, decel: float, speed: float):  # type: ignore[no-untyped-def]
+            if steps == 7:
+                raise StepRampError("the core flagged error 3 (C_FIRST)")
+            return super().move(steps, accel, decel, speed)
+
+    out = io.StringIO()
+    Shell(Flaky(**SHELL_CONFIG), out, **SHELL_CONFIG).run(io.StringIO("m 5\nm 7\nm 2\n"))
+    lines = out.getvalue().splitlines()
+    assert "Running... failed: the core flagged error 3 (C_FIRST)" in lines
+    assert [g[0] for g in infos(lines)] == [0, 5, 5, 7]
