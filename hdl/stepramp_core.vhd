@@ -158,6 +158,7 @@ begin
       start_req  => start_req,
       new_dir    => direction,
       hard_stop  => hard_stop,
+      soft_stop  => soft_stop,
       start_out  => start,
       stop_out   => gate_stop,
       start_dir  => start_dir,

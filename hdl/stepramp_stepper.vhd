@@ -15,10 +15,11 @@
 --       S + 3 and step_o rises at S + 4, so the first STEP rising edge comes exactly max(dir_setup, 5) clocks
 --       after the DIR change.
 --     A start_req while the gate is busy (gate_busy = '1') or while eng_busy = '1' is dropped.
---   * Hard stop: hard_stop sampled at edge H while the gate holds a start (waiting for DIR hold or setup), or
---     together with the start_req it accepts: no DIR change from H on, and start_out and stop_out are both high
---     after edge H, so that the engine accepts the move and ends it at once (done, no pulse). The core ORs stop_out
---     into the engine's hard_stop. (A hard stop in the cycle start_out is high reaches the engine directly.)
+--   * Stops: hard_stop or soft_stop sampled at edge H while the gate holds a start (waiting for DIR hold or setup;
+--     the motor is at rest, so a soft stop has nothing to decelerate), or hard_stop together with the start_req it
+--     accepts: no DIR change from H on, and start_out and stop_out are both high after edge H, so that the engine
+--     accepts the move and ends it at once (done, no pulse). The core ORs stop_out into the engine's hard_stop. (A
+--     stop in the cycle start_out is high reaches the engine directly.)
 --   * Windings: modes 1 .. 3 follow position at the edge where step_o rises (position is already updated in the
 --     cycle eng_step is high). Mode 4 (PWM): the duty is recomputed continuously by a serial multiplier (rounds of
 --     G_DUTY_BITS + 3 clocks); the pins show the duty of a new position from edge E + G_DUTY_BITS + 4 to
@@ -47,6 +48,7 @@ entity stepramp_stepper is
     start_req  : in    std_logic;
     new_dir    : in    std_logic;
     hard_stop  : in    std_logic;
+    soft_stop  : in    std_logic;
     start_out  : out   std_logic;
     stop_out   : out   std_logic;
     start_dir  : out   std_logic;
@@ -284,7 +286,7 @@ begin
 
           when C_GS_HOLD =>
 
-            if (hard_stop = '1') then
+            if (hard_stop = '1' or soft_stop = '1') then
               start_r <= '1';
               stop_r  <= '1';
               v_next  := C_GS_FIRED;
@@ -296,7 +298,7 @@ begin
 
           when C_GS_SETUP =>
 
-            if (hard_stop = '1') then
+            if (hard_stop = '1' or soft_stop = '1') then
               start_r <= '1';
               stop_r  <= '1';
               v_next  := C_GS_FIRED;

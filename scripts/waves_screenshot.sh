@@ -8,6 +8,7 @@ OUT=${2:-docs/img/waves.png}
 DISPLAY_NUM=:${DISPLAY_NUM:-91}
 Xvfb "$DISPLAY_NUM" -screen 0 1600x1000x24 >/dev/null 2>&1 &
 XVFB=$!
+GTK=""
 trap 'kill $GTK $XVFB 2>/dev/null || true' EXIT
 sleep 2
 DISPLAY=$DISPLAY_NUM gtkwave "$GTKW" >/dev/null 2>&1 &

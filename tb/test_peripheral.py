@@ -355,8 +355,8 @@ def _ctrl_bits(*fields: str) -> int:
 
 @cocotb.test()
 async def hard_stop_cancels_a_held_start(dut) -> None:
-    """HARD_STOP while the stepping logic holds a START for DIR setup, or in the same CTRL write as START: DONE
-    without error, no STEP pulse, POSITION unchanged; the next move runs as the model says."""
+    """HARD_STOP or SOFT_STOP while the stepping logic holds a START for DIR setup, or HARD_STOP in the same CTRL
+    write as START: DONE without error, no STEP pulse, POSITION unchanged; the next move runs as the model says."""
     tb = make_tb(dut)
     await tb.reset()
     await tb.configure(Outputs(mode="half", step_width=4, dir_setup=3000, dir_hold=10), enable=True)
@@ -376,6 +376,17 @@ async def hard_stop_cancels_a_held_start(dut) -> None:
     assert len(tb.step_edges) == n0, "a STEP pulse after the hard stop cancelled the held start"
     assert await drv.position() == 0
     assert int(dut.dir.value) == 1, "DIR had changed before the stop; it stays"
+    # 1b: the same with SOFT_STOP (the motor is at rest: nothing to decelerate), back to direction 0.
+    await drv.program(valid_plan())
+    await drv.start()
+    await ClockCycles(tb.clk, 200)
+    assert (await drv.status()).busy
+    await drv.soft_stop()
+    status = await drv.wait_done(idle=lambda: tb.irq_or(500))
+    assert not status.error
+    await ClockCycles(tb.clk, 4000)
+    assert len(tb.step_edges) == n0 and await drv.position() == 0
+    assert int(dut.dir.value) == 0
     # 2: START and HARD_STOP in one write: the stop wins.
     forwards = valid_plan()
     await drv.program(forwards)
@@ -384,7 +395,7 @@ async def hard_stop_cancels_a_held_start(dut) -> None:
     assert not status.error
     await ClockCycles(tb.clk, 4000)
     assert len(tb.step_edges) == n0 and await drv.position() == 0
-    # 3: the core goes on: the backwards move, edge for edge (DIR is already set: no setup wait).
+    # 3: the core goes on: the backwards move, edge for edge.
     await tb.configure(Outputs(mode="half", step_width=4, dir_setup=20, dir_hold=10), enable=True)
     edges, status = await tb.run_plan(drv, backwards)
     assert edges == model_edges(backwards) and not status.error

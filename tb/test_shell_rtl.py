@@ -5,6 +5,7 @@ in-process whose every move is checked pulse for pulse against the bit-exact mod
 from __future__ import annotations
 
 import io
+import os
 import re
 import subprocess
 import sys
@@ -64,3 +65,36 @@ def test_session_moves_equal_the_model() -> None:
         assert outcome.plan == plan
         assert outcome.edges == model_edges(plan), args
         assert len(outcome.edges) == abs(args[0])
+
+
+FAULT_SCRIPT = """
+import sys
+from pathlib import Path
+from stepramp.session import RtlSession, SessionError
+session = RtlSession(Path(sys.argv[1]))
+session.start()
+try:
+    session.request({"op": "move", "steps": 1})  # no accel: the cocotb test raises
+except SessionError as exc:
+    print("request:", exc)
+try:
+    session.close()
+except SessionError as exc:
+    print("close:", exc)
+"""
+
+
+def test_a_failing_simulation_is_reported_outside_pytest() -> None:
+    """A fault inside the simulation reaches the front end as SessionError, and the failed cocotb test is reported by
+    close() even where the runner does not exit (outside pytest)."""
+    env = {k: v for k, v in os.environ.items() if k != "PYTEST_CURRENT_TEST"}
+    run = subprocess.run(
+        [sys.executable, "-c", FAULT_SCRIPT, str(build_dir("shell_fault"))],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=env,
+        check=False,
+    )
+    assert "request: the simulation failed: KeyError('accel')" in run.stdout, run.stdout + run.stderr[-2000:]
+    assert "close: the simulation failed" in run.stdout, run.stdout + run.stderr[-2000:]

@@ -172,6 +172,7 @@ async def setup(dut: Any, cfg: Config, position: int = 0) -> FakeEngine:
     dut.start_req.value = 0
     dut.new_dir.value = 0
     dut.hard_stop.value = 0
+    dut.soft_stop.value = 0
     eng = FakeEngine(dut, position=position).start()
     _CLOCK_T0_PS[0] = round(get_sim_time("ps"))
     await start_clock_and_reset(dut)
@@ -682,11 +683,12 @@ async def hard_stop_cancels_a_held_start(dut) -> None:
 
     watcher = cocotb.start_soon(watch_stop())
 
-    async def stop_at(h: int) -> None:
+    async def stop_at(h: int, kind: str = "hard") -> None:
+        strobe = dut.hard_stop if kind == "hard" else dut.soft_stop
         await after_edge(h - 1)
-        dut.hard_stop.value = 1
+        strobe.value = 1
         await after_edge(h)
-        dut.hard_stop.value = 0
+        strobe.value = 0
 
     # A normal move in direction 0 first: stop_out stays low.
     await run_move(dut, eng, 2, 0)
@@ -706,10 +708,17 @@ async def hard_stop_cancels_a_held_start(dut) -> None:
     await ClockCycles(dut.clk, 400)
     assert stops[-1] == q + 50 and rec.start_edges[-1] == q + 50
     assert rec.dir_edges == [q + 1] and int(dut.dir_o.value) == 1
+    # A soft stop during DIR setup cancels the start the same way (at rest there is nothing to decelerate).
+    q = await request_start(dut, 0)
+    await stop_at(q + 30, "soft")
+    await ClockCycles(dut.clk, 400)
+    assert stops[-1] == q + 30 and rec.start_edges[-1] == q + 30
+    assert rec.dir_edges[-1] == q + 1 and int(dut.dir_o.value) == 0
+    n_dir = len(rec.dir_edges)
     # start_req and hard_stop at one edge, with a direction change: no DIR change, start_out with stop_out.
     await FallingEdge(dut.clk)
     dut.start_req.value = 1
-    dut.new_dir.value = 0
+    dut.new_dir.value = 1
     dut.hard_stop.value = 1
     q = edge_now() + 1
     await after_edge(q)
@@ -717,7 +726,20 @@ async def hard_stop_cancels_a_held_start(dut) -> None:
     dut.hard_stop.value = 0
     await ClockCycles(dut.clk, 400)
     assert stops[-1] == q and rec.start_edges[-1] == q
-    assert len(rec.dir_edges) == 1 and int(dut.dir_o.value) == 1
+    assert len(rec.dir_edges) == n_dir and int(dut.dir_o.value) == 0
+    # A soft stop with the start_req it accepts is not a cancel: the engine decides it (it ignores a soft stop at
+    # its start edge), so start_out comes alone.
+    n_stops = len(stops)
+    await FallingEdge(dut.clk)
+    dut.start_req.value = 1
+    dut.new_dir.value = 0
+    dut.soft_stop.value = 1
+    q = edge_now() + 1
+    await after_edge(q)
+    dut.start_req.value = 0
+    dut.soft_stop.value = 0
+    await ClockCycles(dut.clk, 100)
+    assert len(stops) == n_stops and rec.start_edges[-1] == q
     assert len(eng.step_edges) == 2, "only the first move pulsed"
     watcher.cancel()
     rec.stop()

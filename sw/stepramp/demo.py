@@ -20,6 +20,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from stepramp.driver import StepRampError
 from stepramp.gtkw import signal_paths, write_gtkw
 from stepramp.ideal import c0, ideal_move
 from stepramp.model import FIRST_PULSE_LATENCY
@@ -73,7 +74,7 @@ def main(argv: list[str] | None = None) -> int:
         with RtlSession(out / "sim", config=SHELL_CONFIG, waves=waves, log_file=out / "sim.log") as session:
             missing = session.missing_signals(signal_paths())
             rtl = session.move(DEMO_MOVE["steps"], DEMO_MOVE["accel"], DEMO_MOVE["decel"], DEMO_MOVE["speed"])
-    except (SessionError, ValueError) as exc:
+    except (SessionError, StepRampError, ValueError) as exc:
         print(f"  the simulation failed: {exc}", file=sys.stderr)
         return 1
     gtkw = write_gtkw(
@@ -93,6 +94,12 @@ def main(argv: list[str] | None = None) -> int:
         "error": None,
     }
     (out / "move.json").write_text(json.dumps(move_json) + "\n")
+    if len(rtl.edges) != len(model):
+        print(
+            f"  the RTL emitted {len(rtl.edges)} steps, the model {len(model)}: see {out / 'move.json'}",
+            file=sys.stderr,
+        )
+        return 1
     figures = summarise(DEMO_MOVE, rtl.edges)
     figures["final_position"] = rtl.position
     figures["rtl_equals_model"] = rtl.edges == model and rtl.plan == plan

@@ -52,6 +52,15 @@ class SessionError(RuntimeError):
     """The simulation failed, hung or went away."""
 
 
+class MoveError(StepRampError):
+    """The core flagged an error during a move, or never said DONE within the move's budget; `position` is POSITION
+    read back afterwards."""
+
+    def __init__(self, message: str, position: int) -> None:
+        super().__init__(message)
+        self.position = position
+
+
 class RtlSession:
     """Front end of one simulation of stepramp_plb (use as a context manager)."""
 
@@ -61,13 +70,11 @@ class RtlSession:
         config: dict[str, Any] | None = None,
         waves: Path | None = None,
         log_file: Path | None = None,
-        timeout_s: float = 3600.0,
     ) -> None:
         self.build_dir = build_dir.resolve()
         self.config = {**DEFAULT_CONFIG, **(config or {})}
         self.waves = waves
         self.log_file = log_file if log_file is not None else self.build_dir / "sim.log"
-        self.timeout_s = timeout_s
         self.failure: BaseException | None = None
         self.simulations = 0  # how many simulator runs this session started (one)
         self.end_s = 0.0  # simulated time at the end of the last move
@@ -111,7 +118,7 @@ class RtlSession:
 
     def _run(self, env: dict[str, str]) -> None:
         try:
-            run_cocotb(
+            results = run_cocotb(
                 "stepramp_plb",
                 "stepramp.session",
                 self.build_dir,
@@ -119,23 +126,34 @@ class RtlSession:
                 extra_env=env,
                 log_file=self.log_file,
             )
+            # Outside pytest the runner returns even when the test failed: read its verdict.
+            from cocotb_tools.check_results import get_results
+
+            tests, failed = get_results(results)
+            if tests != 1 or failed:
+                self.failure = SessionError(f"the cocotb session test failed ({failed} of {tests})")
         except BaseException as exc:  # the runner raises SystemExit under pytest: report it later
             self.failure = exc
 
     def request(self, req: dict[str, Any]) -> dict[str, Any]:
-        """Send one request and wait for its answer (SessionError if the simulation ends or hangs first)."""
+        """Send one request and wait for its answer (SessionError if the simulation ends first). A move that never
+        ends is bounded inside the simulation (its budget comes from the model), not here: a long valid move may
+        take hours of simulation."""
         if self._conn is None or self._thread is None:
             raise SessionError("the session is not started")
-        self._conn.sendall(json.dumps(req).encode() + b"\n")
-        waited = 0.0
+        try:
+            self._conn.sendall(json.dumps(req).encode() + b"\n")
+        except OSError as exc:
+            raise SessionError(f"the simulation went away ({exc}); see {self.log_file}") from self.failure
         while b"\n" not in self._buffer:
             try:
                 chunk = self._conn.recv(1 << 16)
             except TimeoutError:
-                waited += 0.2
-                if not self._thread.is_alive() or waited > self.timeout_s:
+                if not self._thread.is_alive():
                     raise SessionError(f"no answer from the simulation; see {self.log_file}") from self.failure
                 continue
+            except OSError as exc:
+                raise SessionError(f"the simulation went away ({exc}); see {self.log_file}") from self.failure
             if not chunk:
                 raise SessionError(f"the simulation ended; see {self.log_file}") from self.failure
             self._buffer += chunk
@@ -152,7 +170,7 @@ class RtlSession:
         if "value_error" in answer:
             raise ValueError(answer["value_error"])
         if "core_error" in answer:
-            raise StepRampError(answer["core_error"])
+            raise MoveError(answer["core_error"], answer["position"])
         self.end_s = answer["end_s"]
         return MoveResult(
             Plan(**answer["plan"]), answer["edges"], answer["position"], answer["start_s"], answer["end_s"]
@@ -237,7 +255,8 @@ if cocotb is not None:
         poll_wait = 20_000 * period_ps
 
         async def idle() -> None:
-            await First(RisingEdge(dut.irq), Timer(poll_wait, unit="ps"))
+            if not int(dut.irq.value):  # irq may have risen during the status read
+                await First(RisingEdge(dut.irq), Timer(poll_wait, unit="ps"))
 
         async def do_move(req: dict[str, Any]) -> dict[str, Any]:
             try:
@@ -254,7 +273,7 @@ if cocotb is not None:
             try:
                 await drv.wait_done(idle=idle, polls=budget // 20_000 + 10)
             except StepRampError as exc:
-                return {"core_error": str(exc)}
+                return {"core_error": str(exc), "position": await drv.position()}
             end_s = get_sim_time("ps") * 1e-12
             position = await drv.position()
             edges: list[int] = []

@@ -14,7 +14,10 @@ on. `q` (or end of input) ends it.
 
 from __future__ import annotations
 
+import io
 import math
+import re
+import shutil
 import sys
 import tempfile
 from collections.abc import Iterable
@@ -87,6 +90,9 @@ class RtlBackend:
         return outcome
 
 
+_INTEGER = re.compile(r"[+-]?[0-9]{1,12}")
+
+
 class CommandError(ValueError):
     """A command the shell does not understand, or a value out of its range."""
 
@@ -137,10 +143,10 @@ class Shell:
 
     @staticmethod
     def _int(token: str, name: str, lo: int, hi: int) -> int:
-        try:
-            value = int(token)
-        except ValueError:
-            raise CommandError(f"{name} must be an integer, got {token!r}") from None
+        if not _INTEGER.fullmatch(token):  # ASCII digits only, as AVR446's atoi
+            shown = token if len(token) <= 20 else token[:20] + "..."
+            raise CommandError(f"{name} must be an integer, got {shown!r}")
+        value = int(token)
         if not lo <= value <= hi:
             raise CommandError(f"{name} {value} is out of range {lo} - {hi}")
         return value
@@ -155,7 +161,7 @@ class Shell:
         tokens = line.split()
         try:
             if not tokens:
-                self._move()
+                self._move(self.steps, self.accel, self.decel, self.speed)
             elif tokens[0] == "?":
                 self.say(self.help_text())
             elif tokens[0] == "q":
@@ -172,40 +178,44 @@ class Shell:
                 self.speed = self._int(value, "speed", SPEED_MIN, self.speed_max)
             elif tokens[0] == "m":
                 (value,) = self._args(tokens, 1)
-                self.steps = self._int(value, "steps", *STEPS_RANGE)
-                self._move()
+                self._move(self._int(value, "steps", *STEPS_RANGE), self.accel, self.decel, self.speed)
             elif tokens[0] == "move":
                 steps, accel, decel, speed = self._args(tokens, 4)
-                values = (
+                self._move(
                     self._int(steps, "steps", *STEPS_RANGE),
                     self._int(accel, "acceleration", *ACCEL_RANGE),
                     self._int(decel, "deceleration", *ACCEL_RANGE),
                     self._int(speed, "speed", SPEED_MIN, self.speed_max),
                 )
-                self.steps, self.accel, self.decel, self.speed = values
-                self._move()
             else:
-                raise CommandError(f"unknown command {tokens[0]!r}")
+                shown = tokens[0] if len(tokens[0]) <= 20 else tokens[0][:20] + "..."
+                raise CommandError(f"unknown command {shown!r}")
         except CommandError as exc:
             self.say(f"error: {exc}")
             self.say(self.help_text())
         self.say(self.info_line())
         return True
 
-    def _move(self) -> None:
-        if self.steps == 0:
+    def _move(self, steps: int, accel: int, decel: int, speed: int) -> None:
+        """Check the move with the driver's rules, take the settings, run it (nothing to run for 0 steps)."""
+        args = (steps, accel / 100, decel / 100, speed / 100)
+        if steps != 0:
+            try:
+                plan_move(*args, **self.config)  # the driver's checks, before anything changes
+            except ValueError as exc:
+                raise CommandError(str(exc)) from None
+        self.steps, self.accel, self.decel, self.speed = steps, accel, decel, speed
+        if steps == 0:
             return  # as AVR446: nothing to move
-        args = (self.steps, self.accel / 100, self.decel / 100, self.speed / 100)
-        try:
-            plan_move(*args, **self.config)  # the driver's checks, before anything starts
-        except ValueError as exc:
-            raise CommandError(str(exc)) from None
         self.out.write("Running... ")
         self.out.flush()
         try:
             outcome = self.backend.move(*args)
         except StepRampError as exc:  # the core flagged an error or never said DONE: report it and go on
             self.say(f"failed: {exc}")
+            position = getattr(exc, "position", None)  # POSITION read back after the failure, when known
+            if isinstance(position, int):
+                self.position = position
             return
         self.position = outcome.position
         self.moves += 1
@@ -227,25 +237,30 @@ class Shell:
 
 def main(model: bool = False, waves: Path | None = None, build: Path | None = None, stdin: TextIO | None = None) -> int:
     """`stepramp shell`: one simulation (or the model) for the whole session, commands from stdin."""
-    lines = stdin if stdin is not None else sys.stdin
-    interactive = lines.isatty()
+    if stdin is None:
+        stdin = sys.stdin
+        if isinstance(stdin, io.TextIOWrapper):
+            stdin.reconfigure(errors="replace")  # bytes that are not text become a bad command, not a crash
+    interactive = stdin.isatty()
     cfg = SHELL_CONFIG
     if model:
-        Shell(ModelBackend(**cfg), sys.stdout, **cfg).run(lines, prompt=interactive)
+        Shell(ModelBackend(**cfg), sys.stdout, **cfg).run(stdin, prompt=interactive)
         return 0
 
     from stepramp.session import RtlSession, SessionError
 
-    with tempfile.TemporaryDirectory(prefix="stepramp-shell-") as tmp:
-        build_dir = build if build is not None else Path(tmp)
-        log = build_dir.resolve() / "sim.log"
-        print(f"stepramp shell: starting one simulation of stepramp_plb for the session (log: {log})", file=sys.stderr)
-        try:
-            with RtlSession(build_dir, config=cfg, waves=waves, log_file=log) as session:
-                Shell(RtlBackend(session), sys.stdout, **cfg).run(lines, prompt=interactive)
-        except SessionError as exc:
-            print(f"\nstepramp shell: {exc}", file=sys.stderr)
-            return 1
+    build_dir = build if build is not None else Path(tempfile.mkdtemp(prefix="stepramp-shell-"))
+    log = build_dir.resolve() / "sim.log"
+    print(f"stepramp shell: starting one simulation of stepramp_plb for the session (log: {log})", file=sys.stderr)
+    try:
+        with RtlSession(build_dir, config=cfg, waves=waves, log_file=log) as session:
+            Shell(RtlBackend(session), sys.stdout, **cfg).run(stdin, prompt=interactive)
+    except SessionError as exc:
+        cause = f" ({exc.__cause__!r})" if exc.__cause__ is not None else ""
+        print(f"\nstepramp shell: {exc}{cause}; the build and the log are kept in {build_dir}", file=sys.stderr)
+        return 1
+    if build is None:
+        shutil.rmtree(build_dir, ignore_errors=True)
     if waves is not None and waves.suffix == ".ghw":  # the layout is written for GHW's facility names
         from stepramp.gtkw import write_gtkw
 

@@ -84,6 +84,9 @@ def test_units_are_hundredths() -> None:
         ("m 64001", "steps 64001 is out of range -64000 - 64000"),
         ("move 1 2 3", "'move' takes 4 values, got 3"),
         ("m 10 20", "'m' takes 1 value, got 2"),
+        ("m \uff14\uff10", "steps must be an integer"),  # full-width digits: not for atoi
+        ("m 1_0", "steps must be an integer, got '1_0'"),
+        ("a " + "9" * 30, "acceleration must be an integer, got '99999999999999999999...'"),
     ],
 )
 def test_bad_commands_get_the_reason_and_the_help(command: str, reason: str) -> None:
@@ -161,3 +164,12 @@ def test_a_failed_move_is_reported_and_the_session_goes_on() -> None:
     lines = out.getvalue().splitlines()
     assert "Running... failed: the core flagged error 3 (C_FIRST)" in lines
     assert [g[0] for g in infos(lines)] == [0, 5, 5, 7]
+
+
+def test_cli_survives_bytes_that_are_not_text() -> None:
+    run = subprocess.run(
+        [BIN, "shell", "--model"], input=b"m \xff\xfe\n\xc3\nm 3\n", capture_output=True, check=True, timeout=60
+    )
+    out = run.stdout.decode("utf-8", errors="replace").splitlines()
+    assert sum(line.startswith("error:") for line in out) == 2
+    assert infos(out)[-1][0] == 3
