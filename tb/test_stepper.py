@@ -683,6 +683,18 @@ async def hard_stop_cancels_a_held_start(dut) -> None:
 
     watcher = cocotb.start_soon(watch_stop())
 
+    async def request_with_stop(new_dir: int, strobe: Any) -> int:
+        """start_req and a stop strobe high in the same cycle; returns the edge Q that samples both."""
+        await FallingEdge(dut.clk)
+        dut.start_req.value = 1
+        dut.new_dir.value = new_dir
+        strobe.value = 1
+        q = edge_now() + 1
+        await after_edge(q)
+        dut.start_req.value = 0
+        strobe.value = 0
+        return q
+
     async def stop_at(h: int, kind: str = "hard") -> None:
         strobe = dut.hard_stop if kind == "hard" else dut.soft_stop
         await after_edge(h - 1)
@@ -716,28 +728,14 @@ async def hard_stop_cancels_a_held_start(dut) -> None:
     assert rec.dir_edges[-1] == q + 1 and int(dut.dir_o.value) == 0
     n_dir = len(rec.dir_edges)
     # start_req and hard_stop at one edge, with a direction change: no DIR change, start_out with stop_out.
-    await FallingEdge(dut.clk)
-    dut.start_req.value = 1
-    dut.new_dir.value = 1
-    dut.hard_stop.value = 1
-    q = edge_now() + 1
-    await after_edge(q)
-    dut.start_req.value = 0
-    dut.hard_stop.value = 0
+    q = await request_with_stop(1, dut.hard_stop)
     await ClockCycles(dut.clk, 400)
     assert stops[-1] == q and rec.start_edges[-1] == q
     assert len(rec.dir_edges) == n_dir and int(dut.dir_o.value) == 0
     # A soft stop with the start_req it accepts is not a cancel: the engine decides it (it ignores a soft stop at
     # its start edge), so start_out comes alone.
     n_stops = len(stops)
-    await FallingEdge(dut.clk)
-    dut.start_req.value = 1
-    dut.new_dir.value = 0
-    dut.soft_stop.value = 1
-    q = edge_now() + 1
-    await after_edge(q)
-    dut.start_req.value = 0
-    dut.soft_stop.value = 0
+    q = await request_with_stop(0, dut.soft_stop)
     await ClockCycles(dut.clk, 100)
     assert len(stops) == n_stops and rec.start_edges[-1] == q
     assert len(eng.step_edges) == 2, "only the first move pulsed"
