@@ -20,6 +20,7 @@ from cocotb.triggers import ClockCycles, FallingEdge, First, RisingEdge, Timer
 
 from monitors import MotionMonitors
 from stepramp.driver import MODES, Outputs, Status, StepRamp
+from stepramp.gtkw import LAYOUTS, missing_in, signal_paths
 from stepramp.ipif import IpifError, IpifMaster
 from stepramp.plan import Plan
 from stepramp.stepper import STEP_LATENCY
@@ -133,6 +134,8 @@ class PeripheralTb:
             await FallingEdge(self.clk)
             self.dut.rst.value = 0
         await ClockCycles(self.clk, 2)
+        missing = missing_in(self.dut, signal_paths(LAYOUTS[self.top]))
+        assert not missing, f"the GTKWave layout names signals {self.top} does not have: {missing}"
         cocotb.start_soon(self.watch(self.dut.step, self.step_edges))
         cocotb.start_soon(self.watch(self.dut.core_inst.busy, self.start_edges))
         self._start_monitors(position=0)

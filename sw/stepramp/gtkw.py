@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 # GTKWave trace flags (gtkwave's analyzer.h).
 _HEX, _DEC, _BIN, _RJUSTIFY, _SIGNED = 0x2, 0x4, 0x8, 0x20, 0x400
@@ -41,63 +42,143 @@ class Trace:
     rows: int = 0  # extra height for an analog trace
 
 
-_ENGINE = "core_inst.engine_inst."
+Layout = list[tuple[str, list[Trace]]]
 
-#: The layout of the demo and shell waveforms of stepramp_plb.
-LAYOUT: list[tuple[str, list[Trace]]] = [
-    (
-        "Bus: PLB IPIF (the soft CPU's accesses)",
-        [
-            Trace("clk"),
-            Trace("rst"),
-            Trace("bus2ip_cs"),
-            Trace("bus2ip_rnw"),
-            Trace("bus2ip_addr", 32, "hex"),
-            Trace("bus2ip_be", 4, "bit"),
-            Trace("bus2ip_data", 32, "hex"),
-            Trace("ip2bus_wrack"),
-            Trace("ip2bus_rdack"),
-            Trace("ip2bus_data", 32, "hex"),
-            Trace("ip2bus_error"),
-            Trace("irq"),
-        ],
-    ),
-    (
-        "Ramp FSM",
-        [
-            Trace(_ENGINE + "state_name", 1, "text", "state"),
-            Trace(_ENGINE + "busy"),
-            Trace(_ENGINE + "done"),
-            Trace(_ENGINE + "error"),
-            Trace(_ENGINE + "err_code", 4, "dec", "err_code"),
-        ],
-    ),
-    (
-        "Current delay (ticks between steps)",
-        [
-            Trace(_ENGINE + "cur_delay", 32, "dec", "cur_delay"),
-            Trace(_ENGINE + "cur_delay", 32, "analog", "cur_delay (analog)", rows=6),
-        ],
-    ),
-    (
-        "Step counter and position",
-        [
-            Trace(_ENGINE + "step_count", 31, "dec", "step_count"),
-            Trace(_ENGINE + "position", 32, "signed", "position"),
-        ],
-    ),
+
+def _engine_groups(prefix: str) -> Layout:
+    """The ramp engine's groups; prefix: the engine's path below the top ("" for the engine itself)."""
+    return [
+        (
+            "Ramp FSM",
+            [
+                Trace(prefix + "state_name", 1, "text", "state"),
+                Trace(prefix + "busy"),
+                Trace(prefix + "done"),
+                Trace(prefix + "error"),
+                Trace(prefix + "err_code", 4, "dec", "err_code"),
+            ],
+        ),
+        (
+            "Current delay (ticks between steps)",
+            [
+                Trace(prefix + "cur_delay", 32, "dec", "cur_delay"),
+                Trace(prefix + "cur_delay", 32, "analog", "cur_delay (analog)", rows=6),
+            ],
+        ),
+        (
+            "Step counter and position",
+            [
+                Trace(prefix + "step_count", 31, "dec", "step_count"),
+                Trace(prefix + "position", 32, "signed", "position"),
+            ],
+        ),
+    ]
+
+
+_PINS: Layout = [
     ("STEP / DIR outputs", [Trace("step"), Trace("dir"), Trace("enable")]),
     ("Windings (H-bridge inputs)", [Trace("a1"), Trace("a2"), Trace("b1"), Trace("b2")]),
 ]
 
+#: A layout per top: the bus, the engine (FSM state by name, delay, counters) and the pins.
+LAYOUTS: dict[str, Layout] = {
+    "stepramp_plb": [
+        (
+            "Bus: PLB IPIF (the soft CPU's accesses)",
+            [
+                Trace("clk"),
+                Trace("rst"),
+                Trace("bus2ip_cs"),
+                Trace("bus2ip_rnw"),
+                Trace("bus2ip_addr", 32, "hex"),
+                Trace("bus2ip_be", 4, "bit"),
+                Trace("bus2ip_data", 32, "hex"),
+                Trace("ip2bus_wrack"),
+                Trace("ip2bus_rdack"),
+                Trace("ip2bus_data", 32, "hex"),
+                Trace("ip2bus_error"),
+                Trace("irq"),
+            ],
+        ),
+        *_engine_groups("core_inst.engine_inst."),
+        *_PINS,
+    ],
+    "stepramp_axil": [
+        (
+            "Bus: AXI4-Lite (the soft CPU's accesses)",
+            [
+                Trace("aclk"),
+                Trace("aresetn"),
+                Trace("s_axil_awvalid"),
+                Trace("s_axil_awready"),
+                Trace("s_axil_awaddr", 7, "hex"),
+                Trace("s_axil_wvalid"),
+                Trace("s_axil_wready"),
+                Trace("s_axil_wdata", 32, "hex"),
+                Trace("s_axil_wstrb", 4, "bit"),
+                Trace("s_axil_bvalid"),
+                Trace("s_axil_bready"),
+                Trace("s_axil_bresp", 2, "bit"),
+                Trace("s_axil_arvalid"),
+                Trace("s_axil_arready"),
+                Trace("s_axil_araddr", 7, "hex"),
+                Trace("s_axil_rvalid"),
+                Trace("s_axil_rready"),
+                Trace("s_axil_rdata", 32, "hex"),
+                Trace("s_axil_rresp", 2, "bit"),
+                Trace("irq"),
+            ],
+        ),
+        *_engine_groups("core_inst.engine_inst."),
+        *_PINS,
+    ],
+    "stepramp_engine": [
+        (
+            "Move inputs",
+            [
+                Trace("clk"),
+                Trace("rst"),
+                Trace("start"),
+                Trace("soft_stop"),
+                Trace("hard_stop"),
+                Trace("steps", 31, "dec", "steps"),
+                Trace("direction"),
+                Trace("prescale", 16, "dec", "prescale"),
+            ],
+        ),
+        *_engine_groups(""),
+        ("STEP / DIR", [Trace("step"), Trace("dir")]),
+    ],
+}
 
-def signal_paths(layout: list[tuple[str, list[Trace]]] = LAYOUT) -> list[tuple[str, int]]:
+#: The layout of the demo and shell waveforms (stepramp_plb).
+LAYOUT: Layout = LAYOUTS["stepramp_plb"]
+
+
+def signal_paths(layout: Layout = LAYOUT) -> list[tuple[str, int]]:
     """Every (path, width) the layout uses, once each."""
     seen: dict[str, int] = {}
     for _, traces in layout:
         for t in traces:
             seen.setdefault(t.path, t.width)
     return list(seen.items())
+
+
+def missing_in(dut: Any, paths: list[tuple[str, int]] | list[list[Any]]) -> list[str]:
+    """Inside a simulation: which of these (path, width) signals the design below `dut` does not have (a vector:
+    or not with that width)."""
+    out = []
+    for path, width in paths:
+        handle = dut
+        try:
+            for part in path.split("."):
+                handle = getattr(handle, part)
+        except AttributeError:
+            out.append(path)
+            continue
+        if width > 1 and len(handle) != width:
+            out.append(f"{path} (width {len(handle)}, not {width})")
+    return out
 
 
 def zoom_for(duration_s: float) -> float:
@@ -116,7 +197,7 @@ def write_gtkw(
     duration_s: float | None = None,
     marker_s: float | None = None,
     title: str = "stepramp",
-    layout: list[tuple[str, list[Trace]]] = LAYOUT,
+    layout: Layout | None = None,
 ) -> Path:
     """Write the save file; `gtkwave SAVEFILE` opens the laid-out view.
 
@@ -138,7 +219,7 @@ def write_gtkw(
         marker = round((marker_s or 0.0) * 1e15)
         lines.append(f"*{zoom_for(duration_s):.6f} {marker} " + " ".join(["-1"] * 26))
     lines += ["[sst_width] 180", "[signals_width] 330", "[sst_expanded] 1", "[sst_vpaned_height] 250"]
-    for group, traces in layout:
+    for group, traces in layout if layout is not None else LAYOUTS[top]:
         lines += [f"@{_GRP_BEGIN | _BLANK:x}", f"-{group}"]
         for t in traces:
             lines.append(f"@{FORMATS[t.fmt]:x}")

@@ -51,6 +51,21 @@ def hdl_sources(upto: str | None = None) -> list[Path]:
     return files
 
 
+def _sim_stop_s(results_xml: Path) -> float | None:
+    """The simulated time at which the last test of a cocotb results file stopped (None if it holds none)."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        stops = [
+            float(p.get("value", "0"))
+            for p in ET.parse(results_xml).iter("property")
+            if p.get("name") == "sim_time_stop"
+        ]
+    except (OSError, ET.ParseError):
+        return None
+    return max(stops) * 1e-9 if stops else None  # cocotb reports it in ns
+
+
 def run_cocotb(
     toplevel: str,
     test_module: str,
@@ -63,7 +78,9 @@ def run_cocotb(
 ) -> Path:
     """Build the RTL up to toplevel and run a cocotb test module against it with GHDL.
 
-    One build directory per call, so that tests can run in parallel. waves: a .ghw or .fst path to write.
+    One build directory per call, so that tests can run in parallel. waves: a .ghw or .fst path to write; for a
+    .ghw of a top with a layout in stepramp.gtkw, a GTKWave save file (.gtkw) is written beside it. With WAVES=1 in
+    the environment every call writes build_dir/<toplevel>.ghw.
     log_file: send the build and simulation output there instead of stdout.
     Returns the results file; under pytest a failing test raises SystemExit.
     """
@@ -79,11 +96,13 @@ def run_cocotb(
         always=True,
         log_file=log_file,
     )
+    if waves is None and os.environ.get("WAVES", "0") not in ("", "0"):
+        waves = build_dir / f"{toplevel}.ghw"  # WAVES=1 pytest ...: every simulation writes its waveform
     plusargs = ["--ieee-asserts=disable-at-0"]
     if waves is not None:
         kind = "fst" if waves.suffix == ".fst" else "wave"
         plusargs.append(f"--{kind}={waves.resolve()}")
-    return runner.test(
+    results = runner.test(
         hdl_toplevel=toplevel,
         test_module=test_module,
         test_args=["--std=08"],
@@ -95,3 +114,17 @@ def run_cocotb(
         testcase=testcase,
         log_file=log_file,
     )
+    if waves is not None and waves.suffix == ".ghw":
+        from stepramp.gtkw import LAYOUTS, write_gtkw
+
+        if toplevel in LAYOUTS:  # a GTKWave layout beside the waveform (gtkwave FILE.gtkw), zoomed to the whole run
+            stop = _sim_stop_s(Path(results))
+            write_gtkw(
+                waves.with_suffix(".gtkw"),
+                waves,
+                top=toplevel,
+                duration_s=stop,
+                marker_s=stop / 2 if stop else None,
+                title=f"{toplevel}: {test_module}",
+            )
+    return results

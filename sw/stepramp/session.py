@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from stepramp.driver import Outputs, StepRamp, StepRampError
+from stepramp.gtkw import missing_in
 from stepramp.hdl import run_cocotb
 from stepramp.model import edges as model_edges
 from stepramp.plan import Plan
@@ -209,13 +210,6 @@ except ImportError:  # the front end does not need cocotb
     cocotb = None  # type: ignore[assignment]
 
 
-def _resolve(dut: Any, path: str) -> Any:
-    handle = dut
-    for part in path.split("."):
-        handle = getattr(handle, part)
-    return handle
-
-
 if cocotb is not None:
 
     @cocotb.test()
@@ -288,18 +282,6 @@ if cocotb is not None:
                 "end_s": end_s,
             }
 
-        def missing(paths: list[list[Any]]) -> list[str]:
-            out = []
-            for path, width in paths:
-                try:
-                    handle = _resolve(dut, path)
-                except AttributeError:
-                    out.append(path)
-                    continue
-                if width > 1 and len(handle) != width:
-                    out.append(f"{path} (width {len(handle)}, not {width})")
-            return out
-
         sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
         sock.connect(os.environ["STEPRAMP_SESSION_SOCKET"])
         stream = sock.makefile("rwb")
@@ -314,7 +296,7 @@ if cocotb is not None:
                 if req["op"] == "move":
                     answer = await do_move(req)
                 elif req["op"] == "signals":
-                    answer = {"missing": missing(req["paths"])}
+                    answer = {"missing": missing_in(dut, req["paths"])}
                 else:
                     answer = {"fault": f"unknown request {req['op']!r}"}
             except Exception as exc:  # tell the front end, then fail the test
