@@ -80,6 +80,15 @@ _PINS: Layout = [
     ("Windings (H-bridge inputs)", [Trace("a1"), Trace("a2"), Trace("b1"), Trace("b2")]),
 ]
 
+
+def _axil_channel(name: str, *payload: tuple[str, int, str]) -> list[Trace]:
+    return [
+        Trace(f"s_axil_{name}valid"),
+        Trace(f"s_axil_{name}ready"),
+        *(Trace(f"s_axil_{field}", width, fmt) for field, width, fmt in payload),
+    ]
+
+
 #: A layout per top: the bus, the engine (FSM state by name, delay, counters) and the pins.
 LAYOUTS: dict[str, Layout] = {
     "stepramp_plb": [
@@ -109,23 +118,12 @@ LAYOUTS: dict[str, Layout] = {
             [
                 Trace("aclk"),
                 Trace("aresetn"),
-                Trace("s_axil_awvalid"),
-                Trace("s_axil_awready"),
-                Trace("s_axil_awaddr", 7, "hex"),
-                Trace("s_axil_wvalid"),
-                Trace("s_axil_wready"),
-                Trace("s_axil_wdata", 32, "hex"),
-                Trace("s_axil_wstrb", 4, "bit"),
-                Trace("s_axil_bvalid"),
-                Trace("s_axil_bready"),
-                Trace("s_axil_bresp", 2, "bit"),
-                Trace("s_axil_arvalid"),
-                Trace("s_axil_arready"),
-                Trace("s_axil_araddr", 7, "hex"),
-                Trace("s_axil_rvalid"),
-                Trace("s_axil_rready"),
-                Trace("s_axil_rdata", 32, "hex"),
-                Trace("s_axil_rresp", 2, "bit"),
+                # each channel: valid, ready, then its payload
+                *_axil_channel("aw", ("awaddr", 7, "hex")),
+                *_axil_channel("w", ("wdata", 32, "hex"), ("wstrb", 4, "bit")),
+                *_axil_channel("b", ("bresp", 2, "bit")),
+                *_axil_channel("ar", ("araddr", 7, "hex")),
+                *_axil_channel("r", ("rdata", 32, "hex"), ("rresp", 2, "bit")),
                 Trace("irq"),
             ],
         ),

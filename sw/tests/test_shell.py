@@ -14,7 +14,8 @@ from pathlib import Path
 import pytest
 
 from stepramp.driver import StepRampError
-from stepramp.gtkw import LAYOUT, signal_paths, write_gtkw, zoom_for
+from stepramp.gtkw import LAYOUT, LAYOUTS, missing_in, signal_paths, write_gtkw, zoom_for
+from stepramp.hdl import _sim_stop_s
 from stepramp.model import edges as model_edges
 from stepramp.plan import MIN_INTERVAL_CLKS, plan_move
 from stepramp.shell import SHELL_CONFIG, ModelBackend, Shell, speed_limit
@@ -173,3 +174,39 @@ def test_cli_survives_bytes_that_are_not_text() -> None:
     out = run.stdout.decode("utf-8", errors="replace").splitlines()
     assert sum(line.startswith("error:") for line in out) == 2
     assert infos(out)[-1][0] == 3
+
+
+def test_missing_in_reports_absent_signals_and_wrong_widths() -> None:
+    """The check every simulation makes of its layout, on a stand-in for cocotb handles."""
+
+    class Vec:
+        def __init__(self, width: int) -> None:
+            self.width = width
+
+        def __len__(self) -> int:
+            return self.width
+
+    class Scope:
+        pass
+
+    dut = Scope()
+    dut.clk = Vec(1)  # type: ignore[attr-defined]
+    dut.core_inst = Scope()  # type: ignore[attr-defined]
+    dut.core_inst.cur_delay = Vec(31)  # type: ignore[attr-defined]
+    got = missing_in(dut, [("clk", 1), ("core_inst.cur_delay", 32), ("core_inst.nope", 1), ("nope.x", 4)])
+    assert got == ["core_inst.cur_delay (width 31, not 32)", "core_inst.nope", "nope.x"]
+    # every top's layout shows the engine's state by name, its delay and counters, and STEP/DIR
+    for top, layout in LAYOUTS.items():
+        names = {p.rsplit(".", 1)[-1] for p, _ in signal_paths(layout)}
+        assert {"state_name", "cur_delay", "step_count", "position", "step", "dir"} <= names, top
+
+
+def test_sim_stop_from_cocotb_results(tmp_path: Path) -> None:
+    xml = tmp_path / "r.xml"
+    xml.write_text(
+        '<testsuites><testsuite><testcase><properties><property name="sim_time_stop" value="1500.0" />'
+        '</properties></testcase><testcase><properties><property name="sim_time_stop" value="97360.0" />'
+        "</properties></testcase></testsuite></testsuites>"
+    )
+    assert _sim_stop_s(xml) == pytest.approx(97360e-9)
+    assert _sim_stop_s(tmp_path / "absent.xml") is None
