@@ -81,6 +81,7 @@ class FakeEngine:
     start_out_edges: list[int] = field(default_factory=list)  # every edge after which start_out is '1'
     busy: bool = False
     ignored: int = 0
+    cancelled: int = 0  # starts that came with stop_out
     last_pulse: Event = field(default_factory=Event)
     done: Event = field(default_factory=Event)
 
@@ -105,6 +106,13 @@ class FakeEngine:
             self.start_out_edges.append(s)
             if self.busy:
                 self.ignored += 1  # the engine ignores a start while busy
+                continue
+            await ReadOnly()
+            if int(dut.stop_out.value):  # start with hard_stop: the engine accepts and ends it, no pulse
+                if self.moves:
+                    self.moves.pop(0)
+                self.cancelled += 1
+                self.done.set()
                 continue
             move = self.moves.pop(0) if self.moves else Move(0)
             self.busy = True
@@ -707,6 +715,7 @@ async def hard_stop_cancels_a_held_start(dut) -> None:
     assert stops == []
     # DIR hold: direction 1 requested right after the last pulse waits for dir_hold; stopped meanwhile.
     n_starts = len(rec.start_edges)
+    eng.moves.append(Move(3))  # what the engine would play if the cancel failed
     q = await request_start(dut, 1)
     assert int(dut.gate_busy.value) == 1
     await stop_at(q + 20)
@@ -715,12 +724,14 @@ async def hard_stop_cancels_a_held_start(dut) -> None:
     assert rec.dir_edges == [] and int(dut.dir_o.value) == 0, "DIR changed after a stop during its hold"
     assert int(dut.gate_busy.value) == 0
     # DIR setup: DIR changes at once (no pulse for a while), the start waits 195 clocks; stopped meanwhile.
+    eng.moves.append(Move(3))  # what the engine would play if the cancel failed
     q = await request_start(dut, 1)
     await stop_at(q + 50)
     await ClockCycles(dut.clk, 400)
     assert stops[-1] == q + 50 and rec.start_edges[-1] == q + 50
     assert rec.dir_edges == [q + 1] and int(dut.dir_o.value) == 1
     # A soft stop during DIR setup cancels the start the same way (at rest there is nothing to decelerate).
+    eng.moves.append(Move(3))
     q = await request_start(dut, 0)
     await stop_at(q + 30, "soft")
     await ClockCycles(dut.clk, 400)
@@ -728,6 +739,7 @@ async def hard_stop_cancels_a_held_start(dut) -> None:
     assert rec.dir_edges[-1] == q + 1 and int(dut.dir_o.value) == 0
     n_dir = len(rec.dir_edges)
     # start_req and hard_stop at one edge, with a direction change: no DIR change, start_out with stop_out.
+    eng.moves.append(Move(3))
     q = await request_with_stop(1, dut.hard_stop)
     await ClockCycles(dut.clk, 400)
     assert stops[-1] == q and rec.start_edges[-1] == q
@@ -738,6 +750,7 @@ async def hard_stop_cancels_a_held_start(dut) -> None:
     q = await request_with_stop(0, dut.soft_stop)
     await ClockCycles(dut.clk, 100)
     assert len(stops) == n_stops and rec.start_edges[-1] == q
+    assert eng.cancelled == 4 and not eng.moves
     assert len(eng.step_edges) == 2, "only the first move pulsed"
     watcher.cancel()
     rec.stop()
