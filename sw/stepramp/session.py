@@ -94,7 +94,8 @@ class RtlSession:
     def start(self) -> None:
         self.build_dir.mkdir(parents=True, exist_ok=True)
         # A short path: Unix socket names are limited to about 100 bytes.
-        self._tmp = tempfile.TemporaryDirectory(prefix="stepramp-")
+        short = "/tmp" if len(tempfile.gettempdir()) > 60 and os.path.isdir("/tmp") else None
+        self._tmp = tempfile.TemporaryDirectory(prefix="stepramp-", dir=short)
         path = os.path.join(self._tmp.name, "s")
         server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
         server.bind(path)
