@@ -23,8 +23,8 @@ from stepramp.driver import MODES, Outputs, Status, StepRamp
 from stepramp.gtkw import LAYOUTS, missing_in, signal_paths
 from stepramp.ipif import IpifError, IpifMaster
 from stepramp.plan import Plan
-from stepramp.stepper import STEP_LATENCY
-from tbutil import CLK_PERIOD_NS, cocotb, now_cycles
+from stepramp.stepwatch import StepWatch
+from tbutil import CLK_PERIOD_NS
 
 
 class AxilError(Exception):
@@ -111,7 +111,8 @@ class PeripheralTb:
         self.clk = dut.aclk if top == "stepramp_axil" else dut.clk
         Clock(self.clk, CLK_PERIOD_NS, unit="ns").start()
         self.bus: Any = None
-        self.step_edges: list[int] = []
+        self.pins: StepWatch | None = None
+        self.step_edges: list[int] = []  # the pins' records once reset
         self.start_edges: list[int] = []
         self.outputs = Outputs()
         self.enabled = False
@@ -136,8 +137,8 @@ class PeripheralTb:
         await ClockCycles(self.clk, 2)
         missing = missing_in(self.dut, signal_paths(LAYOUTS[self.top]))
         assert not missing, f"the GTKWave layout names signals {self.top} does not have: {missing}"
-        cocotb.start_soon(self.watch(self.dut.step, self.step_edges))
-        cocotb.start_soon(self.watch(self.dut.core_inst.busy, self.start_edges))
+        self.pins = StepWatch(self.dut.step, self.dut.core_inst.busy, CLK_PERIOD_NS * 1000)
+        self.step_edges, self.start_edges = self.pins.step_edges, self.pins.start_edges
         self._start_monitors(position=0)
 
     def _start_monitors(self, position: int) -> None:
@@ -175,13 +176,6 @@ class PeripheralTb:
             self.monitors.check()
             self.monitors = None
 
-    @staticmethod
-    async def watch(signal: Any, edges: list[int]) -> None:
-        """Record the clock edge (index) of every rising edge of a signal."""
-        while True:
-            await RisingEdge(signal)
-            edges.append(now_cycles())
-
     def driver(self, plan_args: dict[str, Any] | None = None) -> StepRamp:
         args = plan_args or {"fclk": 1e6, "spr": 200.0, "prescale": 1}
         drv = StepRamp(self.bus, fclk=args["fclk"], spr=args["spr"], prescale=args["prescale"])
@@ -193,11 +187,9 @@ class PeripheralTb:
         await First(RisingEdge(self.dut.irq), Timer(cycles * CLK_PERIOD_NS, unit="ns"))
 
     def edges_since(self, first_step: int, first_start: int) -> list[int]:
-        """STEP pin edges of the move whose engine start was the first one recorded at or after first_start,
-        counted from the engine's start edge and less the stepping logic's register stage, so that they compare
-        with stepramp.model.edges."""
-        start = self.start_edges[first_start]
-        return [e - start - STEP_LATENCY for e in self.step_edges[first_step:]]
+        """STEP pin edges of a move in the model's convention (stepramp.stepwatch.StepWatch.since)."""
+        assert self.pins is not None, "reset() first"
+        return self.pins.since(first_step, first_start)
 
     async def run_plan(self, drv: StepRamp, plan: Plan) -> tuple[list[int], Status]:
         """Program, start, wait for done (interrupt-driven); step edges counted from the engine's start edge."""

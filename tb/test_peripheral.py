@@ -312,7 +312,7 @@ async def soft_and_hard_stop(dut) -> None:
     await tb.configure(Outputs(mode="half", step_width=4, dir_setup=12, dir_hold=6), enable=True)
     stop_edges: dict[str, list[int]] = {"soft": [], "hard": []}
     for kind in stop_edges:
-        cocotb.start_soon(tb.watch(getattr(dut.core_inst, f"{kind}_stop"), stop_edges[kind]))
+        cocotb.start_soon(tb.pins.watch(getattr(dut.core_inst, f"{kind}_stop"), stop_edges[kind]))
     prof = PROFILES_BY_NAME["trap_long_cruise"]
     drv = tb.driver(prof.args())
     plan = drv.plan(prof.steps, prof.accel, prof.decel, prof.speed)
@@ -346,11 +346,6 @@ async def soft_and_hard_stop(dut) -> None:
             assert tail[-1] >= 0.95 * slow_end, f"{kind} stop in {phase}: last interval {tail[-1]} < {slow_end}"
             assert all(b >= a - plan.prescale for a, b in itertools.pairwise(tail)), "speed rose after a soft stop"
     tb.finish()
-
-
-def _ctrl_bits(*fields: str) -> int:
-    ctrl = REGISTERS_BY_NAME["CTRL"]
-    return sum(1 << ctrl.field(f).lsb for f in fields)
 
 
 @cocotb.test()
@@ -390,7 +385,8 @@ async def hard_stop_cancels_a_held_start(dut) -> None:
     # 2: START and HARD_STOP in one write: the stop wins.
     forwards = valid_plan()
     await drv.program(forwards)
-    await tb.bus.write(offset("CTRL"), _ctrl_bits("START", "HARD_STOP"), strobe=0x1)
+    ctrl = REGISTERS_BY_NAME["CTRL"]
+    await tb.bus.write(offset("CTRL"), ctrl.field("START").mask | ctrl.field("HARD_STOP").mask, strobe=0x1)
     status = await drv.wait_done(idle=lambda: tb.irq_or(500))
     assert not status.error
     await ClockCycles(tb.clk, 4000)

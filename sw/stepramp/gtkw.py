@@ -1,11 +1,11 @@
 # SPDX-License-Identifier: MIT
-"""A GTKWave save file (.gtkw) that lays out a stepramp_plb waveform for a reader.
+"""GTKWave save files (.gtkw) that lay out a waveform of stepramp_plb, stepramp_axil or stepramp_engine for a reader.
 
-Groups, top to bottom: the bus (PLB-like IPIF), the ramp FSM (state by name, busy, done, error), the current delay
-(as a number and as an analog trace, which draws the ramp), the step counter and the position, STEP/DIR/ENABLE,
-and the windings. `LAYOUT` names each signal by its path below the top and its width; the simulation that writes
-the waveform checks that every one of them exists with that width (`stepramp.session.RtlSession.missing_signals`),
-so the layout cannot silently drift from the RTL.
+Groups, top to bottom: the bus (or the engine's move inputs), the ramp FSM (state by name, busy, done, error), the
+current delay (as a number and as an analog trace, which draws the ramp), the step counter and the position,
+STEP/DIR/ENABLE, and the windings. `LAYOUTS` names each signal by its path below the top and its width; every engine
+and bus simulation checks that each of them exists with that width (`missing_in`), so a layout cannot silently drift
+from the RTL.
 
 GTKWave reads GHDL's GHW with one facility per bit (`top.<top>.<path>[i]`), so vectors are written as GTKWave's
 concatenations `#{name} bit bit ...`, which every GTKWave 3.x loads.

@@ -30,10 +30,12 @@ from stepramp.gtkw import missing_in
 from stepramp.hdl import run_cocotb
 from stepramp.model import edges as model_edges
 from stepramp.plan import Plan
-from stepramp.stepper import STEP_LATENCY
 
 #: Default setting: the AVR446 demo's motor (200 steps/rev, half-stepped: 400 steps/rev) with the windings driven in
 #: half steps, on a 250 kHz core clock (the clock's period sets the waveform's time axis).
+#: Clocks between two STATUS polls at most (the driver sleeps on irq in between).
+_POLL_CYCLES = 20_000
+
 DEFAULT_CONFIG: dict[str, Any] = {"fclk": 250e3, "spr": 400.0, "prescale": 1, "mode": "half", "dir_setup": 2}
 
 
@@ -217,67 +219,50 @@ if cocotb is not None:
     async def session(dut: Any) -> None:
         """Serve the front end's requests until it quits or goes away."""
         from stepramp.ipif import IpifMaster  # needs cocotb-bus
+        from stepramp.stepwatch import StepWatch
 
         cfg: dict[str, Any] = json.loads(os.environ["STEPRAMP_SESSION_CONFIG"])
         period_ps = round(1e12 / cfg["fclk"])
         Clock(dut.clk, period_ps, unit="ps").start()
-
-        def now_edge() -> int:
-            return round(get_sim_time("ps") / period_ps)
-
-        step_edges: list[int] = []
-        start_edges: list[int] = []
-
-        async def watch(signal: Any, edges: list[int]) -> None:
-            while True:
-                await RisingEdge(signal)
-                edges.append(now_edge())
-
         bus = IpifMaster(dut, dut.clk, period_ps // 1000 or 1)
         dut.rst.value = 1
         await ClockCycles(dut.clk, 3)
         await FallingEdge(dut.clk)
         dut.rst.value = 0
         await ClockCycles(dut.clk, 2)
-        cocotb.start_soon(watch(dut.step, step_edges))
-        cocotb.start_soon(watch(dut.core_inst.busy, start_edges))
+        pins = StepWatch(dut.step, dut.core_inst.busy, period_ps)
 
         drv = StepRamp(bus, fclk=cfg["fclk"], spr=cfg["spr"], prescale=cfg["prescale"])
         await drv.check_id()
         await drv.configure_outputs(Outputs(mode=cfg["mode"], dir_setup=cfg["dir_setup"], dir_hold=cfg["dir_setup"]))
         await drv.set_enable(True)
         await drv.enable_irq()
-        poll_wait = 20_000 * period_ps
 
         async def idle() -> None:
             if not int(dut.irq.value):  # irq may have risen during the status read
-                await First(RisingEdge(dut.irq), Timer(poll_wait, unit="ps"))
+                await First(RisingEdge(dut.irq), Timer(_POLL_CYCLES * period_ps, unit="ps"))
 
         async def do_move(req: dict[str, Any]) -> dict[str, Any]:
             try:
                 plan = drv.plan(req["steps"], req["accel"], req["decel"], req["speed"])
             except ValueError as exc:
                 return {"value_error": str(exc)}
-            n_steps, n_starts = len(step_edges), len(start_edges)
+            mark = pins.mark()
             start_s = get_sim_time("ps") * 1e-12
             await drv.program(plan)
             await drv.start()
             # A hang fails the move instead of the session waiting for ever: the model's last edge, plus DIR
-            # setup/hold and slack, in polls of at most poll_wait.
-            budget = max([0, *model_edges(plan)[-1:]]) + 2 * cfg["dir_setup"] + 20_000
+            # setup/hold and slack, in polls of at most _POLL_CYCLES.
+            budget = max([0, *model_edges(plan)[-1:]]) + 2 * cfg["dir_setup"] + _POLL_CYCLES
             try:
-                await drv.wait_done(idle=idle, polls=budget // 20_000 + 10)
+                await drv.wait_done(idle=idle, polls=budget // _POLL_CYCLES + 10)
             except StepRampError as exc:
                 return {"core_error": str(exc), "position": await drv.position()}
             end_s = get_sim_time("ps") * 1e-12
             position = await drv.position()
-            edges: list[int] = []
-            if len(start_edges) > n_starts:
-                start = start_edges[n_starts]
-                edges = [e - start - STEP_LATENCY for e in step_edges[n_steps:]]
             return {
                 "plan": dataclasses.asdict(plan),
-                "edges": edges,
+                "edges": pins.since(*mark),
                 "position": position,
                 "start_s": start_s,
                 "end_s": end_s,

@@ -105,7 +105,6 @@ class Shell:
         self.out = out
         self.accel, self.decel, self.speed, self.steps = 4000, 4000, 2000, 400
         self.position = 0
-        self.moves = 0
         self.config = {"spr": spr, "fclk": fclk, "prescale": prescale}
         self.speed_max = speed_limit(fclk, spr, prescale)
 
@@ -218,7 +217,6 @@ class Shell:
                 self.position = position
             return
         self.position = outcome.position
-        self.moves += 1
         self.say("OK")
 
     def run(self, lines: Iterable[str], prompt: bool = False) -> None:

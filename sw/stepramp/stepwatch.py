@@ -1,0 +1,48 @@
+# SPDX-License-Identifier: MIT
+"""Inside a simulation (cocotb): every STEP rising edge and every engine start, stamped with its clock edge, so that
+a move seen on the pins compares with the bit-exact model (`stepramp.model.edges`) whatever the bus timing and
+however long the stepping logic holds a start for DIR setup/hold. Used by `stepramp.session` and the bus testbenches.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import cocotb
+from cocotb.triggers import RisingEdge
+from cocotb.utils import get_sim_time
+
+from stepramp.stepper import STEP_LATENCY
+
+
+class StepWatch:
+    """Records the STEP pin's rising edges and the engine's starts (the rising edge of its busy: the model's edge 0)."""
+
+    def __init__(self, step: Any, busy: Any, period_ps: int) -> None:
+        self.period_ps = period_ps
+        self.step_edges: list[int] = []
+        self.start_edges: list[int] = []
+        cocotb.start_soon(self.watch(step, self.step_edges))
+        cocotb.start_soon(self.watch(busy, self.start_edges))
+
+    def now(self) -> int:
+        """Index of the most recent rising clock edge (simulation time in clock periods, rounded)."""
+        return round(get_sim_time("ps") / self.period_ps)
+
+    async def watch(self, signal: Any, edges: list[int]) -> None:
+        """Record the clock edge of every rising edge of a signal."""
+        while True:
+            await RisingEdge(signal)
+            edges.append(self.now())
+
+    def mark(self) -> tuple[int, int]:
+        """Where the next move's records will start: pass to `since` once it is done."""
+        return len(self.step_edges), len(self.start_edges)
+
+    def since(self, first_step: int, first_start: int) -> list[int]:
+        """STEP edges of the move whose engine start is the first recorded at or after first_start, counted from
+        that start edge and less the stepping logic's register stage (empty if the engine never started)."""
+        if len(self.start_edges) <= first_start:
+            return []
+        start = self.start_edges[first_start]
+        return [e - start - STEP_LATENCY for e in self.step_edges[first_step:]]
