@@ -41,6 +41,9 @@ end entity stepramp_core;
 architecture rtl of stepramp_core is
 
   signal start_req     : std_logic;
+  signal load          : std_logic;
+  signal step_space    : std_logic_vector(15 downto 0);
+  signal min_gap       : std_logic_vector(16 downto 0);
   signal start         : std_logic;
   signal start_dir     : std_logic;
   signal gate_busy     : std_logic;
@@ -76,7 +79,7 @@ architecture rtl of stepramp_core is
   signal busy          : std_logic;
   signal done          : std_logic;
   signal error         : std_logic;
-  signal err_code      : std_logic_vector(3 downto 0);
+  signal err_code      : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
   signal state         : std_logic_vector(1 downto 0);
   signal dir_i         : std_logic;
   signal position      : std_logic_vector(31 downto 0);
@@ -123,6 +126,7 @@ begin
       dir_setup      => dir_setup,
       dir_hold       => dir_hold,
       pwm_period     => pwm_period,
+      step_space     => step_space,
       eng_busy       => busy_any,
       eng_done       => done,
       eng_error      => error,
@@ -135,8 +139,13 @@ begin
       dir_fault      => dir_fault
     );
 
-  -- STATUS.BUSY covers a start held back by the stepping logic for DIR setup/hold.
+  -- STATUS.BUSY covers a start held back by the stepping logic for DIR setup/hold or STEP spacing.
   busy_any <= busy or gate_busy;
+
+  -- The engine takes the move at the edge that accepts START (the register file passes START on only while idle,
+  -- and the stepping logic accepts it exactly then), not when the held start reaches it: writes during the hold
+  -- go to the staging copy for the next move.
+  load <= start_req and not busy_any;
 
   -- A hard stop that cancels a start held by the stepping logic reaches the engine with that start (done, no pulse).
   eng_hard_stop <= hard_stop or gate_stop;
@@ -155,6 +164,8 @@ begin
       dir_hold   => dir_hold,
       enable_in  => enable_cfg,
       pwm_period => pwm_period,
+      step_space => step_space,
+      min_gap    => min_gap,
       start_req  => start_req,
       new_dir    => direction,
       hard_stop  => hard_stop,
@@ -181,6 +192,7 @@ begin
     port map (
       clk        => clk,
       rst        => rst,
+      load       => load,
       start      => start,
       soft_stop  => soft_stop,
       hard_stop  => eng_hard_stop,
@@ -197,6 +209,7 @@ begin
       decel_seed => decel_seed,
       cruise     => cruise,
       stop_ratio => stop_ratio,
+      min_gap    => min_gap,
       pos_load   => pos_load,
       pos_value  => pos_value,
       step       => eng_step,

@@ -10,14 +10,18 @@
 --     accumulator. The result waits in nxt_* until the pulse edge. The countdown never waits for it: if it is not
 --     there in time the move stops with error C_ERR_LATE.
 --
+-- Parameters: latched at any edge that samples load = '1' while idle (the core drives load at the edge that accepts
+-- START, so a start held back by the stepping logic keeps them); a bench may give load with start.
 -- Timing (edge 0 samples start = '1' while busy = '0'):
---   edge 0: parameters latched, busy <= '1', dir <= direction, timer restart and next-delay flush requested;
+--   edge 0: busy <= '1', dir <= direction, timer restart and next-delay flush requested;
 --   edge 1: parameters checked, interval 1 prepared (no arithmetic needed: the accumulator is 0), accel seed load
 --           requested from the next-delay unit;
 --   edge 2: pulse 0 (step '1' in the following cycle), or done + error when a parameter is bad, or done for N = 0;
 --   edge 2 + prescale * T_k: pulse k. done comes with the last pulse; a late value stops the move with done + error
 --   at the edge of the pulse that had no successor ready (that pulse is emitted and counted).
--- All move parameters (steps .. stop_ratio, direction, prescale) are latched at edge 0; every output is registered.
+--   A pulse k >= 1 less than min_gap clocks after pulse k - 1 is not emitted: the move ends at its edge with done +
+--   error C_ERR_STEP_SPACE (docs/algorithm.md, "Step spacing").
+-- Every output is registered.
 --
 -- Stops (docs/stepramp_engine.md "Stops", docs/algorithm.md "Soft stop"), strobes sampled at edge e while busy:
 --   hard_stop: no pulse after edge e (a pulse due at e is not emitted); done (no error) after edge e. Also taken
@@ -45,6 +49,7 @@ entity stepramp_engine is
   port (
     clk        : in    std_logic;
     rst        : in    std_logic;
+    load       : in    std_logic;
     start      : in    std_logic;
     soft_stop  : in    std_logic;
     hard_stop  : in    std_logic;
@@ -61,6 +66,7 @@ entity stepramp_engine is
     decel_seed : in    std_logic_vector(47 downto 0);
     cruise     : in    std_logic_vector(63 downto 0);
     stop_ratio : in    std_logic_vector(31 downto 0);
+    min_gap    : in    std_logic_vector(16 downto 0);
     pos_load   : in    std_logic;
     pos_value  : in    std_logic_vector(31 downto 0);
     step       : out   std_logic;
@@ -68,7 +74,7 @@ entity stepramp_engine is
     busy       : out   std_logic;
     done       : out   std_logic;
     error      : out   std_logic;
-    err_code   : out   std_logic_vector(3 downto 0);
+    err_code   : out   std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
     state      : out   std_logic_vector(1 downto 0);
     position   : out   std_logic_vector(31 downto 0);
     step_count : out   std_logic_vector(30 downto 0);
@@ -137,14 +143,16 @@ architecture rtl of stepramp_engine is
   signal busy_r       : std_logic;
   signal done_r       : std_logic;
   signal error_r      : std_logic;
-  signal err_code_r   : std_logic_vector(3 downto 0);
+  signal err_code_r   : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
   signal step_r       : std_logic;
   signal dir_r        : std_logic;
   signal state_r      : std_logic_vector(1 downto 0);
   signal position_r   : unsigned(31 downto 0);
   signal step_count_r : unsigned(30 downto 0);
   signal cur_delay_r  : unsigned(31 downto 0);
-  signal chk_code     : std_logic_vector(3 downto 0);
+  signal chk_code     : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
+  -- Clocks until a pulse keeps min_gap from the previous pulse of the move (0: it may come).
+  signal gap_left : unsigned(16 downto 0);
   signal n_zero       : std_logic;
   signal n_one        : std_logic;
 
@@ -163,7 +171,7 @@ architecture rtl of stepramp_engine is
   signal nxt_d     : unsigned(32 downto 0);
   signal nxt_acc   : unsigned(31 downto 0);
   signal nxt_delay : unsigned(31 downto 0); -- nxt_d saturated to 32 bits, for cur_delay
-  signal nxt_code  : std_logic_vector(3 downto 0);
+  signal nxt_code  : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
   signal nxt_state : std_logic_vector(1 downto 0);
   signal nxt_last  : std_logic;
 
@@ -178,7 +186,7 @@ architecture rtl of stepramp_engine is
   signal rec_val : unsigned(47 downto 0);
   signal rec_rem : unsigned(32 downto 0);
   signal v_r     : unsigned(63 downto 0); -- Q32.32 value of interval pc_j (then of the alternative)
-  signal v_code  : std_logic_vector(3 downto 0);
+  signal v_code  : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
 
   -- Soft stop. sreq: a request waits for its pulse p (the first pulse edge after the edge that sampled it).
   -- stop_mode: a soft stop is in effect; the precompute then follows the stop's decel ramp, pc_m = L' - pc_j.
@@ -196,7 +204,7 @@ architecture rtl of stepramp_engine is
   signal alt_ok      : std_logic;
   signal alt_d       : unsigned(32 downto 0);
   signal alt_acc     : unsigned(31 downto 0);
-  signal alt_code    : std_logic_vector(3 downto 0);
+  signal alt_code    : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
   signal alt_rec_val : unsigned(47 downto 0); -- D_(m-1) and its remainder: the stop's recurrence state
   signal alt_rec_rem : unsigned(32 downto 0);
 
@@ -275,7 +283,7 @@ begin
   -- >= 1.0. Registered every clock; the sequencer reads it at edge 2 (the parameters are latched at edge 0).
   check_proc : process (clk) is
 
-    variable v_chk : std_logic_vector(3 downto 0);
+    variable v_chk : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
 
   begin
 
@@ -327,7 +335,7 @@ begin
     variable v_pulse  : std_logic;
     variable v_load   : std_logic;
     variable v_finish : std_logic;
-    variable v_err    : std_logic_vector(3 downto 0);
+    variable v_err    : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
     variable v_alt    : std_logic;
     variable v_m      : unsigned(30 downto 0);
     variable v_big    : std_logic;
@@ -561,7 +569,7 @@ begin
 
         when C_PH_IDLE =>
 
-          if (start = '1') then
+          if (load = '1') then
             p_steps      <= unsigned(steps);
             p_l          <= unsigned(steps) - 1;
             p_prescale   <= unsigned(prescale);
@@ -575,6 +583,9 @@ begin
             p_decel_seed <= unsigned(decel_seed);
             p_cruise     <= unsigned(cruise);
             p_stop_ratio <= unsigned(stop_ratio);
+          end if;
+
+          if (start = '1') then
             dir_r        <= direction;
             busy_r       <= '1';
             err_code_r   <= C_ERR_NONE;
@@ -655,7 +666,11 @@ begin
 
           -- The hot path: one compare per tick.
           if (tick = '1') then
-            if (cnt = 1) then
+            if (cnt = 1 and gap_left /= 0) then
+              -- Too close to the previous pulse: it would merge with it on the STEP pin.
+              v_finish := '1';
+              v_err    := C_ERR_STEP_SPACE;
+            elsif (cnt = 1) then
               v_pulse := '1';
               if (sreq = '1' and alt_kind = C_ALT_END) then
                 -- Soft stop with m = 0: this pulse is the last.
@@ -701,6 +716,13 @@ begin
         v_alt    := '0';
         v_finish := '1';
         v_err    := C_ERR_NONE;
+      end if;
+
+      -- Step spacing: gap_left is 0 once min_gap clocks have passed since the last pulse (none before pulse 0).
+      if (v_pulse = '1' and unsigned(min_gap) /= 0) then
+        gap_left <= unsigned(min_gap) - 1;
+      elsif (gap_left /= 0) then
+        gap_left <= gap_left - 1;
       end if;
 
       if (v_pulse = '1') then
@@ -801,6 +823,7 @@ begin
         busy_r       <= '0';
         done_r       <= '0';
         error_r      <= '0';
+        gap_left     <= (others => '0');
         err_code_r   <= C_ERR_NONE;
         step_r       <= '0';
         dir_r        <= '0';

@@ -5,9 +5,9 @@
 -- answer (ack, with err for an unmapped offset, and rdata for reads) comes one clock later, registered. The tops
 -- (stepramp_plb for the PLB-like IPIF, stepramp_axil for AXI4-Lite) turn their bus into these strobes.
 --
--- The engine side carries the latched-at-start move registers, the command strobes and the engine's status.
--- Motion registers are plain storage: the engine latches them at start, so writing them during a move only
--- prepares the next move (shadowing). Sticky DONE/ERROR are set by the engine's strobes and cleared by writing 1;
+-- The engine side carries the staging copy of the move registers, the command strobes and the engine's status.
+-- Motion registers are plain storage: the engine latches them at the edge that accepts START (stepramp_core), so
+-- writing them during a move, or while a start is held back, only prepares the next move (shadowing). Sticky DONE/ERROR are set by the engine's strobes and cleared by writing 1;
 -- a set and a clear in the same cycle keep the flag set, so no event is lost.
 
 library ieee;
@@ -58,11 +58,12 @@ entity stepramp_regfile is
     dir_setup  : out   std_logic_vector(15 downto 0);
     dir_hold   : out   std_logic_vector(15 downto 0);
     pwm_period : out   std_logic_vector(15 downto 0);
+    step_space : out   std_logic_vector(15 downto 0);
     -- Engine and stepping logic status (eng_busy: the engine, or a start held for DIR timing).
     eng_busy       : in    std_logic;
     eng_done       : in    std_logic;
     eng_error      : in    std_logic;
-    eng_err_code   : in    std_logic_vector(3 downto 0);
+    eng_err_code   : in    std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
     eng_state      : in    std_logic_vector(1 downto 0);
     eng_dir        : in    std_logic;
     eng_position   : in    std_logic_vector(31 downto 0);
@@ -75,12 +76,12 @@ end entity stepramp_regfile;
 architecture rtl of stepramp_regfile is
 
   -- The plain read/write words: the motion registers STEPS .. STOP_RATIO, and the stepping configuration DRIVE ..
-  -- PWM_PERIOD (written only while stopped). One register per word, indexed by word offset, reached with constant
+  -- STEP_SPACE (written only while stopped). One register per word, indexed by word offset, reached with constant
   -- indices only (loops below), so no memory is inferred; the words in between are never written (constant 0).
   constant C_FIRST_W     : natural := C_REG_STEPS / 4;
   constant C_LAST_MOVE_W : natural := C_REG_STOP_RATIO / 4;
   constant C_FIRST_CFG_W : natural := C_REG_DRIVE / 4;
-  constant C_LAST_W      : natural := C_REG_PWM_PERIOD / 4;
+  constant C_LAST_W      : natural := C_REG_STEP_SPACE / 4;
 
   type reg_array_t is array (C_FIRST_W to C_LAST_W) of std_logic_vector(31 downto 0);
 
@@ -91,7 +92,7 @@ architecture rtl of stepramp_regfile is
   signal irq_error_en : std_logic;
   signal done_flag    : std_logic;
   signal error_flag   : std_logic;
-  signal err_code_r   : std_logic_vector(3 downto 0);
+  signal err_code_r   : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
   signal rdata_r      : std_logic_vector(31 downto 0);
   signal ack_r        : std_logic;
   signal err_r        : std_logic;
@@ -163,7 +164,8 @@ architecture rtl of stepramp_regfile is
   ) return std_logic_vector is
   begin
 
-    if (w = word(C_REG_PRESCALE) or w = word(C_REG_STEP_WIDTH) or w = word(C_REG_PWM_PERIOD)) then
+    if (w = word(C_REG_PRESCALE) or w = word(C_REG_STEP_WIDTH) or w = word(C_REG_PWM_PERIOD) or
+        w = word(C_REG_STEP_SPACE)) then
       return x"0000FFFF";
     elsif (w = word(C_REG_DRIVE)) then
       return x"00000077";
@@ -282,7 +284,7 @@ begin
           rd_v(C_STATUS_DONE_LSB)                                      := done_flag;
           rd_v(C_STATUS_ERROR_LSB)                                     := error_flag;
           rd_v(C_STATUS_DIR_FAULT_LSB)                                 := dir_fault;
-          rd_v(C_STATUS_ERR_CODE_LSB + 3 downto C_STATUS_ERR_CODE_LSB) := err_code_r;
+          rd_v(C_STATUS_ERR_CODE_LSB + C_STATUS_ERR_CODE_W - 1 downto C_STATUS_ERR_CODE_LSB) := err_code_r;
         elsif (w = word(C_REG_POSITION)) then
           rd_v := eng_position;
         elsif (w = word(C_REG_CUR_DELAY)) then
@@ -346,6 +348,7 @@ begin
 
         mem(word(C_REG_PRESCALE))   <= x"00000001";
         mem(word(C_REG_STEP_WIDTH)) <= x"00000001";
+        mem(word(C_REG_STEP_SPACE)) <= x"00000001";
       end if;
     end if;
 
@@ -398,5 +401,6 @@ begin
   dir_setup  <= mem(word(C_REG_DIR_TIMING))(C_DIR_TIMING_SETUP_LSB + 15 downto C_DIR_TIMING_SETUP_LSB);
   dir_hold   <= mem(word(C_REG_DIR_TIMING))(C_DIR_TIMING_HOLD_LSB + 15 downto C_DIR_TIMING_HOLD_LSB);
   pwm_period <= mem(word(C_REG_PWM_PERIOD))(15 downto 0);
+  step_space <= mem(word(C_REG_STEP_SPACE))(15 downto 0);
 
 end architecture rtl;

@@ -9,7 +9,7 @@ package stepramp_regs_pkg is
 
   -- Decoded address bits and the ID register's value.
   constant C_ADDR_BITS : natural                       := 7;
-  constant C_ID_VALUE  : std_logic_vector(31 downto 0) := x"53520002";
+  constant C_ID_VALUE  : std_logic_vector(31 downto 0) := x"53520003";
 
   -- Byte offsets.
   constant C_REG_ID            : natural := 16#00#;
@@ -41,6 +41,7 @@ package stepramp_regs_pkg is
   constant C_REG_STEP_WIDTH    : natural := 16#68#;
   constant C_REG_DIR_TIMING    : natural := 16#6C#;
   constant C_REG_PWM_PERIOD    : natural := 16#70#;
+  constant C_REG_STEP_SPACE    : natural := 16#74#;
 
   -- Fields: lowest bit and width.
   constant C_CTRL_START_LSB        : natural := 0;
@@ -68,7 +69,7 @@ package stepramp_regs_pkg is
   constant C_STATUS_DIR_FAULT_LSB  : natural := 6;
   constant C_STATUS_DIR_FAULT_W    : natural := 1;
   constant C_STATUS_ERR_CODE_LSB   : natural := 8;
-  constant C_STATUS_ERR_CODE_W     : natural := 4;
+  constant C_STATUS_ERR_CODE_W     : natural := 5;
   constant C_DRIVE_MODE_LSB        : natural := 0;
   constant C_DRIVE_MODE_W          : natural := 3;
   constant C_DRIVE_USTEP_LOG2_LSB  : natural := 4;
@@ -79,21 +80,22 @@ package stepramp_regs_pkg is
   constant C_DIR_TIMING_HOLD_W     : natural := 16;
 
   -- STATUS.ERR_CODE values.
-  constant C_ERR_NONE       : std_logic_vector(3 downto 0) := x"0";
-  constant C_ERR_PRESCALE   : std_logic_vector(3 downto 0) := x"1";
-  constant C_ERR_BOUNDS     : std_logic_vector(3 downto 0) := x"2";
-  constant C_ERR_C_FIRST    : std_logic_vector(3 downto 0) := x"3";
-  constant C_ERR_C_LAST     : std_logic_vector(3 downto 0) := x"4";
-  constant C_ERR_C_SA       : std_logic_vector(3 downto 0) := x"5";
-  constant C_ERR_C_SD       : std_logic_vector(3 downto 0) := x"6";
-  constant C_ERR_CRUISE     : std_logic_vector(3 downto 0) := x"7";
-  constant C_ERR_ACCEL_SEED : std_logic_vector(3 downto 0) := x"8";
-  constant C_ERR_DECEL_SEED : std_logic_vector(3 downto 0) := x"9";
-  constant C_ERR_LATE       : std_logic_vector(3 downto 0) := x"A";
-  constant C_ERR_ZERO_TICKS : std_logic_vector(3 downto 0) := x"B";
-  constant C_ERR_RANGE      : std_logic_vector(3 downto 0) := x"C";
-  constant C_ERR_STEPS      : std_logic_vector(3 downto 0) := x"D";
-  constant C_ERR_POS_BUSY   : std_logic_vector(3 downto 0) := x"E";
-  constant C_ERR_CFG_BUSY   : std_logic_vector(3 downto 0) := x"F";
+  constant C_ERR_NONE       : std_logic_vector(4 downto 0) := "00000";
+  constant C_ERR_PRESCALE   : std_logic_vector(4 downto 0) := "00001";
+  constant C_ERR_BOUNDS     : std_logic_vector(4 downto 0) := "00010";
+  constant C_ERR_C_FIRST    : std_logic_vector(4 downto 0) := "00011";
+  constant C_ERR_C_LAST     : std_logic_vector(4 downto 0) := "00100";
+  constant C_ERR_C_SA       : std_logic_vector(4 downto 0) := "00101";
+  constant C_ERR_C_SD       : std_logic_vector(4 downto 0) := "00110";
+  constant C_ERR_CRUISE     : std_logic_vector(4 downto 0) := "00111";
+  constant C_ERR_ACCEL_SEED : std_logic_vector(4 downto 0) := "01000";
+  constant C_ERR_DECEL_SEED : std_logic_vector(4 downto 0) := "01001";
+  constant C_ERR_LATE       : std_logic_vector(4 downto 0) := "01010";
+  constant C_ERR_ZERO_TICKS : std_logic_vector(4 downto 0) := "01011";
+  constant C_ERR_RANGE      : std_logic_vector(4 downto 0) := "01100";
+  constant C_ERR_STEPS      : std_logic_vector(4 downto 0) := "01101";
+  constant C_ERR_POS_BUSY   : std_logic_vector(4 downto 0) := "01110";
+  constant C_ERR_CFG_BUSY   : std_logic_vector(4 downto 0) := "01111";
+  constant C_ERR_STEP_SPACE : std_logic_vector(4 downto 0) := "10000";
 
 end package stepramp_regs_pkg;

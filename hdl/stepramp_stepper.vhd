@@ -6,7 +6,11 @@
 -- Timing (edge numbers are rising edges of clk; "after edge e" is the clock cycle that follows it):
 --   * STEP: eng_step sampled '1' at edge E -> step_o rises at edge E (high after E) and stays high for exactly
 --     W = max(step_width, 1) clocks (falls at edge E + W). An eng_step while step_o is high restarts the width
---     (the pulse then ends W clocks after the later eng_step; the two engine pulses merge into one STEP pulse).
+--     (the pulse then ends W clocks after the later eng_step; the two engine pulses merge into one STEP pulse: the
+--     engine never does this, it refuses a pulse closer than min_gap to the previous one). A pulse in progress
+--     when rst rises keeps its full width (reset never cuts a STEP pulse short).
+--   * min_gap = W + max(step_space, 1): the shortest distance between two STEP rising edges (registered, for the
+--     engine and the start gate below).
 --   * Start gate, start_req sampled at edge Q while the gate is idle and eng_busy = '0':
 --       same direction (new_dir = dir_o):   start_out high after edge S = Q (1 clock latency);
 --       direction change: DIR changes at edge D = max(Q + 1, R + max(dir_hold, 1)), R = the last edge at which
@@ -14,6 +18,7 @@
 --       S = D + 1 + max(dir_setup - 5, 0). The engine samples start_out at S + 1, its pulse 0 is high after
 --       S + 3 and step_o rises at S + 4, so the first STEP rising edge comes exactly max(dir_setup, 5) clocks
 --       after the DIR change.
+--     In both cases S is also held until S + 4 >= R + min_gap (STEP spacing across moves).
 --     A start_req while the gate is busy (gate_busy = '1') or while eng_busy = '1' is dropped.
 --   * Stops: hard_stop or soft_stop sampled at edge H while the gate holds a start (waiting for DIR hold or setup;
 --     the motor is at rest, so a soft stop has nothing to decelerate), or hard_stop together with the start_req it
@@ -45,6 +50,8 @@ entity stepramp_stepper is
     dir_hold   : in    std_logic_vector(15 downto 0);
     enable_in  : in    std_logic;
     pwm_period : in    std_logic_vector(15 downto 0);
+    step_space : in    std_logic_vector(15 downto 0);
+    min_gap    : out   std_logic_vector(16 downto 0);
     start_req  : in    std_logic;
     new_dir    : in    std_logic;
     hard_stop  : in    std_logic;
@@ -140,13 +147,16 @@ architecture rtl of stepramp_stepper is
   -- Shortest DIR change -> first STEP rising edge: the gate registers start_out one edge after the DIR change.
   constant C_SETUP_MIN : natural := C_START_TO_STEP + 1;
 
-  constant C_SINCE_MAX : unsigned(15 downto 0) := (others => '1');
+  -- since_step saturates above the largest min_gap - C_START_TO_STEP - 1 (min_gap <= 2 * 65535).
+  constant C_SINCE_MAX : unsigned(16 downto 0) := (others => '1');
 
   -- STEP pulse.
   signal step_r     : std_logic;
   signal width_cnt  : unsigned(15 downto 0);
   signal width_m1   : unsigned(15 downto 0);
-  signal since_step : unsigned(15 downto 0); -- edges since eng_step was last sampled '1' (saturating)
+  signal since_step : unsigned(16 downto 0); -- edges since eng_step was last sampled '1' (saturating)
+  signal min_gap_r  : unsigned(16 downto 0);
+  signal space_ok   : std_logic;             -- a start_out registered at this edge keeps min_gap
 
   -- Start gate.
   signal gstate      : std_logic_vector(1 downto 0);
@@ -224,8 +234,13 @@ begin
 
     if rising_edge(clk) then
       if (rst = '1') then
-        step_r     <= '0';
-        width_cnt  <= (others => '0');
+        -- A pulse in progress keeps its width; otherwise STEP is low from the first reset edge on.
+        if (step_r = '1' and width_cnt /= 0) then
+          width_cnt <= width_cnt - 1;
+        else
+          step_r    <= '0';
+          width_cnt <= (others => '0');
+        end if;
         since_step <= C_SINCE_MAX;
       elsif (eng_step = '1') then
         step_r     <= '1';
@@ -246,6 +261,31 @@ begin
     end if;
 
   end process step_proc;
+
+  -- The shortest distance between two STEP rising edges (step_space: the STEP low time, 0 acts as 1).
+  gap_proc : process (clk) is
+
+    variable v_space : unsigned(16 downto 0);
+
+  begin
+
+    if rising_edge(clk) then
+      v_space := resize(unsigned(step_space), 17);
+      if (v_space = 0) then
+        v_space := to_unsigned(1, 17);
+      end if;
+      min_gap_r <= resize(width_m1, 17) + 1 + v_space;
+    end if;
+
+  end process gap_proc;
+
+  min_gap <= std_logic_vector(min_gap_r);
+
+  -- A start_out registered at edge S gives a STEP rising edge at S + C_START_TO_STEP; the previous one was at the
+  -- last edge R that sampled eng_step = '1' (R = S when eng_step is '1' now, else since_step = S - 1 - R).
+  space_ok <= '1' when eng_step = '1' and min_gap_r <= C_START_TO_STEP else
+              '1' when eng_step = '0' and resize(since_step, 18) + C_START_TO_STEP + 1 >= resize(min_gap_r, 18) else
+              '0';
 
   ---------------------------------------------------------------------------------------------------------------------
   -- Start gate: DIR changes only between moves, dir_hold after the last STEP rising edge at the earliest, and
@@ -303,8 +343,11 @@ begin
               stop_r  <= '1';
               v_next  := C_GS_FIRED;
             elsif (setup_cnt = 0) then
-              start_r <= '1';
-              v_next  := C_GS_FIRED;
+              -- Setup kept; the STEP spacing across moves may hold the start a little longer.
+              if (space_ok = '1') then
+                start_r <= '1';
+                v_next  := C_GS_FIRED;
+              end if;
             else
               setup_cnt <= setup_cnt - 1;
             end if;
@@ -322,9 +365,13 @@ begin
                 start_r <= '1';
                 stop_r  <= '1';
                 v_next  := C_GS_FIRED;
-              elsif (new_dir = dir_r) then
+              elsif (new_dir = dir_r and space_ok = '1') then
                 start_r <= '1';
                 v_next  := C_GS_FIRED;
+              elsif (new_dir = dir_r) then
+                -- Same direction, but too close to the last STEP pulse: wait in SETUP (nothing to set up).
+                setup_cnt <= (others => '0');
+                v_next    := C_GS_SETUP;
               else
                 pend_dir <= new_dir;
                 v_next   := C_GS_HOLD;

@@ -65,8 +65,9 @@ class Monitor:
         self._tasks = []
 
     def now(self) -> float:
-        """Simulation time in clock periods."""
-        return get_sim_time("ns") / self.clk_period_ns
+        """Simulation time in clock periods, to a thousandth: a test that starts a time step late (cocotb starts each
+        test of a simulation one step after the previous one ends) must not make a 4-clock pulse 3.9999999 long."""
+        return round(get_sim_time("ns") / self.clk_period_ns, 3)
 
     def violation(self, message: str) -> None:
         self.violations.append((get_sim_time("ns"), message))

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 import subprocess
 import sys
@@ -46,6 +47,32 @@ def test_sim_equals_model(move: list[str], tmp_path: Path) -> None:
     assert sim["edges"] == model["edges"]
     assert sim["final_position"] == model["final_position"]
     assert waves.stat().st_size > 0
+
+
+def test_sim_summary_equals_model_summary(tmp_path: Path) -> None:
+    """`--summary` from the RTL's edges and from the model's chunks: the same figures and the same checksum."""
+    move = MOVES[0]
+    model = json.loads(
+        subprocess.run([BIN, "model", *move, "--summary"], capture_output=True, text=True, check=True).stdout
+    )
+    edges = json.loads(subprocess.run([BIN, "model", *move], capture_output=True, text=True, check=True).stdout)
+    out = tmp_path / "sim.json"
+    run = subprocess.run(
+        [BIN, "sim", *move, "--summary", "--json", str(out), "--build", str(tmp_path / "build")],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert run.stdout == ""
+    sim = json.loads(out.read_text())
+    assert list(sim) == ["tool", "inputs", "registers", "summary", "final_position", "error"]
+    assert sim["error"] is None
+    assert sim["summary"] == model["summary"]
+    assert sim["final_position"] == model["final_position"]
+    plain = hashlib.sha256(b"".join(e.to_bytes(8, "little") for e in edges["edges"])).hexdigest()
+    assert sim["summary"]["checksum"] == "sha256:" + plain
+    assert sim["summary"]["pulses"] == len(edges["edges"])
 
 
 def test_sim_invalid_input_simulates_nothing() -> None:

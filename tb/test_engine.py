@@ -8,19 +8,30 @@ trapezoid; nothing is taken from the RTL's own output.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 
 import pytest
 
 from stepramp.enginesim import SimResult, Stop, simulate
-from stepramp.model import FIRST_PULSE_LATENCY, edges_with_stop, phase_of, soft_stop_length, soft_stop_pulse
+from stepramp.model import (
+    FIRST_PULSE_LATENCY,
+    edges_with_stop,
+    first_space_fault,
+    min_gap,
+    phase_of,
+    soft_stop_length,
+    soft_stop_pulse,
+)
 from stepramp.model import edges as model_edges
 from stepramp.model import phases as model_phases
 from stepramp.plan import Plan, plan_move
-from stepramp.profiles import PROFILES, PROFILES_BY_NAME, Profile
+from stepramp.profiles import PROFILES, PROFILES_BY_NAME, Profile, exact_plan
+from stepramp.regmap import ERROR_CODES
 from tbutil import build_dir
 
 CHUNKS = 4
+ERR = {name: code for name, (code, _) in ERROR_CODES.items()}
 
 
 def plans_of(profiles: Sequence[Profile]) -> list[Plan]:
@@ -322,3 +333,94 @@ def test_engine_stop_combinations() -> None:
         if res.busy_after != 0 or res.state_after != "STOP":
             problems.append(f"{what}: after done busy={res.busy_after} state={res.state_after}")
     assert not problems, "\n".join(problems)
+
+
+# --------------------------------------------------------------------------------------------------------------
+# The move is latched by `load` (the core's START acceptance), not by the later start; step spacing.
+# --------------------------------------------------------------------------------------------------------------
+def _ends_as(plan: Plan, expected: list[int], code: int, res: SimResult) -> list[str]:
+    """What differs between a finished move and its expectation (edges, error code, step count)."""
+    problems = []
+    if res.edges != expected:
+        problems.append(f"edges {res.edges[:8]}... vs model {expected[:8]}...")
+    if not res.done or res.err_code != code or res.error != int(code != 0):
+        problems.append(f"done={res.done} error={res.error} code={res.err_code}, expected code {code}")
+    if res.step_count != len(expected):
+        problems.append(f"step_count {res.step_count}, expected {len(expected)}")
+    return problems
+
+
+def test_engine_runs_the_loaded_move() -> None:
+    """load latches the move: whatever the inputs carry afterwards (another move, or bad values: PRESCALE 0, a
+    zero C_FIRST), the start runs the loaded one, edge for edge as the model, with its checks. And a bad move that
+    was loaded is rejected although good values sit on the inputs at start."""
+    good = plan_move(**PROFILES_BY_NAME["trap_basic"].args())
+    other = plan_move(**PROFILES_BY_NAME["triangle_asym"].args())
+    bad_prescale = dataclasses.replace(good, prescale=0)
+    bad_first = dataclasses.replace(good, c_first=0)
+    # (loaded, on the inputs after load, load_lead, expected error code)
+    cases = [
+        (good, other, 1, 0),
+        (other, good, 7, 0),
+        (good, bad_prescale, 3, 0),
+        (good, bad_first, 300, 0),
+        (bad_prescale, good, 2, ERR["PRESCALE"]),
+        (bad_first, good, 5, ERR["C_FIRST"]),
+    ]
+    extras = [
+        # the direction comes with start (the stepping logic's start_dir), not with load
+        {"load_lead": lead, "after_load": {**dataclasses.asdict(after), "direction": loaded.direction}}
+        for loaded, after, lead, _ in cases
+    ]
+    results = simulate([c[0] for c in cases], build_dir("engine_load"), extras=extras)
+    assert len(results) == len(cases)
+    problems = []
+    for i, ((loaded, _, lead, code), res) in enumerate(zip(cases, results, strict=True)):
+        expected = [] if code else model_edges(loaded)
+        problems += [f"case {i} (lead {lead}): {p}" for p in _ends_as(loaded, expected, code, res)]
+    assert not problems, "\n".join(problems)
+
+
+def spacing_cases() -> list[tuple[Plan, int, int]]:
+    """(plan, step_width, step_space): 1-, 2- and 3-tick intervals (first, cruise with a fraction, last) at
+    PRESCALE 1, 4, 5 and 8 against min_gap = max(W, 1) + max(S, 1) from 2 to 25 clocks, on both sides of it."""
+    cases = [(exact_plan(2, 1, 1.0), 1, 1)]  # the adversarial case: pulses at edges 2 and 3 would merge
+    for first in (1, 2, 3):  # the only interval of 2-step moves at PRESCALE 1 (a later one would be LATE)
+        for width, space in ((1, 1), (1, 2), (2, 1), (0, 0), (1, 0), (2, 2)):
+            cases.append((exact_plan(2, 1, first), width, space))
+    for cruise in (1.0, 2.0, 3.0):  # cruise intervals at PRESCALE 8: 8, 16, 24 clocks
+        for width, space in ((4, 4), (5, 4), (8, 8), (8, 9), (12, 12), (12, 13)):
+            cases.append((exact_plan(6, 8, 20, cruise), width, space))
+    for last in (1.0, 2.0, 3.0):  # the last interval at PRESCALE 5: 5, 10, 15 clocks
+        for width, space in ((2, 3), (3, 3), (7, 3), (8, 3), (10, 5), (10, 6)):
+            cases.append((exact_plan(5, 5, 30, 30, last, direction=1), width, space))
+    for width, space in ((3, 1), (3, 2), (2, 3), (4, 2), (4, 4), (4, 5)):  # 1.5 ticks at PRESCALE 4: 4, 8, 4, ..
+        cases.append((exact_plan(9, 4, 20, 1.5), width, space))
+    return cases
+
+
+def test_engine_step_spacing() -> None:
+    """A pulse closer than min_gap clocks to the previous one is not emitted: the move ends at its edge with error
+    STEP_SPACE, position and step count exact for the pulses before it; the model (first_space_fault) names the
+    pulse. Pulses that keep the distance, even by exactly min_gap, are untouched."""
+    cases = spacing_cases()
+    plans = [plan for plan, _, _ in cases]
+    extras = [{"min_gap": min_gap(width, space)} for _, width, space in cases]
+    results = simulate(plans, build_dir("engine_step_spacing"), extras=extras)
+    assert len(results) == len(cases)
+    problems = []
+    position = 0
+    faults = 0
+    for (plan, width, space), res in zip(cases, results, strict=True):
+        normal = model_edges(plan)
+        k = first_space_fault(normal, min_gap(width, space))
+        expected = normal if k is None else normal[:k]
+        faults += k is not None
+        position += -len(expected) if plan.direction else len(expected)
+        label = f"P={plan.prescale} N={plan.steps} W={width} S={space} model {normal}"
+        problems += [f"{label}: {p}" for p in _ends_as(plan, expected, 0 if k is None else ERR["STEP_SPACE"], res)]
+        if res.final_position != position:
+            problems.append(f"{label}: position {res.final_position}, expected {position}")
+            position = res.final_position or 0
+    assert not problems, "\n".join(problems)
+    assert 0 < faults < len(cases), f"{faults} of {len(cases)} cases fault: the cases do not straddle min_gap"

@@ -163,6 +163,7 @@ class Config:
     dir_hold: int = 20
     pwm_period: int = 64
     enable: int = 1
+    step_space: int = 1
 
 
 def apply(dut: Any, cfg: Config) -> None:
@@ -173,6 +174,7 @@ def apply(dut: Any, cfg: Config) -> None:
     dut.dir_hold.value = cfg.dir_hold
     dut.pwm_period.value = cfg.pwm_period
     dut.enable_in.value = cfg.enable
+    dut.step_space.value = cfg.step_space
 
 
 async def setup(dut: Any, cfg: Config, position: int = 0) -> FakeEngine:
@@ -562,30 +564,44 @@ class GateRecorder:
 @cocotb.test()
 async def start_gate_timing(dut) -> None:
     """start_out 1 clock after start_req when DIR stays; on a change DIR waits for dir_hold after the last STEP
-    rising edge, start_out for max(dir_setup, 5) clocks to the first STEP rising edge: measured edge for edge
-    against stepramp.stepper.gate_timing, with the DIR monitor on."""
+    rising edge, start_out for max(dir_setup, 5) clocks to the first STEP rising edge; either way the first STEP
+    rising edge keeps STEP_WIDTH + STEP_SPACE from the last one: measured edge for edge against
+    stepramp.stepper.gate_timing, with the DIR monitor on."""
     cfg = Config(mode=sm.MODE_HALF, step_width=4)
     eng = await setup(dut, cfg)
     cases = [
-        # (dir_setup, dir_hold, new_dir, gap): gap = clocks between the last pulse's eng_step and start_req
-        # (0: start_req in the engine's done cycle, the last pulse's own cycle)
-        (20, 20, 0, 30),
-        (20, 20, 1, 30),
-        (20, 20, 1, 100),
-        (0, 0, 0, 5),
-        (1, 1, 1, 0),
-        (5, 1, 0, 0),
-        (6, 3, 1, 0),
-        (9, 40, 0, 0),
-        (9, 40, 1, 12),
-        (300, 200, 0, 3),
-        (4, 64, 1, 63),
-        (64, 7, 0, 7),
-        (64, 7, 0, 8),
-        (2, 1000, 1, 0),
+        # (dir_setup, dir_hold, new_dir, gap, step_width, step_space): gap = clocks between the last pulse's
+        # eng_step and start_req (0: start_req in the engine's done cycle, the last pulse's own cycle)
+        (20, 20, 0, 30, 4, 1),
+        (20, 20, 1, 30, 4, 1),
+        (20, 20, 1, 100, 4, 1),
+        (0, 0, 0, 5, 4, 1),
+        (1, 1, 1, 0, 4, 1),
+        (5, 1, 0, 0, 4, 1),
+        (6, 3, 1, 0, 4, 1),
+        (9, 40, 0, 0, 4, 1),
+        (9, 40, 1, 12, 4, 1),
+        (300, 200, 0, 3, 4, 1),
+        (4, 64, 1, 63, 4, 1),
+        (64, 7, 0, 7, 4, 1),
+        (64, 7, 0, 8, 4, 1),
+        (2, 1000, 1, 0, 4, 1),
+        # STEP spacing across moves holds the start (same direction, and after a DIR change)
+        (0, 0, 0, 0, 1, 1),
+        (0, 0, 0, 0, 2, 1),
+        (0, 0, 0, 0, 2, 2),
+        (0, 0, 0, 0, 40, 30),
+        (0, 0, 0, 2, 40, 30),
+        (0, 0, 0, 66, 40, 30),
+        (0, 0, 0, 67, 40, 30),
+        (0, 0, 0, 3, 0, 0),
+        (5, 1, 1, 0, 40, 30),
+        (30, 20, 1, 10, 40, 30),
+        (80, 20, 1, 10, 40, 30),
+        (5, 1, 1, 0, 1000, 5000),
     ]
-    for setup_clks, hold, new_dir, gap in cases:
-        cfg.dir_setup, cfg.dir_hold = setup_clks, hold
+    for setup_clks, hold, new_dir, gap, width, space in cases:
+        cfg.dir_setup, cfg.dir_hold, cfg.step_width, cfg.step_space = setup_clks, hold, width, space
         apply(dut, cfg)
         # a previous move ends with a pulse at a known edge
         eng.moves.append(Move(3, 64))
@@ -618,17 +634,22 @@ async def start_gate_timing(dut) -> None:
         await ClockCycles(dut.clk, 2 * hold + 2 * setup_clks + 20)
         rec.stop()
         mon.stop()
-        want = sm.gate_timing(q, new_dir != prev_dir, last_rise, hold, setup_clks)
+        want = sm.gate_timing(q, new_dir != prev_dir, last_rise, hold, setup_clks, width, space)
         got_dir = rec.dir_edges[0] if rec.dir_edges else None
-        msg = f"setup {setup_clks} hold {hold} dir {prev_dir}->{new_dir} gap {gap}: q={q}, want {want}, got "
+        msg = f"setup {setup_clks} hold {hold} width {width} space {space} dir {prev_dir}->{new_dir} gap {gap}: "
+        msg += f"q={q}, want {want}, got "
         msg += f"dir {rec.dir_edges} start_out {rec.start_edges} step rises {rec.step_rises}"
         assert got_dir == want.dir_edge and len(rec.dir_edges) <= 1, msg
         assert rec.start_edges == [want.start_edge], msg
         rises = [r for r in rec.step_rises if r > last_rise]
         assert rises and rises[0] == want.first_step_edge, msg
         assert eng.start_edges[-1] == want.start_edge + 1, msg
+        spacing = max(width, 1) + max(space, 1)
+        assert rises[0] - last_rise >= spacing, msg
         if want.dir_edge is not None:
-            assert want.first_step_edge - want.dir_edge == max(setup_clks, sm.GATE_SETUP_MIN), msg
+            assert want.first_step_edge - want.dir_edge >= max(setup_clks, sm.GATE_SETUP_MIN), msg
+            if rises[0] - last_rise > spacing:
+                assert want.first_step_edge - want.dir_edge == max(setup_clks, sm.GATE_SETUP_MIN), msg
         assert all(busy_trace[:-1]), f"busy dropped during the start: {busy_trace}"
         mon.check()
         assert int(dut.dir_o.value) == new_dir and int(dut.dir_fault.value) == 0

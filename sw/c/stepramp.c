@@ -164,6 +164,7 @@ int stepramp_configure_outputs(const stepramp_t *dev, const stepramp_outputs_t *
               ((uint32_t)out->dir_setup << STEPRAMP_DIR_TIMING_SETUP_SHIFT) |
                   ((uint32_t)out->dir_hold << STEPRAMP_DIR_TIMING_HOLD_SHIFT));
     write_reg(dev, STEPRAMP_REG_PWM_PERIOD, out->pwm_period);
+    write_reg(dev, STEPRAMP_REG_STEP_SPACE, out->step_space);
     return STEPRAMP_OK;
 }
 
@@ -237,9 +238,11 @@ int stepramp_wait_done(const stepramp_t *dev, uint32_t max_polls)
     X(RANGE, "a recurrence value left its 48-bit range; the move stopped")                                             \
     X(STEPS, "STEPS is -2^31 (|steps| must be <= 2^31 - 1)")                                                           \
     X(POS_BUSY, "POSITION written while a move runs (the write was ignored)")                                          \
-    X(CFG_BUSY, "DRIVE, STEP_WIDTH, DIR_TIMING or PWM_PERIOD written while a move runs (ignored)")
+    X(CFG_BUSY, "DRIVE, STEP_WIDTH, DIR_TIMING, PWM_PERIOD or STEP_SPACE written while a move runs (ignored)")         \
+    X(STEP_SPACE, "a pulse would have come less than STEP_WIDTH + STEP_SPACE clocks after the previous one (the two "   \
+                  "would merge on the STEP pin); it was not emitted and the move stopped")
 
-#define CORE_TABLE_SIZE 16u /* ERR_CODE is 4 bits */
+#define CORE_TABLE_SIZE 32u /* ERR_CODE is 5 bits */
 #define CAUSE(name, text) [STEPRAMP_ERR_##name] = text,
 #define NAME(name, text) [STEPRAMP_ERR_##name] = #name,
 #define RESULT(name, text) [STEPRAMP_ERR_##name] = "core error " #name ": " text,

@@ -59,10 +59,10 @@ enum {
     STEPRAMP_ECORE_BASE = 128 /**< STEPRAMP_ECORE(code): the core flagged STATUS.ERROR with ERR_CODE code */
 };
 
-/** The result for a core error: STATUS.ERR_CODE code (0 .. 15) offset by STEPRAMP_ECORE_BASE. */
+/** The result for a core error: STATUS.ERR_CODE code (0 .. 31) offset by STEPRAMP_ECORE_BASE. */
 #define STEPRAMP_ECORE(code) (STEPRAMP_ECORE_BASE + (int)(code))
 /** Nonzero when result r is a core error (STEPRAMP_ECORE(code)). */
-#define STEPRAMP_IS_ECORE(r) ((r) >= STEPRAMP_ECORE_BASE && (r) < STEPRAMP_ECORE_BASE + 16)
+#define STEPRAMP_IS_ECORE(r) ((r) >= STEPRAMP_ECORE_BASE && (r) < STEPRAMP_ECORE_BASE + 32)
 /** The STATUS.ERR_CODE of a core-error result. */
 #define STEPRAMP_ECORE_CODE(r) ((uint32_t)((r)-STEPRAMP_ECORE_BASE))
 
@@ -154,14 +154,15 @@ void stepramp_enable_irq(const stepramp_t *dev, int done, int error);
 /** CTRL.ENABLE (the ENABLE output; off also switches the H-bridge windings off): a byte write of CTRL byte 2. */
 void stepramp_set_enable(const stepramp_t *dev, int on);
 
-/** The stepping outputs (registers DRIVE, STEP_WIDTH, DIR_TIMING, PWM_PERIOD; docs/registers.md). */
+/** The stepping outputs (registers DRIVE, STEP_WIDTH, DIR_TIMING, PWM_PERIOD, STEP_SPACE; docs/registers.md). */
 typedef struct {
     uint32_t mode;       /**< 0 STEP/DIR only, 1 wave, 2 full step, 3 half step, 4 sine/cosine PWM */
     uint32_t ustep_log2; /**< PWM microsteps per full step = 2^ustep_log2 (0 .. 7, at most the core's G_MICROSTEPS) */
-    uint16_t step_width; /**< STEP high time, clocks (0 acts as 1); must be below the shortest step interval */
+    uint16_t step_width; /**< STEP high time, clocks (0 acts as 1); width + space must fit the shortest interval */
     uint16_t dir_setup;  /**< DIR setup before a STEP rising edge, clocks */
     uint16_t dir_hold;   /**< DIR hold after a STEP rising edge, clocks */
     uint16_t pwm_period; /**< PWM carrier period, clocks (0 or 1: windings off in mode 4) */
+    uint16_t step_space; /**< shortest STEP low time, clocks (0 acts as 1; the reset value is 1) */
 } stepramp_outputs_t;
 
 /**

@@ -39,7 +39,9 @@ void stepramp_fakebus_reset(uintptr_t base, uint32_t id)
     memset(f, 0, sizeof *f);
     f->base = base;
     f->regs[WORD(ID)] = id;
-    f->regs[WORD(PRESCALE)] = 1u; /* reset value */
+    f->regs[WORD(PRESCALE)] = 1u; /* reset values */
+    f->regs[WORD(STEP_WIDTH)] = 1u;
+    f->regs[WORD(STEP_SPACE)] = 1u;
 }
 
 void stepramp_fakebus_set_status(uint32_t state, uint32_t busy, uint32_t dir, uint32_t err_code, uint32_t flags)
@@ -71,7 +73,7 @@ static long window_offset(uintptr_t addr)
 
 static int mapped(uint32_t word)
 {
-    return word <= WORD(PWM_PERIOD);
+    return word <= WORD(STEP_SPACE);
 }
 
 static uint32_t merge(uint32_t old, uint32_t data, uint32_t be)
@@ -124,7 +126,7 @@ static void write_word(uint32_t off, uint32_t data, uint32_t be)
         }
     } else if (word >= WORD(STEPS) && word <= WORD(STOP_RATIO)) {
         *reg = merge(*reg, data, be);
-    } else if (word >= WORD(DRIVE) && word <= WORD(PWM_PERIOD)) {
+    } else if (word >= WORD(DRIVE) && word <= WORD(STEP_SPACE)) {
         if (status & STEPRAMP_STATUS_BUSY_MASK) { /* stepping configuration: only while stopped */
             stepramp_fakebus_set_status((status & STEPRAMP_STATUS_STATE_MASK) >> STEPRAMP_STATUS_STATE_SHIFT, 1u,
                                         (status & STEPRAMP_STATUS_DIR_MASK) != 0u, STEPRAMP_ERR_CFG_BUSY,

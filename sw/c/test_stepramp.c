@@ -27,7 +27,7 @@
     } while (0)
 
 #define BASE ((uintptr_t)0x40A00000u)
-#define GOOD_ID 0x53520002u
+#define GOOD_ID 0x53520003u
 
 /* Offsets from docs/registers.md, written out (not stepramp_regs.h) */
 enum {
@@ -147,7 +147,7 @@ static void test_init(void)
     stepramp_fakebus_reset(BASE, GOOD_ID);
     CHECK_EQ(stepramp_init(&dev, BASE, 50e6, 6400.0, 50u), STEPRAMP_OK);
     CHECK(dev.base == BASE && dev.fclk == 50e6 && dev.spr == 6400.0 && dev.prescale == 50u);
-    CHECK_EQ(dev.version, 0x0002u);
+    CHECK_EQ(dev.version, 0x0003u);
     CHECK_EQ(bus->writes, 0u); /* init only reads */
     CHECK_EQ(bus->reads, 1u);
     for (i = 0; i < sizeof bad_ids / sizeof bad_ids[0]; i++) {
@@ -319,7 +319,7 @@ static void test_commands_keep_irq_enables(void)
 static void test_enable_and_outputs(void)
 {
     stepramp_t dev = fresh(1e6, 200.0, 1u);
-    stepramp_outputs_t out = {4u, 4u, 7u, 20u, 9u, 40u};
+    stepramp_outputs_t out = {4u, 4u, 7u, 20u, 9u, 40u, 3u};
 
     stepramp_enable_irq(&dev, 1, 1);
     stepramp_set_enable(&dev, 1);
@@ -338,6 +338,7 @@ static void test_enable_and_outputs(void)
     CHECK_EQ(reg(0x68u), 7u);
     CHECK_EQ(reg(0x6Cu), 20u | (9u << 16));
     CHECK_EQ(reg(0x70u), 40u);
+    CHECK_EQ(reg(0x74u), 3u);
     out.mode = 5u;
     CHECK_EQ(stepramp_configure_outputs(&dev, &out), STEPRAMP_EOUTPUTS);
     out.mode = 3u;
@@ -536,7 +537,7 @@ static void test_error_texts(void)
                  "POSITION written while a move runs (the write was ignored)") == 0);
     CHECK(strcmp(stepramp_corename(STEPRAMP_ERR_LATE), "LATE") == 0);
     CHECK(strcmp(stepramp_corename(STEPRAMP_ERR_ZERO_TICKS), "ZERO_TICKS") == 0);
-    for (a = 0; a <= STEPRAMP_ERR_CFG_BUSY; a++) {
+    for (a = 0; a <= STEPRAMP_ERR_STEP_SPACE; a++) {
         CHECK(strcmp(stepramp_strcoreerror(a), "unknown error code") != 0);
         CHECK(strcmp(stepramp_corename(a), "UNKNOWN") != 0);
         CHECK(strstr(stepramp_strresult(STEPRAMP_ECORE(a)), stepramp_strcoreerror(a)) != NULL);
@@ -545,7 +546,8 @@ static void test_error_texts(void)
             CHECK(strcmp(stepramp_strcoreerror(a), stepramp_strcoreerror(b)) != 0);
         }
     }
-    CHECK(strcmp(stepramp_strcoreerror(STEPRAMP_ERR_CFG_BUSY + 1u), "unknown error code") == 0);
+    CHECK(strcmp(stepramp_strcoreerror(STEPRAMP_ERR_STEP_SPACE + 1u), "unknown error code") == 0);
+    CHECK(strcmp(stepramp_strcoreerror(31u), "unknown error code") == 0);
     CHECK(strcmp(stepramp_strcoreerror(UINT32_MAX), "unknown error code") == 0);
     CHECK(strcmp(stepramp_corename(99u), "UNKNOWN") == 0);
     CHECK(strcmp(stepramp_strresult(STEPRAMP_OK), "success") == 0);
@@ -554,7 +556,9 @@ static void test_error_texts(void)
     CHECK(strstr(stepramp_strresult(STEPRAMP_EID), "ID") != NULL);
     CHECK(strstr(stepramp_strresult(STEPRAMP_ETIMEOUT), "DONE") != NULL);
     CHECK(strcmp(stepramp_strresult(-1), "unknown error") == 0);
-    CHECK(strcmp(stepramp_strresult(STEPRAMP_ECORE(16)), "unknown error") == 0);
+    CHECK(strcmp(stepramp_strresult(STEPRAMP_ECORE(32)), "unknown error") == 0);
+    CHECK(strstr(stepramp_strresult(STEPRAMP_ECORE(31)), "unknown error code") != NULL);
+    CHECK(strstr(stepramp_strresult(STEPRAMP_ECORE(16)), "STEP_SPACE") != NULL);
     CHECK(strstr(stepramp_strresult(STEPRAMP_ECORE(15)), "CFG_BUSY") != NULL);
     /* the driver's results do not collide with the plan's errors */
     CHECK((int)STEPRAMP_ENULL < STEPRAMP_EID && STEPRAMP_EID != STEPRAMP_ETIMEOUT);

@@ -2,6 +2,7 @@
 """The `stepramp` command line.
 
     stepramp sim   --steps N --accel A --decel D --speed V --spr S --fclk F [--prescale P] [--waves FILE] [--json FILE]
+                   [--summary]
     stepramp model (same options, no --waves)
     stepramp plot FILE.json [-o FILE.png]
     stepramp shell [--model] [--waves FILE.ghw] [--build DIR]   (the AVR446 demo's commands, from stdin)
@@ -10,20 +11,42 @@ Both print (or write with --json) one JSON object:
     {"tool": "sim"|"model", "inputs": {...}, "registers": {...}, "edges": [...], "final_position": int, "error": null}
 `edges` are the clock cycles of each STEP rising edge, counted from the clock edge that sampled start. Invalid
 input: exit status 2, "error" holds the reason, nothing is simulated. sim and model give identical edges.
+The object is written as it is produced (the edges chunk by chunk), so `stepramp model` takes bounded memory for any
+valid move. --summary writes "summary" (pulse count, last edge, move time, peak speed, largest deviation from the
+ideal, checksum of the edges; docs/algorithm.md, "Long moves") in place of "edges". What would not fit the memory
+budget (`stepramp sim` beyond SIM_MAX_PULSES pulses, `stepramp plot` of a too large move) exits with status 2 and
+the reason.
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import itertools
 import json
+import os
 import sys
 import tempfile
+from collections.abc import Callable, Iterable
 from pathlib import Path
-from typing import Any
+from typing import Any, TextIO
 
+from stepramp.model import edge_chunks
 from stepramp.model import edges as model_edges
 from stepramp.plan import plan_move
+from stepramp.summary import summarise_edges, summarise_model
+
+MEMORY_BUDGET_MB = 300
+"""Peak memory every command keeps to; what would need more is refused (exit status 2)."""
+SIM_MAX_PULSES = 1_000_000
+"""`stepramp sim` keeps every edge of the RTL's move in memory (the testbench, its result file, the front end)."""
+PLOT_MAX_PULSES = 1_000_000
+"""`stepramp plot` draws every pulse (and the model's and the ideal's)."""
+PLOT_MAX_BYTES = 64 << 20
+"""`stepramp plot` reads the whole file."""
+
+EdgeChunks = Iterable[list[int]]
+"""A move's edges, in order, in lists (stepramp.model.edge_chunks, or the RTL's one list)."""
 
 
 def _move_args(parser: argparse.ArgumentParser) -> None:
@@ -35,6 +58,9 @@ def _move_args(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--fclk", type=float, required=True, help="core clock, Hz")
     parser.add_argument("--prescale", type=int, default=1, help="base timer period in clocks (default 1)")
     parser.add_argument("--json", type=Path, help="write the JSON here instead of stdout")
+    parser.add_argument(
+        "--summary", action="store_true", help='write "summary" (counts, times, deviation, checksum) instead of "edges"'
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -60,24 +86,44 @@ def plot_file(path: Path, png: Path | None) -> int:
     """`stepramp plot`: step rate against time (with the bit-exact model and the ideal) and the deviation."""
     from stepramp.plot import plot_move  # needs matplotlib
 
+    size = path.stat().st_size
+    if size > PLOT_MAX_BYTES:
+        return _plot_refusal(f"{path} is {size} bytes, more than the {PLOT_MAX_BYTES} a plot reads")
     move = json.loads(path.read_text())
     if move.get("error") or not move.get("registers"):
         print(f"stepramp plot: {path} holds no move ({move.get('error')})", file=sys.stderr)
         return 2
+    if "edges" not in move:
+        print(f"stepramp plot: {path} holds no edges (written with --summary)", file=sys.stderr)
+        return 2
+    pulses = max(len(move["edges"]), abs(move["inputs"]["steps"]))
+    if pulses > PLOT_MAX_PULSES:
+        return _plot_refusal(f"the move has {pulses} pulses, more than the {PLOT_MAX_PULSES} a plot draws")
     png = png or path.with_suffix(".png")
     plot_move(move, png, model_edges=model_edges(plan_move(**move["inputs"])))
     print(png)
     return 0
 
 
-def run_move(tool: str, args: argparse.Namespace) -> tuple[dict[str, Any], int]:
-    """Plan and run one move with the model or the RTL; returns the JSON object and the exit status."""
+def _plot_refusal(reason: str) -> int:
+    print(f"stepramp plot: {reason} (memory budget {MEMORY_BUDGET_MB} MB)", file=sys.stderr)
+    return 2
+
+
+def run_move(tool: str, args: argparse.Namespace) -> tuple[dict[str, Any], int, EdgeChunks]:
+    """Plan and run one move with the model or the RTL.
+
+    Returns the JSON object, the exit status and the edges in chunks, which write_move writes in the place of the
+    object's "edges" (the model's are produced lazily, as they are written). With --summary the object holds
+    "summary" instead of "edges" and the chunks are empty.
+    """
     inputs = {k: getattr(args, k) for k in ("steps", "accel", "decel", "speed", "spr", "fclk", "prescale")}
+    summary = bool(getattr(args, "summary", False))
     out: dict[str, Any] = {
         "tool": tool,
         "inputs": inputs,
         "registers": None,
-        "edges": [],
+        "summary" if summary else "edges": None if summary else [],
         "final_position": 0,
         "error": None,
     }
@@ -85,12 +131,21 @@ def run_move(tool: str, args: argparse.Namespace) -> tuple[dict[str, Any], int]:
         plan = plan_move(**inputs)
     except ValueError as exc:
         out["error"] = str(exc)
-        return out, 2
+        return out, 2, []
     out["registers"] = dataclasses.asdict(plan)
     if tool == "model":
-        out["edges"] = model_edges(plan)
         out["final_position"] = args.steps
-        return out, 0
+        if summary:
+            out["summary"] = summarise_model(inputs, plan)
+            return out, 0, []
+        return out, 0, edge_chunks(plan)
+
+    if plan.steps > SIM_MAX_PULSES:
+        out["error"] = (
+            f"stepramp sim keeps every edge in memory: {plan.steps} pulses are more than its {SIM_MAX_PULSES} "
+            f"(memory budget {MEMORY_BUDGET_MB} MB); `stepramp model` streams any move"
+        )
+        return out, 2, []
 
     from stepramp.enginesim import simulate  # needs cocotb and GHDL, the model does not
 
@@ -99,14 +154,59 @@ def run_move(tool: str, args: argparse.Namespace) -> tuple[dict[str, Any], int]:
         results = simulate([plan], build, waves=args.waves, log_file=build.resolve() / "sim.log")
     if not results or not results[0].done:
         out["error"] = "the RTL did not finish the move (hang); see the simulation log"
-        return out, 1
+        return out, 1, []
     res = results[0]
-    out["edges"] = res.edges
     out["final_position"] = res.final_position
+    chunks: EdgeChunks = []
+    if summary:
+        out["summary"] = summarise_edges(inputs, res.edges)
+    else:
+        chunks = [res.edges]
     if res.error:
         out["error"] = f"the engine flagged error code {res.err_code}"
-        return out, 1
-    return out, 0
+        return out, 1, chunks
+    return out, 0, chunks
+
+
+def write_move(write: Callable[[str], object], out: dict[str, Any], chunks: EdgeChunks) -> None:
+    """Write the JSON object and a newline, the edges chunk by chunk in the place of out["edges"].
+
+    The text is exactly json.dumps(out with the edges filled in) + "\\n": the separators ", " and ": ", keys in
+    order, each edge chunk's items as json.dumps writes a list's.
+    """
+    write("{")
+    for n, (key, value) in enumerate(out.items()):
+        write(", " if n else "")
+        write(json.dumps(key) + ": ")
+        if key != "edges":
+            write(json.dumps(value))
+            continue
+        write("[")
+        first = True
+        for part in itertools.chain([value], chunks):  # edges already in out first (none in run_move's)
+            if len(part) == 0:
+                continue
+            write(("" if first else ", ") + json.dumps(part)[1:-1])
+            first = False
+        write("]")
+    write("}\n")
+
+
+def _emit(out: dict[str, Any], chunks: EdgeChunks, target: Path | None) -> None:
+    if target is None:
+        write_move(sys.stdout.write, out, chunks)
+        sys.stdout.flush()
+        return
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with target.open("w", encoding="utf-8") as stream:
+        write_move(stream.write, out, chunks)
+
+
+def _quiet_broken_pipe(stream: TextIO) -> None:
+    """The reader went away (stepramp model ... | head): no traceback, and no second error at exit."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, stream.fileno())
+    os.close(devnull)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -118,13 +218,12 @@ def main(argv: list[str] | None = None) -> int:
 
         return shell_main(model=args.model, waves=args.waves, build=args.build)
     if args.command in ("sim", "model"):
-        out, status = run_move(args.command, args)
-        text = json.dumps(out, indent=None)
-        if args.json:
-            args.json.parent.mkdir(parents=True, exist_ok=True)
-            args.json.write_text(text + "\n")
-        else:
-            print(text)
+        out, status, chunks = run_move(args.command, args)
+        try:
+            _emit(out, chunks, args.json)
+        except BrokenPipeError:
+            _quiet_broken_pipe(sys.stdout)
+            return 1
         if out["error"]:
             print(f"stepramp {args.command}: {out['error']}", file=sys.stderr)
         return status

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import itertools
 import json
 import sys
 from pathlib import Path
@@ -22,37 +21,19 @@ from typing import Any
 
 from stepramp.driver import StepRampError
 from stepramp.gtkw import signal_paths, write_gtkw
-from stepramp.ideal import c0, ideal_move
-from stepramp.model import FIRST_PULSE_LATENCY
 from stepramp.model import edges as model_edges
 from stepramp.plan import plan_move
 from stepramp.shell import SHELL_CONFIG
+from stepramp.summary import summarise_edges
 
 DEMO_MOVE: dict[str, Any] = {"steps": 400, "accel": 40.0, "decel": 40.0, "speed": 20.0, **SHELL_CONFIG}
 
 
 def summarise(move: dict[str, Any], edges: list[int]) -> dict[str, Any]:
-    """Figures of merit of a simulated move against the ideal trapezoid (times in ticks and seconds)."""
-    prescale = move["prescale"]
-    f_tick = move["fclk"] / prescale
-    ideal = ideal_move(**move)
-    ticks = [(e - FIRST_PULSE_LATENCY) / prescale for e in edges]
-    deviation = [t - ti for t, ti in zip(ticks, ideal.pulse_times(), strict=True)]
-    intervals = [b - a for a, b in itertools.pairwise(ticks)]
-    c0_slow = c0(min(move["accel"], move["decel"]), move["spr"], move["fclk"], prescale)
-    alpha = 2 * 3.141592653589793 / move["spr"]
-    worst = max(range(len(deviation)), key=lambda k: abs(deviation[k])) if deviation else 0
-    return {
-        "steps": len(edges),
-        "move_time_s": ticks[-1] / f_tick if ticks else 0.0,
-        "ideal_move_time_s": ideal.t_end,
-        "peak_speed_rad_s": alpha * f_tick / min(intervals) if intervals else 0.0,
-        "ideal_peak_speed_rad_s": ideal.v_peak * alpha,
-        "max_deviation_ticks": abs(deviation[worst]) if deviation else 0.0,
-        "max_deviation_pulse": worst,
-        "max_deviation_c0": abs(deviation[worst]) / c0_slow if deviation else 0.0,
-        "c0_slow_ticks": c0_slow,
-    }
+    """Figures of merit of a simulated move against the ideal trapezoid (times in ticks and seconds): the summary of
+    `stepramp sim --summary` (stepramp.summary), with the pulse count as "steps"."""
+    figures = summarise_edges(move, edges)
+    return {"steps": figures.pop("pulses"), **figures}
 
 
 def main(argv: list[str] | None = None) -> int:

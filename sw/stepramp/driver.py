@@ -98,7 +98,7 @@ MODES = {"stepdir": 0, "wave": 1, "full": 2, "half": 3, "pwm": 4}
 
 @dataclass(frozen=True)
 class Outputs:
-    """Configuration of the stepping outputs (registers DRIVE, STEP_WIDTH, DIR_TIMING, PWM_PERIOD)."""
+    """Configuration of the stepping outputs (registers DRIVE, STEP_WIDTH, DIR_TIMING, PWM_PERIOD, STEP_SPACE)."""
 
     mode: str = "stepdir"
     ustep_log2: int = 0
@@ -106,6 +106,12 @@ class Outputs:
     dir_setup: int = 0
     dir_hold: int = 0
     pwm_period: int = 0
+    step_space: int = 1
+
+    @property
+    def min_gap(self) -> int:
+        """Shortest distance between two STEP rising edges the core allows, clocks (docs/algorithm.md)."""
+        return max(self.step_width, 1) + max(self.step_space, 1)
 
     def check(self) -> None:
         """ValueError with the reason if a field does not fit its register."""
@@ -113,7 +119,7 @@ class Outputs:
             raise ValueError(f"mode must be one of {sorted(MODES)}, got {self.mode!r}")
         if not 0 <= self.ustep_log2 <= 7:
             raise ValueError(f"ustep_log2 must be in 0 .. 7, got {self.ustep_log2}")
-        for name in ("step_width", "dir_setup", "dir_hold", "pwm_period"):
+        for name in ("step_width", "dir_setup", "dir_hold", "pwm_period", "step_space"):
             value = getattr(self, name)
             if not isinstance(value, int) or not 0 <= value <= 0xFFFF:
                 raise ValueError(f"{name} must be an integer number of clocks in 0 .. 65535, got {value!r}")
@@ -139,15 +145,15 @@ class StepRamp:
     def plan(self, steps: int, accel: float, decel: float, speed: float) -> Plan:
         """Register values of a move in physical units (rad/s^2, rad/s); ValueError with the reason if invalid.
 
-        Besides the plan's own limits, the STEP pulse width configured with configure_outputs must be shorter than
-        the move's shortest interval.
+        Besides the plan's own limits, the STEP pulse width plus the STEP low time configured with configure_outputs
+        must fit the move's shortest interval (the core stops a move with error STEP_SPACE otherwise).
         """
         plan, info = plan_move_info(steps, accel, decel, speed, self.spr, self.fclk, self.prescale)
         shortest = int(info.min_interval) * self.prescale if plan.steps > 1 else None
-        if shortest is not None and max(self.outputs.step_width, 1) >= shortest:
+        if shortest is not None and self.outputs.min_gap > shortest:
             raise ValueError(
-                f"STEP width {self.outputs.step_width} clocks does not fit the shortest interval of the move "
-                f"({shortest} clocks): lower the speed or the STEP width"
+                f"STEP width {self.outputs.step_width} + STEP space {self.outputs.step_space} clocks does not fit "
+                f"the shortest interval of the move ({shortest} clocks): lower the speed, the STEP width or the space"
             )
         return plan
 
@@ -166,6 +172,7 @@ class StepRamp:
             outputs.dir_setup << timing.field("SETUP").lsb | outputs.dir_hold << timing.field("HOLD").lsb,
         )
         await self.access.write(offset("PWM_PERIOD"), outputs.pwm_period)
+        await self.access.write(offset("STEP_SPACE"), outputs.step_space)
         self.outputs = outputs
 
     async def set_enable(self, on: bool) -> None:

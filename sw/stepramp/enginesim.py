@@ -11,8 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from stepramp.hdl import run_cocotb
-from stepramp.model import edges as model_edges
-from stepramp.model import edges_with_stop
+from stepramp.model import last_edge
 from stepramp.plan import Plan
 
 #: Engine states as the RTL encodes them on its `state` port.
@@ -53,12 +52,13 @@ def timeout_cycles(plan: Plan, stop: Stop | Sequence[Stop] | None = None) -> int
     """A generous cycle budget for one move: the model's last edge plus slack (a hang fails after this).
 
     With stops, the longest of the model's stopped moves (a soft stop can make a move last longer) and the edge of
-    the last request (a hard stop ends the move there, after its last pulse).
+    the last request (a hard stop ends the move there, after its last pulse). The last edges come from the model in
+    closed form (stepramp.model.last_edge): no edge list, whatever the move's length.
     """
     stops = [] if stop is None else [stop] if isinstance(stop, Stop) else list(stop)
-    last = max([0, *model_edges(plan)[-1:]])
+    last = last_edge(plan) or 0
     for s in stops:
-        last = max([last, s.at_cycle, *edges_with_stop(plan, s.kind, s.at_cycle)])
+        last = max(last, s.at_cycle, last_edge(plan, stop=(s.kind, s.at_cycle)) or 0)
     return last + 2000 + 4 * plan.prescale
 
 
@@ -69,11 +69,13 @@ def simulate(
     budgets: Sequence[int] | None = None,
     log_file: Path | None = None,
     stops: Sequence[Stop | Sequence[Stop] | None] | None = None,
+    extras: Sequence[dict[str, Any]] | None = None,
 ) -> list[SimResult]:
     """Play the moves back to back in one simulation; one SimResult per move (fewer if the engine hung).
 
     stops: an optional stop (or list of stops) per move (None: no stop). Under pytest a hang (or any failure inside
-    the simulation) raises SystemExit from the runner.
+    the simulation) raises SystemExit from the runner. extras: per move, more keys of the request (stepramp.enginetb:
+    "min_gap", "load_lead" with "after_load").
     """
     if stops is not None and len(stops) != len(plans):
         raise ValueError(f"{len(stops)} stops for {len(plans)} plans")
@@ -93,6 +95,8 @@ def simulate(
             move["stop"] = {"kind": stop.kind, "at_cycle": stop.at_cycle}
         elif stop is not None:
             move["stop"] = [{"kind": s.kind, "at_cycle": s.at_cycle} for s in stop]
+        if extras is not None:
+            move.update(extras[i])
         moves.append(move)
     request.write_text(json.dumps({"moves": moves}))
     run_cocotb(

@@ -10,6 +10,10 @@ A move may carry a stop: {"kind": "soft" | "hard", "at_cycle": e}. The strobe so
 for one clock, sampled by the rising edge e cycles after the start edge (the numbering of the step timestamps:
 the start edge is 0, so e = 0 drives it together with start). "stop" may also be a list of such requests (at
 distinct edges for one kind).
+
+The move's registers are latched by `load`, driven with start (or, with "load_lead": k >= 1, k clocks before it,
+after which the inputs carry "after_load", another move's registers, until start: the engine must run the values
+it loaded). "min_gap" (default 2, a STEP_WIDTH and a STEP_SPACE of 1) is the step spacing input.
 """
 
 from __future__ import annotations
@@ -62,6 +66,17 @@ async def _play(dut: Any, move: dict[str, Any]) -> dict[str, Any]:
     regs: dict[str, int] = move["registers"]
     for name in INPUTS:
         getattr(dut, name).value = regs[name]
+    dut.min_gap.value = int(move.get("min_gap", 2))
+    lead = int(move.get("load_lead", 0))
+    if lead > 0:
+        await FallingEdge(dut.clk)
+        dut.load.value = 1
+        await FallingEdge(dut.clk)
+        dut.load.value = 0
+        for name in INPUTS:
+            getattr(dut, name).value = move["after_load"][name]
+        if lead > 1:
+            await ClockCycles(dut.clk, lead - 1)
     raw_stop = move.get("stop")
     stops: list[dict[str, Any]] = [] if raw_stop is None else [raw_stop] if isinstance(raw_stop, dict) else raw_stop
     requests = [(STOP_PORTS[stop["kind"]], int(stop["at_cycle"])) for stop in stops]
@@ -69,6 +84,7 @@ async def _play(dut: Any, move: dict[str, Any]) -> dict[str, Any]:
         raise ValueError(f"stop at_cycle must be >= 0: {stops}")
     await FallingEdge(dut.clk)
     dut.start.value = 1
+    dut.load.value = int(lead == 0)
     for port, at_cycle in requests:
         if at_cycle == 0:
             getattr(dut, port).value = 1
@@ -79,6 +95,7 @@ async def _play(dut: Any, move: dict[str, Any]) -> dict[str, Any]:
     ]
     await FallingEdge(dut.clk)
     dut.start.value = 0
+    dut.load.value = 0
     for port, at_cycle in requests:
         if at_cycle == 0:
             getattr(dut, port).value = 0
@@ -122,6 +139,8 @@ async def play_moves(dut: Any) -> None:
     request = json.loads(Path(os.environ["STEPRAMP_SIM_REQUEST"]).read_text())
     Clock(dut.clk, CLK_PERIOD_NS, unit="ns").start()
     dut.start.value = 0
+    dut.load.value = 0
+    dut.min_gap.value = 2
     dut.soft_stop.value = 0
     dut.hard_stop.value = 0
     dut.pos_load.value = 0

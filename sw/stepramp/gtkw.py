@@ -55,7 +55,7 @@ def _engine_groups(prefix: str) -> Layout:
                 Trace(prefix + "busy"),
                 Trace(prefix + "done"),
                 Trace(prefix + "error"),
-                Trace(prefix + "err_code", 4, "dec", "err_code"),
+                Trace(prefix + "err_code", 5, "dec", "err_code"),
             ],
         ),
         (

@@ -10,6 +10,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # numpy only for time_chunk
+    import numpy as np
+    from numpy.typing import NDArray
 
 
 def step_angle(spr: float) -> float:
@@ -81,6 +86,38 @@ class IdealMove:
     def pulse_times(self) -> list[float]:
         """Ideal pulse times t_k (ticks), k = 0 .. length."""
         return [self.time_at(float(k)) for k in range(self.length + 1)]
+
+    def time_chunk(self, start: int, stop: int) -> NDArray[np.float64]:
+        """time_at(k) for k = start .. stop - 1 as a numpy array, bit-identical to time_at (the same double
+        operations in the same order, per region), so that long moves can be judged chunk by chunk."""
+        import numpy as np
+
+        x = np.arange(start, stop, dtype=np.float64)
+        out = np.zeros(len(x))
+        if self.length <= 0 or len(x) == 0:
+            return out
+
+        def index(k: int) -> int:  # position in the chunk of pulse k, clamped
+            return min(max(k - start, 0), len(x))
+
+        # for an integer k >= 1: k <= x_a <=> k <= floor(x_a), likewise for x_d (x_a <= x_d)
+        first = index(1)
+        end_a = max(index(math.floor(self.x_a) + 1), first)
+        end_c = max(index(math.floor(self.x_d) + 1), end_a)
+        part = 2.0 * x[first:end_a]  # sqrt(2.0 * x / a)
+        part /= self.a
+        np.sqrt(part, out=out[first:end_a])
+        part = np.subtract(x[end_a:end_c], self.x_a)  # t_a + (x - x_a) / v_peak; in place, the same operations
+        part /= self.v_peak
+        np.add(self.t_a, part, out=out[end_a:end_c])
+        part = np.subtract(float(self.length), x[end_c:])  # t_end - sqrt(2.0 * max(length - x, 0.0) / d)
+        np.maximum(part, 0.0, out=part)
+        part *= 2.0
+        part /= self.d
+        np.sqrt(part, out=part)
+        np.subtract(self.t_end, part, out=out[end_c:])
+        out *= self.f_tick
+        return out
 
     def intervals(self) -> list[float]:
         """Ideal intervals t_i - t_{i-1} (ticks), i = 1 .. length."""

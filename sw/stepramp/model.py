@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: MIT
 """Bit-exact integer model of the ramp engine (docs/algorithm.md, followed literally).
 
-The RTL is compared edge for edge with :func:`edges`.
+The RTL is compared edge for edge with :func:`edges`. The list functions are for short moves; any move, up to
+2^31 - 1 steps, is read in bounded memory with value_runs, tick_chunks, edge_chunks, iter_edges and last_edge.
 """
 
 from __future__ import annotations
@@ -9,8 +10,13 @@ from __future__ import annotations
 import bisect
 import itertools
 from collections.abc import Iterable, Iterator
+from typing import TYPE_CHECKING
 
 from .plan import FRAC_CRUISE, FRAC_RAMP, Plan
+
+if TYPE_CHECKING:  # numpy is imported where the lazy functions need it (the list functions do not)
+    import numpy as np
+    from numpy.typing import NDArray
 
 FIRST_PULSE_LATENCY = 2
 """Clock edges from the edge sampling start = '1' to the edge after which pulse 0 is high."""
@@ -25,6 +31,16 @@ _FRAC_MASK = (1 << FRAC_CRUISE) - 1
 
 def interval_values(plan: Plan) -> Iterator[int]:
     """The Q32.32 value of every interval i = 1 .. L, in order (rule order of the spec)."""
+    for value, count in value_runs(plan):
+        yield from itertools.repeat(value, count)
+
+
+def value_runs(plan: Plan) -> Iterator[tuple[int, int]]:
+    """interval_values run-length coded: (Q32.32 value, count) for intervals 1 .. L, in order.
+
+    Every interval rule 7 gives (cruise, sa < i < sd) is in one run, the whole cruise at once; every other interval
+    is a run of one, from the recurrences as the spec runs them. Time and memory are those of the ramps.
+    """
     length = plan.steps - 1
     sa, sd = plan.sa, plan.sd
     c_first = plan.c_first << _SHIFT
@@ -37,7 +53,8 @@ def interval_values(plan: Plan) -> Iterator[int]:
     # decel recurrence: dec_val = D_m (dec_m is None until the first decel value is emitted)
     dec_m: int | None = None
     dec_val, dec_r = plan.decel_seed, 0
-    for i in range(1, length + 1):
+    i = 1
+    while i <= length:
         if i == 1:
             value = c_first
         elif i == length:
@@ -60,9 +77,13 @@ def interval_values(plan: Plan) -> Iterator[int]:
                 dec_val += q
                 dec_m -= 1
             value = dec_val << _SHIFT
-        else:
-            value = cruise
-        yield value
+        else:  # rule 7 holds for i .. min(sd, L) - 1 (i > sa, i > 1, and no rule before it matches up to there)
+            count = min(sd, length) - i
+            yield cruise, count
+            i += count
+            continue
+        yield value, 1
+        i += 1
 
 
 def tick_times(plan: Plan) -> list[int]:
@@ -98,6 +119,193 @@ def phases(plan: Plan) -> list[str]:
         else:
             out.append(DECEL)
     return out
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Long moves in bounded memory (docs/algorithm.md, "Long moves: the lazy model, streamed JSON, summary")
+# ---------------------------------------------------------------------------------------------------------------
+
+CHUNK = 1 << 18
+"""Default (and largest useful) number of pulses in one chunk of tick_chunks and edge_chunks: 2 MB of uint64."""
+
+_MAX_CHUNK = 1 << 31
+_VECTOR_MIN = 64
+"""Runs of at least this many intervals (the cruise) are computed in numpy, shorter ones interval by interval."""
+
+StopRequest = tuple[str, int]
+"""A stop for the lazy functions: (kind, request_edge) as edges_with_stop takes them ("soft" or "hard")."""
+
+
+def _take_runs(runs: Iterable[tuple[int, int]], intervals: int) -> Iterator[tuple[int, int]]:
+    """The first `intervals` intervals of a run-length coded value sequence."""
+    if intervals <= 0:
+        return
+    for value, count in runs:
+        if count >= intervals:
+            yield value, intervals
+            return
+        yield value, count
+        intervals -= count
+
+
+def _advance(t: int, acc: int, value: int, count: int) -> tuple[int, int]:
+    """Tick time and accumulator fraction after `count` intervals of `value` (the accumulator summed at once)."""
+    s = acc + count * value
+    return t + (s >> FRAC_CRUISE), s & _FRAC_MASK
+
+
+def _first_pulse_from(plan: Plan, edge: int) -> int:
+    """The first pulse k of the plan's move with edge E_k >= edge (N when there is none), in O(ramp) time."""
+    if plan.steps <= 0:
+        return 0
+    if plan.prescale == 0:  # not a plan the driver makes: every pulse at edge FIRST_PULSE_LATENCY
+        return 0 if edge <= FIRST_PULSE_LATENCY else plan.steps
+    need = -(-(edge - FIRST_PULSE_LATENCY) // plan.prescale)  # E_k >= edge <=> T_k >= need
+    if need <= 0:
+        return 0
+    k = t = acc = 0
+    for value, count in value_runs(plan):
+        reached, frac = _advance(t, acc, value, count)
+        if reached >= need:  # the j-th interval of this run: acc + j * value >= (need - t) * 2^32
+            return k + -(-(((need - t) << FRAC_CRUISE) - acc) // value)
+        k, t, acc = k + count, reached, frac
+    return plan.steps
+
+
+def _soft_stop_runs(plan: Plan, p: int, m: int) -> Iterator[tuple[int, int]]:
+    """soft_stop_values(plan, p) run-length coded, for the p and m of a soft stop that is not ignored."""
+    if m == 0:
+        yield from _take_runs(value_runs(plan), p)
+        return
+    left, d_val = p, 0
+    for value, count in value_runs(plan):  # intervals 1 .. p, and D = the Q32.16 value of interval p + 1
+        if count <= left:
+            yield value, count
+            left -= count
+            continue
+        if left:
+            yield value, left
+        d_val = value >> _SHIFT
+        break
+    rem = 0
+    for j in range(m, 1, -1):  # D_{j-1} from D_j
+        q, rem = divmod(2 * d_val + rem, 4 * j - 1)
+        d_val += q
+        yield d_val << _SHIFT, 1
+    yield plan.c_last << _SHIFT, 1
+
+
+def move_runs(plan: Plan, stop: StopRequest | None = None) -> tuple[int, Iterator[tuple[int, int]]]:
+    """(N, runs): the number of pulses of the move and its interval values 1 .. N-1 run-length coded.
+
+    Without a stop the plan's move (value_runs); with one, the move edges_with_stop(plan, *stop) describes.
+    """
+    if stop is None:
+        return plan.steps, value_runs(plan)
+    kind, request_edge = stop
+    if kind == HARD:
+        pulses = plan.steps if request_edge < 0 else _first_pulse_from(plan, request_edge)
+        return pulses, _take_runs(value_runs(plan), pulses - 1)
+    if kind != SOFT:
+        raise ValueError(f"kind must be {SOFT!r} or {HARD!r}, got {kind!r}")
+    p = soft_stop_pulse(plan, request_edge)
+    m = None if p is None else soft_stop_length(plan, p)
+    if p is None or m is None:
+        return plan.steps, value_runs(plan)
+    # m < 0 only for plans the driver does not make (sd > L); soft_stop_values then puts c_last alone after p
+    return p + 1 + (max(m, 1) if m else 0), _soft_stop_runs(plan, p, m)
+
+
+def _run_ticks(t: int, acc: int, value: int, count: int, chunk: int) -> Iterator[NDArray[np.uint64]]:
+    """Tick times after each of `count` intervals of `value`, from time t and fraction acc, in numpy chunks.
+
+    The j-th: t + ((acc + j * value) >> 32) = t + j * hi + ((acc + j * lo) >> 32), value = hi * 2^32 + lo, split
+    per chunk into a base (Python int) and i * hi + ((r0 + i * lo) >> 32), i <= chunk <= 2^31: below 2^64, and the
+    result is a tick time (< 2^63 for any Plan).
+    """
+    import numpy as np
+
+    hi, lo = value >> FRAC_CRUISE, value & _FRAC_MASK
+    steps = np.arange(1, min(chunk, count) + 1, dtype=np.uint64)
+    lo_part = steps * np.uint64(lo)
+    hi_part = steps * np.uint64(hi)
+    del steps
+    for j0 in range(0, count, chunk):
+        n = min(chunk, count - j0)
+        a0 = acc + j0 * lo
+        out = lo_part[:n] + np.uint64(a0 & _FRAC_MASK)
+        out >>= np.uint64(FRAC_CRUISE)
+        out += hi_part[:n]
+        out += np.uint64(t + j0 * hi + (a0 >> FRAC_CRUISE))
+        yield out
+
+
+def tick_chunks(plan: Plan, *, chunk: int = CHUNK, stop: StopRequest | None = None) -> Iterator[NDArray[np.uint64]]:
+    """tick_times(plan) (or the stopped move's) as numpy uint64 arrays of at most `chunk` values, in order.
+
+    Memory: a few chunks, whatever the move's length. The ramps run interval by interval in Python, the cruise in
+    numpy (bit-identical: the same accumulator, summed in closed form).
+    """
+    import numpy as np
+
+    if not 1 <= chunk <= _MAX_CHUNK:
+        raise ValueError(f"chunk must be in 1 .. 2^31, got {chunk}")
+    pulses, runs = move_runs(plan, stop)
+    if pulses <= 0:
+        return
+    buf = [0]
+    t = acc = 0
+    for value, count in runs:
+        if count < _VECTOR_MIN:
+            for _ in range(count):
+                s = acc + value
+                t += s >> FRAC_CRUISE
+                acc = s & _FRAC_MASK
+                buf.append(t)
+            while len(buf) >= chunk:
+                yield np.array(buf[:chunk], dtype=np.uint64)
+                del buf[:chunk]
+            continue
+        if buf:
+            yield np.array(buf, dtype=np.uint64)
+            buf = []
+        yield from _run_ticks(t, acc, value, count, chunk)
+        t, acc = _advance(t, acc, value, count)
+    if buf:
+        yield np.array(buf, dtype=np.uint64)
+
+
+def edge_chunks(plan: Plan, *, chunk: int = CHUNK, stop: StopRequest | None = None) -> Iterator[list[int]]:
+    """edges(plan) (or edges_with_stop(plan, *stop)) as lists of at most `chunk` Python ints, in order."""
+    import numpy as np
+
+    last = last_edge(plan, stop=stop)
+    narrow = last is not None and last < 1 << 64  # else exact Python ints (a move of 2^64 clocks or more)
+    prescale, latency = np.uint64(plan.prescale), np.uint64(FIRST_PULSE_LATENCY)
+    for ticks in tick_chunks(plan, chunk=chunk, stop=stop):
+        if narrow:
+            ticks *= prescale
+            ticks += latency
+            yield ticks.tolist()
+        else:
+            yield [FIRST_PULSE_LATENCY + plan.prescale * t for t in ticks.tolist()]
+
+
+def iter_edges(plan: Plan, *, stop: StopRequest | None = None) -> Iterator[int]:
+    """edges(plan) (or edges_with_stop(plan, *stop)) one by one, in bounded memory."""
+    for part in edge_chunks(plan, stop=stop):
+        yield from part
+
+
+def last_edge(plan: Plan, *, stop: StopRequest | None = None) -> int | None:
+    """The last pulse's edge (None without pulses), in closed form over the runs: O(ramp) time, no edge list."""
+    pulses, runs = move_runs(plan, stop)
+    if pulses <= 0:
+        return None
+    t = acc = 0
+    for value, count in runs:
+        t, acc = _advance(t, acc, value, count)
+    return FIRST_PULSE_LATENCY + plan.prescale * t
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -180,9 +388,12 @@ def soft_stop_pulse(plan: Plan, request_edge: int) -> int | None:
     """p, the pulse at which a soft stop sampled at request_edge is decided; None when the request is ignored.
 
     The request counts only while the engine is busy (edges 1 .. the last pulse's edge; edge 0, the start edge,
-    is not busy). p is the first pulse whose edge is strictly after request_edge.
+    is not busy). p is the first pulse whose edge is strictly after request_edge. O(ramp) time, no edge list.
     """
-    return _first_pulse_after(edges(plan), request_edge)
+    last = last_edge(plan)
+    if request_edge < 1 or last is None or request_edge >= last:
+        return None
+    return _first_pulse_from(plan, request_edge + 1)
 
 
 def _first_pulse_after(normal: list[int], request_edge: int) -> int | None:
@@ -208,3 +419,24 @@ def edges_with_stop(plan: Plan, kind: str, request_edge: int) -> list[int]:
     if values is None:
         return normal
     return _edges_of_values(plan, values)
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Step spacing (docs/algorithm.md, "Step spacing (STEP_SPACE)")
+# ---------------------------------------------------------------------------------------------------------------
+
+
+def min_gap(step_width: int, step_space: int) -> int:
+    """Shortest distance in clocks between two STEP rising edges: max(step_width, 1) + max(step_space, 1)."""
+    return max(step_width, 1) + max(step_space, 1)
+
+
+def first_space_fault(move_edges: Iterable[int], gap: int) -> int | None:
+    """Index k >= 1 of the first pulse closer than `gap` clocks to pulse k - 1 (the engine refuses it and ends the
+    move there with error STEP_SPACE); None when every pulse keeps its distance. Reads the edges lazily."""
+    previous: int | None = None
+    for k, edge in enumerate(move_edges):
+        if previous is not None and edge - previous < gap:
+            return k
+        previous = edge
+    return None

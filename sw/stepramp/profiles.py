@@ -14,7 +14,7 @@ import random
 from dataclasses import dataclass
 from typing import Any
 
-from .plan import MIN_INTERVAL_CLKS
+from .plan import MIN_INTERVAL_CLKS, Plan
 
 
 @dataclass(frozen=True)
@@ -227,3 +227,27 @@ INVALID_INPUTS: list[tuple[dict[str, Any], str]] = [
     (_bad(speed=2 * math.pi / 200 * 1e6 / 40.0, accel=1e6, decel=1e6, prescale=2), "speed too high for the hardware"),
 ]
 """Invalid plan_move keyword arguments and a substring of the expected ValueError message."""
+
+
+def exact_plan(
+    steps: int, prescale: int, first: float, cruise: float = 100.0, last: float = 100.0, direction: int = 0
+) -> Plan:
+    """A hand-made move whose intervals are all exact values (no recurrence), in ticks: interval 1 = `first`,
+    intervals 2 .. L - 1 = `cruise` (Q32.32, so a fraction alternates the tick counts), interval L = `last`
+    (sa = 1, sd = L). The driver never plans intervals this short; the step-spacing tests need them."""
+    length = steps - 1
+    return Plan(
+        steps=steps,
+        direction=direction,
+        prescale=prescale,
+        c_first=round(first * 2**16),
+        c_last=round(last * 2**16) if length >= 2 else 0,
+        sa=1 if length >= 1 else 0,
+        c_sa=0,
+        sd=length,
+        c_sd=0,
+        accel_seed=0,
+        decel_seed=0,
+        cruise=round(cruise * 2**32) if length >= 3 else 0,
+        stop_ratio=0,
+    )

@@ -6,7 +6,8 @@ From this description `python -m stepramp.regmap_gen` writes the VHDL constants 
 the Python driver uses it directly. A test checks that the generated files are up to date.
 
 All registers are 32 bits wide, at byte offsets on a 32-bit bus. Motion registers (STEPS .. STOP_RATIO) may be
-written at any time: the core latches them at START, so a write during a move prepares the next one (shadowing).
+written at any time: the core latches them at the edge that accepts START, so a write during a move (or while a
+START is held back) prepares the next one (shadowing).
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ WS = "WS"  # write 1 to act (a strobe); reads 0
 
 ID_MAGIC = 0x5352  # "SR"
 VERSION_MAJOR = 0
-VERSION_MINOR = 2
+VERSION_MINOR = 3
 ID_VALUE = (ID_MAGIC << 16) | (VERSION_MAJOR << 8) | VERSION_MINOR
 
 
@@ -88,7 +89,12 @@ ERROR_CODES: dict[str, tuple[int, str]] = {
     "RANGE": (12, "a recurrence value left its 48-bit range; the move stopped"),
     "STEPS": (13, "STEPS is -2^31 (|steps| must be <= 2^31 - 1)"),
     "POS_BUSY": (14, "POSITION written while a move runs (the write was ignored)"),
-    "CFG_BUSY": (15, "DRIVE, STEP_WIDTH, DIR_TIMING or PWM_PERIOD written while a move runs (ignored)"),
+    "CFG_BUSY": (15, "DRIVE, STEP_WIDTH, DIR_TIMING, PWM_PERIOD or STEP_SPACE written while a move runs (ignored)"),
+    "STEP_SPACE": (
+        16,
+        "a pulse would have come less than STEP_WIDTH + STEP_SPACE clocks after the previous one (the two would "
+        "merge on the STEP pin); it was not emitted and the move stopped",
+    ),
 }
 
 REGISTERS: tuple[Register, ...] = (
@@ -126,7 +132,7 @@ REGISTERS: tuple[Register, ...] = (
             Field("DONE", 4, 1, W1C, 0, "a move ended (normally, stopped or rejected); write 1 to clear"),
             Field("ERROR", 5, 1, W1C, 0, "a move was rejected or stopped on an error; write 1 to clear"),
             Field("DIR_FAULT", 6, 1, RO, 0, "a step came while DIR disagreed with the engine (never expected)"),
-            Field("ERR_CODE", 8, 4, RO, 0, "cause of the last error (table below)"),
+            Field("ERR_CODE", 8, 5, RO, 0, "cause of the last error (table below)"),
         ),
     ),
     _value("STEPS", 0x0C, RW, 32, "signed step count of the next move (two's complement; -2^31 is rejected)"),
@@ -183,6 +189,15 @@ REGISTERS: tuple[Register, ...] = (
         ),
     ),
     _value("PWM_PERIOD", 0x70, RW, 16, "PWM carrier period in clocks (0 or 1: windings off in mode 4)"),
+    _value(
+        "STEP_SPACE",
+        0x74,
+        RW,
+        16,
+        "shortest STEP low time in clocks (0 acts as 1): two STEP rising edges are at least STEP_WIDTH + STEP_SPACE "
+        "apart, or the move stops with error STEP_SPACE; written only while stopped",
+        1,
+    ),
 )
 
 REGISTERS_BY_NAME: dict[str, Register] = {r.name: r for r in REGISTERS}

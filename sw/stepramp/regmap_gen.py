@@ -11,7 +11,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from stepramp.regmap import ADDR_BITS, ERROR_CODES, ID_VALUE, REGISTERS, Register
+from stepramp.regmap import ADDR_BITS, ERROR_CODES, ID_VALUE, REGISTERS, REGISTERS_BY_NAME, Register
 
 REPO = Path(__file__).resolve().parents[2]
 VHDL_PKG = REPO / "hdl" / "stepramp_regs_pkg.vhd"
@@ -36,7 +36,8 @@ def _vhdl_group(comment: str, consts: list[tuple[str, str, str]]) -> list[str]:
 
 
 def vhdl() -> str:
-    slv4 = "std_logic_vector(3 downto 0)"
+    err_w = REGISTERS_BY_NAME["STATUS"].field("ERR_CODE").width
+    slv_err = f"std_logic_vector({err_w - 1} downto 0)"
     lines = [
         "-- SPDX-License-Identifier: MIT",
         "-- stepramp_regs_pkg: register offsets, fields and error codes of the stepramp core.",
@@ -62,7 +63,8 @@ def vhdl() -> str:
             fields += [(f"C_{name}_LSB", "natural", str(lsb)), (f"C_{name}_W", "natural", str(w))]
     lines += _vhdl_group("Fields: lowest bit and width.", fields)
     lines += _vhdl_group(
-        "STATUS.ERR_CODE values.", [(f"C_ERR_{n}", slv4, f'x"{code:X}"') for n, (code, _) in ERROR_CODES.items()]
+        "STATUS.ERR_CODE values.",
+        [(f"C_ERR_{n}", slv_err, f'"{code:0{err_w}b}"') for n, (code, _) in ERROR_CODES.items()],
     )
     lines += ["end package stepramp_regs_pkg;", ""]
     return "\n".join(lines)
@@ -101,11 +103,14 @@ def markdown() -> str:
         f"<!-- {_BANNER} -->",
         "",
         "32-bit registers at byte offsets; the core decodes the low "
-        f"{ADDR_BITS} address bits (a {1 << ADDR_BITS}-byte window). Any other offset answers with a bus error "
+        f"{ADDR_BITS} address bits (a {1 << ADDR_BITS}-byte window). It decodes word addresses on both buses: "
+        "the low two address bits are ignored, so offsets 0x0D, 0x0E and 0x0F reach STEPS like 0x0C (byte "
+        "lanes are chosen by the byte enables / WSTRB alone). An offset with no register answers with a bus error "
         "(`IP2Bus_Error`, AXI `SLVERR`). Byte enables apply to every writable register.",
         "",
-        "The motion registers (STEPS .. STOP_RATIO) can be written at any time: the core latches them when START "
-        "is written, so writing them during a move prepares the next move and does not disturb the running one. "
+        "The motion registers (STEPS .. STOP_RATIO) can be written at any time: the core latches them at the "
+        "clock edge that accepts START, so writing them during a move, or while a START is held for DIR timing or "
+        "STEP spacing, prepares the next move and does not disturb the running or held one. "
         "Wide values are split into `_LO` (bits 31:0) and `_HI` words. The driver computes every value "
         "(`stepramp.plan.plan_move`, `stepramp_plan_move` in C); see [algorithm.md](algorithm.md).",
         "",

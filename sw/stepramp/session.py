@@ -28,7 +28,7 @@ from typing import Any
 from stepramp.driver import Outputs, StepRamp, StepRampError
 from stepramp.gtkw import missing_in
 from stepramp.hdl import run_cocotb
-from stepramp.model import edges as model_edges
+from stepramp.model import last_edge
 from stepramp.plan import Plan
 
 #: Default setting: the AVR446 demo's motor (200 steps/rev, half-stepped: 400 steps/rev) with the windings driven in
@@ -253,7 +253,7 @@ if cocotb is not None:
             await drv.start()
             # A hang fails the move instead of the session waiting for ever: the model's last edge, plus DIR
             # setup/hold and slack, in polls of at most _POLL_CYCLES.
-            budget = max([0, *model_edges(plan)[-1:]]) + 2 * cfg["dir_setup"] + _POLL_CYCLES
+            budget = (last_edge(plan) or 0) + 2 * cfg["dir_setup"] + _POLL_CYCLES
             try:
                 await drv.wait_done(idle=idle, polls=budget // _POLL_CYCLES + 10)
             except StepRampError as exc:

@@ -284,21 +284,34 @@ class GateTiming:
 
 
 def gate_timing(
-    request: int, dir_changes: bool, last_step_edge: int | None, dir_hold: int, dir_setup: int
+    request: int,
+    dir_changes: bool,
+    last_step_edge: int | None,
+    dir_hold: int,
+    dir_setup: int,
+    step_width: int = 1,
+    step_space: int = 1,
 ) -> GateTiming:
     """The start gate's rule for one accepted start_req (sampled at edge `request`, gate idle, engine idle).
 
     Same direction: start_out after edge request (1 clock after start_req). Direction change: DIR changes at
     D = max(request + 1, last_step_edge + max(dir_hold, 1)), start_out after edge D + 1 + max(dir_setup - 5, 0),
-    so that the first STEP rising edge comes max(dir_setup, 5) clocks after D. last_step_edge: the last edge that
-    sampled eng_step = '1' (None: none since reset).
+    so that the first STEP rising edge comes max(dir_setup, 5) clocks after D. In both cases start_out waits until
+    the first STEP rising edge is at least min_gap = max(step_width, 1) + max(step_space, 1) clocks after
+    last_step_edge (docs/algorithm.md, "Step spacing"). last_step_edge: the last edge that sampled eng_step = '1'
+    (None: none since reset), which is also the edge the STEP pin rose.
     """
+    gap = max(step_width, 1) + max(step_space, 1)
+    earliest = None if last_step_edge is None else last_step_edge + gap - START_TO_FIRST_STEP
     if not dir_changes:
-        return GateTiming(request, None, request, request + START_TO_FIRST_STEP)
+        s = request if earliest is None else max(request, earliest)
+        return GateTiming(request, None, s, s + START_TO_FIRST_STEP)
     d = request + 1
     if last_step_edge is not None:
         d = max(d, last_step_edge + max(dir_hold, 1))
     s = d + 1 + max(dir_setup - GATE_SETUP_MIN, 0)
+    if earliest is not None:
+        s = max(s, earliest)
     return GateTiming(request, d, s, s + START_TO_FIRST_STEP)
 
 

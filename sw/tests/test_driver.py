@@ -63,14 +63,22 @@ def test_step_width_must_fit_the_shortest_interval() -> None:
     speed = 2 * 3.141592653589793 / 200.0 * 1e6 / 100.5
     drv.plan(500, 1e6, 1e6, speed)
     run(drv.configure_outputs(Outputs(mode="half", step_width=100)))
-    with pytest.raises(ValueError, match="STEP width 100 clocks does not fit"):
+    with pytest.raises(ValueError, match="STEP width 100 [+] STEP space 1 clocks does not fit"):
+        drv.plan(500, 1e6, 1e6, speed)
+    # the core refuses pulses closer than STEP_WIDTH + STEP_SPACE: the plan checks the sum
+    run(drv.configure_outputs(Outputs(mode="half", step_width=90, step_space=10)))
+    drv.plan(500, 1e6, 1e6, speed)
+    run(drv.configure_outputs(Outputs(mode="half", step_width=90, step_space=11)))
+    with pytest.raises(ValueError, match="STEP width 90 [+] STEP space 11 clocks does not fit"):
         drv.plan(500, 1e6, 1e6, speed)
 
 
 def test_configure_outputs_words_and_checks() -> None:
     bank = FakeBank()
     drv = StepRamp(bank, fclk=1e6, spr=200.0)
-    run(drv.configure_outputs(Outputs(mode="pwm", ustep_log2=4, step_width=7, dir_setup=20, dir_hold=9, pwm_period=40)))
+    outputs = Outputs(mode="pwm", ustep_log2=4, step_width=7, dir_setup=20, dir_hold=9, pwm_period=40, step_space=3)
+    run(drv.configure_outputs(outputs))
+    assert bank.regs[offset("STEP_SPACE")] == 3
     assert bank.regs[offset("DRIVE")] == 4 | 4 << 4
     assert bank.regs[offset("STEP_WIDTH")] == 7
     assert bank.regs[offset("DIR_TIMING")] == 20 | 9 << 16
@@ -80,6 +88,7 @@ def test_configure_outputs_words_and_checks() -> None:
         (Outputs(ustep_log2=8), "ustep_log2"),
         (Outputs(step_width=70000), "step_width"),
         (Outputs(dir_hold=-1), "dir_hold"),
+        (Outputs(step_space=65536), "step_space"),
     ):
         with pytest.raises(ValueError, match=msg):
             run(drv.configure_outputs(bad))
