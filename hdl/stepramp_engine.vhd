@@ -153,8 +153,8 @@ architecture rtl of stepramp_engine is
   signal chk_code     : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
   -- Clocks until a pulse keeps min_gap from the previous pulse of the move (0: it may come).
   signal gap_left : unsigned(16 downto 0);
-  signal n_zero       : std_logic;
-  signal n_one        : std_logic;
+  signal n_zero   : std_logic;
+  signal n_one    : std_logic;
 
   -- Base timer.
   signal tmr_restart : std_logic;

@@ -7,8 +7,9 @@
 --
 -- The engine side carries the staging copy of the move registers, the command strobes and the engine's status.
 -- Motion registers are plain storage: the engine latches them at the edge that accepts START (stepramp_core), so
--- writing them during a move, or while a start is held back, only prepares the next move (shadowing). Sticky DONE/ERROR are set by the engine's strobes and cleared by writing 1;
--- a set and a clear in the same cycle keep the flag set, so no event is lost.
+-- writing them during a move, or while a start is held back, only prepares the next move (shadowing). Sticky
+-- DONE/ERROR are set by the engine's strobes and cleared by writing 1; a set and a clear in the same cycle keep the
+-- flag set, so no event is lost.
 
 library ieee;
   use ieee.std_logic_1164.all;
@@ -78,10 +79,11 @@ architecture rtl of stepramp_regfile is
   -- The plain read/write words: the motion registers STEPS .. STOP_RATIO, and the stepping configuration DRIVE ..
   -- STEP_SPACE (written only while stopped). One register per word, indexed by word offset, reached with constant
   -- indices only (loops below), so no memory is inferred; the words in between are never written (constant 0).
-  constant C_FIRST_W     : natural := C_REG_STEPS / 4;
-  constant C_LAST_MOVE_W : natural := C_REG_STOP_RATIO / 4;
-  constant C_FIRST_CFG_W : natural := C_REG_DRIVE / 4;
-  constant C_LAST_W      : natural := C_REG_STEP_SPACE / 4;
+  constant C_FIRST_W      : natural := C_REG_STEPS / 4;
+  constant C_LAST_MOVE_W  : natural := C_REG_STOP_RATIO / 4;
+  constant C_FIRST_CFG_W  : natural := C_REG_DRIVE / 4;
+  constant C_LAST_W       : natural := C_REG_STEP_SPACE / 4;
+  constant C_ERR_CODE_MSB : natural := C_STATUS_ERR_CODE_LSB + C_STATUS_ERR_CODE_W - 1;
 
   type reg_array_t is array (C_FIRST_W to C_LAST_W) of std_logic_vector(31 downto 0);
 
@@ -278,13 +280,13 @@ begin
           rd_v(C_CTRL_IRQ_ERROR_EN_LSB) := irq_error_en;
           rd_v(C_CTRL_ENABLE_LSB)       := enable_r;
         elsif (w = word(C_REG_STATUS)) then
-          rd_v(C_STATUS_STATE_LSB + 1 downto C_STATUS_STATE_LSB)       := eng_state;
-          rd_v(C_STATUS_BUSY_LSB)                                      := eng_busy;
-          rd_v(C_STATUS_DIR_LSB)                                       := eng_dir;
-          rd_v(C_STATUS_DONE_LSB)                                      := done_flag;
-          rd_v(C_STATUS_ERROR_LSB)                                     := error_flag;
-          rd_v(C_STATUS_DIR_FAULT_LSB)                                 := dir_fault;
-          rd_v(C_STATUS_ERR_CODE_LSB + C_STATUS_ERR_CODE_W - 1 downto C_STATUS_ERR_CODE_LSB) := err_code_r;
+          rd_v(C_STATUS_STATE_LSB + 1 downto C_STATUS_STATE_LSB) := eng_state;
+          rd_v(C_STATUS_BUSY_LSB)                                := eng_busy;
+          rd_v(C_STATUS_DIR_LSB)                                 := eng_dir;
+          rd_v(C_STATUS_DONE_LSB)                                := done_flag;
+          rd_v(C_STATUS_ERROR_LSB)                               := error_flag;
+          rd_v(C_STATUS_DIR_FAULT_LSB)                           := dir_fault;
+          rd_v(C_ERR_CODE_MSB downto C_STATUS_ERR_CODE_LSB)      := err_code_r;
         elsif (w = word(C_REG_POSITION)) then
           rd_v := eng_position;
         elsif (w = word(C_REG_CUR_DELAY)) then

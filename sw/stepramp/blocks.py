@@ -91,3 +91,48 @@ def iter_msb_pairs(width: int) -> Iterator[tuple[int, int]]:
     for n in values:
         for d in values:
             yield n, d
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# The next-delay unit (docs/stepramp_engine.md, "stepramp_next_delay"): one recurrence step of docs/algorithm.md
+# ---------------------------------------------------------------------------------------------------------------
+
+#: Ramp values are Q32.16: 48 bits.
+RAMP_VALUE_LIMIT = 1 << 48
+
+
+def recurrence_iterations(numerator: int, denominator: int) -> int:
+    """k, the divider iterations of one recurrence step: msb(num) - msb(den) + 1, or 0 when num < den."""
+    if numerator < denominator:
+        return 0
+    return msb(numerator) - msb(denominator) + 1
+
+
+@dataclass(frozen=True)
+class NextDelayAnswer:
+    """What the next-delay unit answers to one request."""
+
+    value: int  # the exact result: A_n or D_m (outside 0 .. 2^48 - 1 when ovf)
+    remainder: int
+    ovf: bool  # the value left the Q32.16 range
+    latency: int  # clock edges from the edge that samples req to the edge after which ans_valid is '1'
+
+
+def next_delay(seed: bool, decel: bool, index: int, value: int, remainder: int) -> NextDelayAnswer:
+    """The answer to a request: a seed is value itself, remainder 0, at the sampling edge; a step is
+
+    accel (answer A_n, n = index):  num = 2 A_(n-1) + r, den = 4n + 1, A_n = A_(n-1) - num div den
+    decel (answer D_m, m = index):  num = 2 D_(m+1) + r, den = 4m + 3, D_m = D_(m+1) + num div den
+
+    (docs/algorithm.md with the answer's index; 4m + 3 is the spec's 4m' - 1, m' = m + 1), registered 2 + k edges
+    after the sampling edge, k = recurrence_iterations(num, den).
+    """
+    if seed:
+        return NextDelayAnswer(value, 0, False, 0)
+    numerator = 2 * value + remainder
+    denominator = 4 * index + (3 if decel else 1)
+    q, r = divmod(numerator, denominator)
+    result = value + q if decel else value - q
+    return NextDelayAnswer(
+        result, r, not 0 <= result < RAMP_VALUE_LIMIT, 2 + recurrence_iterations(numerator, denominator)
+    )

@@ -32,6 +32,16 @@ class SimResult:
     done_edge: int | None = None
     busy_after: int | None = None
     state_after: str | None = None
+    #: the absolute index of the edge the timestamps count from (the start edge; for a held start, the edge after
+    #: the previous move's done cycle)
+    origin: int | None = None
+    #: the outputs (stepramp.enginetb.SNAPSHOT_PORTS and position, state by name) in the cycle before the start
+    #: edge (None for a held start) and in the cycle after it
+    before: dict[str, Any] | None = None
+    after_start: dict[str, Any] | None = None
+    #: a move ended by a "rst" event: the outputs in the cycle after the reset edge, and "stray", the first step,
+    #: done or busy rising edge seen after it (None: none)
+    reset: dict[str, Any] | None = None
 
 
 @dataclass(frozen=True)
@@ -75,7 +85,8 @@ def simulate(
 
     stops: an optional stop (or list of stops) per move (None: no stop). Under pytest a hang (or any failure inside
     the simulation) raises SystemExit from the runner. extras: per move, more keys of the request (stepramp.enginetb:
-    "min_gap", "load_lead" with "after_load").
+    "min_gap", "load_lead" with "after_load", "gap_cycles", "events", "reset_watch_cycles", "inputs_after_start",
+    "start_held").
     """
     if stops is not None and len(stops) != len(plans):
         raise ValueError(f"{len(stops)} stops for {len(plans)} plans")
@@ -115,5 +126,8 @@ def simulate(
         r["states"] = [STATE_NAMES[s] for s in r["states"]]
         if "state_after" in r:
             r["state_after"] = STATE_NAMES[r["state_after"]]
+        for key in ("before", "after_start", "reset"):
+            if r.get(key) is not None:
+                r[key]["state"] = STATE_NAMES[r[key]["state"]]
         out.append(SimResult(**r))
     return out

@@ -14,6 +14,21 @@ distinct edges for one kind).
 The move's registers are latched by `load`, driven with start (or, with "load_lead": k >= 1, k clocks before it,
 after which the inputs carry "after_load", another move's registers, until start: the engine must run the values
 it loaded). "min_gap" (default 2, a STEP_WIDTH and a STEP_SPACE of 1) is the step spacing input.
+
+Optional keys for the control inputs (none of them changes a move that does not use it):
+
+* "events": [{"port": p, "at_cycle": e, "pos_value": v}]: port p ("pos_load", "rst", "start" or "load") is '1' for
+  the one clock sampled by edge e of the move's numbering (e < 0: while idle, -e clocks before the start edge; e = 0:
+  with start; e >= 1: during or after the move); "pos_value" goes with "pos_load". A "rst" at e >= 1 ends the
+  observation there: the result's "reset" holds the outputs in the cycle after that edge and "stray", the first
+  rising edge of step, done or busy seen in the "reset_watch_cycles" (default 100) that follow (None: none).
+* "inputs_after_start": registers put on the inputs after the start edge (as "after_load" after a load).
+* "start_held": true: the move's start is not given by itself: start and load stay '1' from the previous move's
+  start edge on, with this move's registers on the inputs, so that the engine takes them in the previous move's done
+  cycle. Its timestamps count from the edge after the previous move's done cycle, where the docs say it is accepted.
+
+Every result also records "origin" (the absolute index of the edge its timestamps count from), "before" (the outputs
+in the cycle before the start edge; None for a held start) and "after_start" (the outputs in the cycle after it).
 """
 
 from __future__ import annotations
@@ -62,12 +77,85 @@ async def _strobe(dut: Any, port: str, at_cycle: int, start_edge: int) -> None:
     assert sampled == at_cycle, f"{port} sampled at edge {sampled}, requested {at_cycle}"
 
 
-async def _play(dut: Any, move: dict[str, Any]) -> dict[str, Any]:
+#: Ports an "events" entry may drive.
+EVENT_PORTS = ("pos_load", "rst", "start", "load")
+
+#: Outputs recorded in the snapshots ("before", "after_start", "reset").
+SNAPSHOT_PORTS = ("busy", "done", "error", "err_code", "state", "step_count", "dir", "step", "cur_delay")
+
+
+def _snapshot(dut: Any) -> dict[str, int]:
+    """The engine's outputs now (position as a signed number)."""
+    snap = {name: int(getattr(dut, name).value) for name in SNAPSHOT_PORTS}
+    snap["position"] = _signed(dut.position.value, len(dut.position))
+    return snap
+
+
+def _set_event(dut: Any, event: dict[str, Any]) -> None:
+    getattr(dut, event["port"]).value = 1
+    if "pos_value" in event:
+        dut.pos_value.value = int(event["pos_value"]) & 0xFFFF_FFFF
+
+
+async def _event(dut: Any, event: dict[str, Any], start_edge: int) -> None:
+    """Drive an event's port '1' for the clock cycle before rising edge start_edge + at_cycle (at_cycle >= 1)."""
+    at_cycle = int(event["at_cycle"])
+    await Timer(at_cycle * CLK_PERIOD_NS - CLK_PERIOD_NS // 2, unit="ns")  # the falling edge before it
+    _set_event(dut, event)
+    await RisingEdge(dut.clk)
+    sampled = _edge() - start_edge
+    await FallingEdge(dut.clk)
+    getattr(dut, event["port"]).value = 0
+    assert sampled == at_cycle, f"{event['port']} sampled at edge {sampled}, requested {at_cycle}"
+
+
+def _events(move: dict[str, Any]) -> list[dict[str, Any]]:
+    events: list[dict[str, Any]] = list(move.get("events", []))
+    for event in events:
+        if event["port"] not in EVENT_PORTS:
+            raise ValueError(f"event port must be one of {EVENT_PORTS}: {event}")
+        if event["port"] == "rst" and int(event["at_cycle"]) == 0:
+            raise ValueError("a rst event needs at_cycle /= 0")
+    return events
+
+
+async def _watch_after_reset(dut: Any, move: dict[str, Any], start_edge: int) -> dict[str, Any]:
+    """The outputs in the cycle after the reset edge, then the first stray step, done or busy edge (if any)."""
+    await FallingEdge(dut.clk)
+    snap: dict[str, Any] = _snapshot(dut)
+    watch = int(move.get("reset_watch_cycles", 100)) * CLK_PERIOD_NS
+    timer = Timer(watch, unit="ns")
+    fired = await First(RisingEdge(dut.step), RisingEdge(dut.done), RisingEdge(dut.busy), timer)
+    snap["stray"] = None if fired is timer else _edge() - start_edge
+    if fired is not timer:
+        await FallingEdge(dut.clk)
+    return snap
+
+
+async def _play(dut: Any, move: dict[str, Any], next_move: dict[str, Any] | None = None) -> dict[str, Any]:
+    hold_next = bool(next_move and next_move.get("start_held"))
+    if move.get("start_held"):
+        return await _play_held(dut, move, hold_next, next_move)
     regs: dict[str, int] = move["registers"]
     for name in INPUTS:
         getattr(dut, name).value = regs[name]
     dut.min_gap.value = int(move.get("min_gap", 2))
     lead = int(move.get("load_lead", 0))
+    events = _events(move)
+    early = [e for e in events if int(e["at_cycle"]) < 0]
+    if early and lead > 0:
+        raise ValueError("events before the start cannot be combined with load_lead")
+    if hold_next and "inputs_after_start" in move:
+        raise ValueError("inputs_after_start cannot be combined with a held start of the next move")
+    if early:
+        # idle events: pos_load or rst '1' for one clock, -at_cycle clocks before the start edge
+        for j in range(-min(int(e["at_cycle"]) for e in early), 0, -1):
+            await FallingEdge(dut.clk)
+            for port in EVENT_PORTS:
+                getattr(dut, port).value = 0
+            for event in early:
+                if int(event["at_cycle"]) == -j:
+                    _set_event(dut, event)
     if lead > 0:
         await FallingEdge(dut.clk)
         dut.load.value = 1
@@ -83,30 +171,91 @@ async def _play(dut: Any, move: dict[str, Any]) -> dict[str, Any]:
     if any(at_cycle < 0 for _, at_cycle in requests):
         raise ValueError(f"stop at_cycle must be >= 0: {stops}")
     await FallingEdge(dut.clk)
+    if early:
+        dut.pos_load.value = 0
+        dut.rst.value = 0
+    before = _snapshot(dut)
     dut.start.value = 1
     dut.load.value = int(lead == 0)
     for port, at_cycle in requests:
         if at_cycle == 0:
             getattr(dut, port).value = 1
+    for event in events:
+        if int(event["at_cycle"]) == 0:
+            _set_event(dut, event)
     await RisingEdge(dut.clk)
     start_edge = _edge()
     strobes = [
         cocotb.start_soon(_strobe(dut, port, at_cycle, start_edge)) for port, at_cycle in requests if at_cycle >= 1
     ]
+    strobes += [cocotb.start_soon(_event(dut, e, start_edge)) for e in events if int(e["at_cycle"]) >= 1]
     await FallingEdge(dut.clk)
-    dut.start.value = 0
-    dut.load.value = 0
+    after_start = _snapshot(dut)
+    # an event at edge 1 drives its port '1' at this very falling edge: leave it to the event
+    at_one = {e["port"] for e in events if int(e["at_cycle"]) == 1}
+    dut.start.value = int(hold_next or "start" in at_one)
+    dut.load.value = int(hold_next or "load" in at_one)
     for port, at_cycle in requests:
         if at_cycle == 0:
             getattr(dut, port).value = 0
+    for event in events:
+        if int(event["at_cycle"]) == 0 and event["port"] not in at_one:
+            getattr(dut, event["port"]).value = 0
+    if hold_next and next_move is not None:
+        _put_inputs(dut, next_move)
+    if "inputs_after_start" in move:
+        for name in INPUTS:
+            getattr(dut, name).value = move["inputs_after_start"][name]
+    resets = [int(e["at_cycle"]) for e in events if e["port"] == "rst" and int(e["at_cycle"]) >= 1]
+    return await _observe(dut, move, start_edge, strobes, before, after_start, min(resets, default=None))
 
+
+def _put_inputs(dut: Any, move: dict[str, Any]) -> None:
+    for name in INPUTS:
+        getattr(dut, name).value = move["registers"][name]
+    dut.min_gap.value = int(move.get("min_gap", 2))
+
+
+async def _play_held(
+    dut: Any, move: dict[str, Any], hold_next: bool, next_move: dict[str, Any] | None
+) -> dict[str, Any]:
+    """A move whose start (and load) have been '1' since the previous move's start edge, with its registers on the
+    inputs: here, in the previous move's done cycle, the engine takes it at the next edge."""
+    if move.get("events") or move.get("stop") or move.get("load_lead") or "inputs_after_start" in move:
+        raise ValueError("a held start takes no events, stops, load_lead or inputs_after_start")
+    await RisingEdge(dut.clk)
+    start_edge = _edge()
+    await FallingEdge(dut.clk)
+    after_start = _snapshot(dut)
+    if hold_next and next_move is not None:
+        _put_inputs(dut, next_move)
+    else:
+        dut.start.value = 0
+        dut.load.value = 0
+    return await _observe(dut, move, start_edge, [], None, after_start, None)
+
+
+async def _observe(
+    dut: Any,
+    move: dict[str, Any],
+    start_edge: int,
+    strobes: list[Any],
+    before: dict[str, int] | None,
+    after_start: dict[str, int],
+    reset_edge: int | None,
+) -> dict[str, Any]:
+    """Timestamp every STEP rising edge until done (or until a reset edge), then record the final outputs."""
     edges: list[int] = []
     states: list[int] = []
     deadline = int(get_sim_time("ns")) + int(move["timeout_cycles"]) * CLK_PERIOD_NS
+    reset_ns = None if reset_edge is None else (start_edge + reset_edge) * CLK_PERIOD_NS
     offset = 0
     # done may already be high here: a hard stop at the start edge ends the move at edge 0
     while int(dut.done.value) != 1:
-        remaining = deadline - int(get_sim_time("ns"))
+        now = int(get_sim_time("ns"))
+        if reset_ns is not None and now >= reset_ns:
+            break
+        remaining = (deadline if reset_ns is None else min(deadline, reset_ns)) - now
         if remaining <= 0:
             return {"edges": edges, "states": states, "done": False}
         await First(RisingEdge(dut.step), RisingEdge(dut.done), Timer(remaining, unit="ns"))
@@ -115,6 +264,12 @@ async def _play(dut: Any, move: dict[str, Any]) -> dict[str, Any]:
         if int(dut.step.value) == 1 and (not edges or edges[-1] != offset):
             edges.append(offset)
             states.append(int(dut.state.value))
+    common = {"origin": start_edge, "before": before, "after_start": after_start}
+    if reset_ns is not None and int(dut.done.value) != 1:
+        reset = await _watch_after_reset(dut, move, start_edge)
+        for strobe in strobes:
+            await strobe
+        return {"edges": edges, "states": states, "done": False, "reset": reset, **common}
     result = {
         "edges": edges,
         "states": states,
@@ -124,6 +279,7 @@ async def _play(dut: Any, move: dict[str, Any]) -> dict[str, Any]:
         "err_code": int(dut.err_code.value),
         "final_position": _signed(dut.position.value, len(dut.position)),
         "step_count": int(dut.step_count.value),
+        **common,
     }
     await FallingEdge(dut.clk)
     result["busy_after"] = int(dut.busy.value)
@@ -157,12 +313,15 @@ async def play_moves(dut: Any) -> None:
     assert not missing, f"the GTKWave layout names signals stepramp_engine does not have: {missing}"
 
     results = []
-    for move in request["moves"]:
-        result = await _play(dut, move)
+    moves = request["moves"]
+    for i, move in enumerate(moves):
+        next_move = moves[i + 1] if i + 1 < len(moves) else None
+        result = await _play(dut, move, next_move)
         results.append(result)
-        if not result["done"]:
+        if not result["done"] and "reset" not in result:
             break  # the engine hung: report what was seen, the caller fails the test
-        await ClockCycles(dut.clk, int(move.get("gap_cycles", 5)))
+        if not (next_move and next_move.get("start_held")):
+            await ClockCycles(dut.clk, int(move.get("gap_cycles", 5)))
     Path(os.environ["STEPRAMP_SIM_RESULT"]).write_text(json.dumps({"results": results}))
-    hung = [i for i, r in enumerate(results) if not r["done"]]
+    hung = [i for i, r in enumerate(results) if not r["done"] and "reset" not in r]
     assert not hung, f"no done within the cycle budget for move {hung[0]}"

@@ -63,13 +63,13 @@ def test_step_width_must_fit_the_shortest_interval() -> None:
     speed = 2 * 3.141592653589793 / 200.0 * 1e6 / 100.5
     drv.plan(500, 1e6, 1e6, speed)
     run(drv.configure_outputs(Outputs(mode="half", step_width=100)))
-    with pytest.raises(ValueError, match="STEP width 100 [+] STEP space 1 clocks does not fit"):
+    with pytest.raises(ValueError, match=r"STEP width 100 \+ STEP space 1 clocks does not fit"):
         drv.plan(500, 1e6, 1e6, speed)
     # the core refuses pulses closer than STEP_WIDTH + STEP_SPACE: the plan checks the sum
     run(drv.configure_outputs(Outputs(mode="half", step_width=90, step_space=10)))
     drv.plan(500, 1e6, 1e6, speed)
     run(drv.configure_outputs(Outputs(mode="half", step_width=90, step_space=11)))
-    with pytest.raises(ValueError, match="STEP width 90 [+] STEP space 11 clocks does not fit"):
+    with pytest.raises(ValueError, match=r"STEP width 90 \+ STEP space 11 clocks does not fit"):
         drv.plan(500, 1e6, 1e6, speed)
 
 

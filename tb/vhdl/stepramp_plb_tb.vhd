@@ -28,9 +28,9 @@ architecture sim of stepramp_plb_tb is
   constant C_STOP_RATIO : natural := 16#54#;
   constant C_POSITION   : natural := 16#58#;
   constant C_STEP_COUNT : natural := 16#60#;
-  constant C_UNMAPPED   : natural := 16#74#;
+  constant C_UNMAPPED   : natural := 16#78#;
 
-  constant C_ID_VALUE : std_logic_vector(31 downto 0) := x"5352_0002";
+  constant C_ID_VALUE : std_logic_vector(31 downto 0) := x"5352_0003";
 
   type t_reg_write is record
     offset : natural;
@@ -326,7 +326,7 @@ begin
     check_reg(C_ID, "ID", C_ID_VALUE);
     bus_read(C_UNMAPPED, word, bus_err);
     assert bus_err = '1'
-      report "no bus error on the read of unmapped offset 0x74"
+      report "no bus error on the read of unmapped offset 0x78"
       severity failure;
 
     -- Program the move, enable the done interrupt (CTRL byte 1), START (CTRL byte 0 only, as the driver does).
