@@ -142,9 +142,9 @@ begin
   -- STATUS.BUSY covers a start held back by the stepping logic for DIR setup/hold or STEP spacing.
   busy_any <= busy or gate_busy;
 
-  -- The engine takes the move at the edge that accepts START (the register file passes START on only while idle,
-  -- and the stepping logic accepts it exactly then), not when the held start reaches it: writes during the hold
-  -- go to the staging copy for the next move.
+  -- The engine takes the move at the edge that accepts START (START while idle: the stepping logic accepts it
+  -- exactly then and drops it otherwise), not when the held start reaches it: writes during the hold go to the
+  -- staging copy for the next move.
   load <= start_req and not busy_any;
 
   -- A hard stop that cancels a start held by the stepping logic reaches the engine with that start (done, no pulse).

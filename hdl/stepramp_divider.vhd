@@ -7,8 +7,11 @@
 -- handful of cycles.
 --
 -- Latency, from the rising edge that samples start to the rising edge that raises done:
---   1                           when D = 0 (div_zero = '1'), or N < D (quotient 0, remainder N)
---   1 + msb(N) - msb(D) + 1     otherwise (at most G_WIDTH + 1)
+--   1                           when D = 0 (div_zero = '1'), or msb(N) < msb(D) (N < D: quotient 0, remainder N;
+--                               also N = 0)
+--   1 + msb(N) - msb(D) + 1     otherwise (at most G_WIDTH + 1; N < D with msb(N) = msb(D) takes this path: 2)
+-- The alignment compares only the two msb indices (no wide comparator), and each iteration is one subtraction whose
+-- borrow decides the quotient bit.
 -- start is sampled only when busy = '0'. done is a one-cycle strobe; quotient, remainder and div_zero are valid
 -- from done on and held until the next start. On D = 0: quotient all ones, remainder = N.
 
@@ -89,6 +92,7 @@ begin
   div_proc : process (clk) is
 
     variable shift : unsigned(C_IDX_W - 1 downto 0);
+    variable diff  : unsigned(G_WIDTH downto 0);
 
   begin
 
@@ -114,14 +118,14 @@ begin
             dz_r   <= '1';
             done_r <= '1';
             state  <= C_IDLE;
-          elsif (num_r < den_r) then
-            -- Also covers N = 0: nothing to iterate.
+          elsif (num_zero = '1' or unsigned(num_msb) < unsigned(den_msb)) then
+            -- N < D (also N = 0): nothing to iterate.
             quo_r  <= (others => '0');
             rem_r  <= num_r;
             done_r <= '1';
             state  <= C_IDLE;
           else
-            -- N >= D > 0, so msb(N) >= msb(D) and the shifted divisor still fits in G_WIDTH bits.
+            -- msb(N) >= msb(D) (D > 0), so the shifted divisor still fits in G_WIDTH bits.
             shift := unsigned(num_msb) - unsigned(den_msb);
             dsh_r <= shift_left(den_r, to_integer(shift));
             rem_r <= num_r;
@@ -132,9 +136,10 @@ begin
 
         when C_ITER =>
 
-          -- One restoring step per clock, from the aligned position down to bit 0.
-          if (rem_r >= dsh_r) then
-            rem_r <= rem_r - dsh_r;
+          -- One restoring step per clock, from the aligned position down to bit 0: the borrow of rem - dsh decides.
+          diff := ('0' & rem_r) - ('0' & dsh_r);
+          if (diff(G_WIDTH) = '0') then
+            rem_r <= diff(G_WIDTH - 1 downto 0);
             quo_r <= quo_r(G_WIDTH - 2 downto 0) & '1';
           else
             quo_r <= quo_r(G_WIDTH - 2 downto 0) & '0';

@@ -170,7 +170,6 @@ architecture rtl of stepramp_engine is
   signal nxt_ok    : std_logic;
   signal nxt_d     : unsigned(32 downto 0);
   signal nxt_acc   : unsigned(31 downto 0);
-  signal nxt_delay : unsigned(31 downto 0); -- nxt_d saturated to 32 bits, for cur_delay
   signal nxt_code  : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
   signal nxt_state : std_logic_vector(1 downto 0);
   signal nxt_last  : std_logic;
@@ -187,6 +186,8 @@ architecture rtl of stepramp_engine is
   signal rec_rem : unsigned(32 downto 0);
   signal v_r     : unsigned(63 downto 0); -- Q32.32 value of interval pc_j (then of the alternative)
   signal v_code  : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
+  -- The integer part of v_r is 0 (in parallel with the accumulator's carry chain).
+  signal v_int_zero : std_logic;
 
   -- Soft stop. sreq: a request waits for its pulse p (the first pulse edge after the edge that sampled it).
   -- stop_mode: a soft stop is in effect; the precompute then follows the stop's decel ramp, pc_m = L' - pc_j.
@@ -197,6 +198,7 @@ architecture rtl of stepramp_engine is
   signal sreq        : std_logic;
   signal stop_mode   : std_logic;
   signal cur_prod    : unsigned(62 downto 0); -- c * stop_ratio, Q47.16, for the ACCEL interval c now counting
+  signal prod_step   : std_logic;             -- pc_j <= sa: the next pulse adds stop_ratio to cur_prod
   signal alt_kind    : std_logic_vector(1 downto 0);
   signal alt_one     : std_logic;             -- m = 1
   signal alt_mm1     : unsigned(30 downto 0); -- m - 1
@@ -226,6 +228,9 @@ architecture rtl of stepramp_engine is
 begin
 
   state_name <= t_state_name'val(to_integer(unsigned(state_r)));
+
+  v_int_zero <= '1' when v_r(63 downto 32) = 0 else
+                '0';
 
   -- The numerator 2 * Q32.16 + remainder needs 50 bits; the divider stops at 64.
   assert G_DIV_WIDTH >= 50 and G_DIV_WIDTH <= 64
@@ -332,6 +337,8 @@ begin
   main_proc : process (clk) is
 
     variable v_sum    : unsigned(64 downto 0);
+    variable v_low    : unsigned(32 downto 0);
+    variable v_zero   : std_logic;
     variable v_pulse  : std_logic;
     variable v_load   : std_logic;
     variable v_finish : std_logic;
@@ -356,8 +363,24 @@ begin
       v_err       := C_ERR_NONE;
       v_m         := (others => '0');
       v_big       := '0';
-      -- The fractional-carry accumulator step of the value in v_r (used by C_PC_ADD and C_PC_ALT_ADD: one adder).
-      v_sum := ('0' & v_r) + resize(acc, 65);
+      -- The fractional-carry accumulator step of the value in v_r (used by C_PC_ADD and C_PC_ALT_ADD: one adder),
+      -- carry-select: the fraction's sum and the integer part + 1 are computed side by side and the fraction's carry
+      -- picks the integer part, so no carry ripples through all 65 bits. "s >> 32 = 0" (no ticks) follows from the
+      -- same carry and v_r's integer part.
+      v_low := ('0' & v_r(31 downto 0)) + ('0' & acc);
+      if (v_low(32) = '1') then
+        v_sum := (('0' & v_r(63 downto 32)) + 1) & v_low(31 downto 0);
+      else
+        v_sum := ('0' & v_r(63 downto 32)) & v_low(31 downto 0);
+      end if;
+      v_zero := v_int_zero and not v_low(32);
+
+      -- pc_j <= sa, registered off the pulse path (read at pulse edges after pulse 0 only).
+      if (pc_j <= p_sa) then
+        prod_step <= '1';
+      else
+        prod_step <= '0';
+      end if;
 
       -- Request handshake: the unit takes req at the first edge where it is not busy (always the first one in
       -- practice: it is flushed at start and serves at most one request per interval).
@@ -497,14 +520,9 @@ begin
           -- The fractional-carry accumulator: s = acc + v, the interval lasts s >> 32 ticks.
           nxt_d   <= v_sum(64 downto 32);
           nxt_acc <= v_sum(31 downto 0);
-          if (v_sum(64) = '1') then
-            nxt_delay <= (others => '1');
-          else
-            nxt_delay <= v_sum(63 downto 32);
-          end if;
           if (v_code /= C_ERR_NONE) then
             nxt_code <= v_code;
-          elsif (v_sum(64 downto 32) = 0) then
+          elsif (v_zero = '1') then
             -- Two pulses on one tick cannot be emitted (only a recurrence value can get here).
             nxt_code <= C_ERR_ZERO_TICKS;
           else
@@ -550,7 +568,7 @@ begin
           alt_acc <= v_sum(31 downto 0);
           if (v_code /= C_ERR_NONE) then
             alt_code <= v_code;
-          elsif (v_sum(64 downto 32) = 0) then
+          elsif (v_zero = '1') then
             alt_code <= C_ERR_ZERO_TICKS;
           else
             alt_code <= C_ERR_NONE;
@@ -609,11 +627,10 @@ begin
           -- n_one are read at edge 2.
 
           -- Interval 1 is c_first; with acc = 0 its ticks and fraction are plain slices.
-          nxt_d     <= resize(p_c_first(47 downto 16), 33);
-          nxt_acc   <= p_c_first(15 downto 0) & C_Q16_PAD;
-          nxt_delay <= p_c_first(47 downto 16);
-          nxt_code  <= C_ERR_NONE;
-          nxt_ok    <= '1';
+          nxt_d    <= resize(p_c_first(47 downto 16), 33);
+          nxt_acc  <= p_c_first(15 downto 0) & C_Q16_PAD;
+          nxt_code <= C_ERR_NONE;
+          nxt_ok   <= '1';
           if (p_sa > 1) then
             nxt_state <= C_ST_ACCEL;
           elsif (p_sd > 1) then
@@ -748,12 +765,19 @@ begin
       end if;
 
       if (v_load = '1') then
-        cnt         <= nxt_d;
-        acc         <= nxt_acc;
-        cur_last    <= nxt_last;
-        state_r     <= nxt_state;
-        cur_delay_r <= nxt_delay;
-        if (pc_j <= p_sa) then
+        cnt      <= nxt_d;
+        acc      <= nxt_acc;
+        cur_last <= nxt_last;
+        state_r  <= nxt_state;
+        if (nxt_d(32) = '1') then
+          cur_delay_r <= (others => '1');
+        else
+          cur_delay_r <= nxt_d(31 downto 0);
+        end if;
+        -- The interval loaded is pc_j (<= sa: the running product follows it). pc_j is 1 at pulse 0 (sa >= 1 there,
+        -- the parameter check has passed), and stable for at least two clocks before any later pulse edge, so the
+        -- registered compare (prod_step) is current.
+        if (phase = C_PH_FIRST or prod_step = '1') then
           cur_prod <= cur_prod + p_stop_ratio;
         end if;
         if (nxt_last = '0') then

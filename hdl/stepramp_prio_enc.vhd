@@ -39,6 +39,7 @@ begin
   encode_proc : process (din) is
 
     type t_any is array (0 to C_PAD - 1) of std_logic;
+
     type t_idx is array (0 to C_PAD - 1) of unsigned(C_LEVELS - 1 downto 0);
 
     variable any_v : t_any;

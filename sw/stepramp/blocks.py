@@ -37,8 +37,9 @@ class Division:
 
 
 def divider_latency(numerator: int, denominator: int) -> int:
-    """Documented latency: 1 when D = 0 or N < D, else 1 + msb(N) - msb(D) + 1."""
-    if denominator == 0 or numerator < denominator:
+    """Documented latency: 1 when D = 0 or msb(N) < msb(D) (N = 0 included), else 1 + msb(N) - msb(D) + 1 (N < D
+    with equal msb included: the alignment compares only the msb indices)."""
+    if denominator == 0 or numerator == 0 or msb(numerator) < msb(denominator):
         return 1
     return 1 + msb(numerator) - msb(denominator) + 1
 
@@ -102,8 +103,8 @@ RAMP_VALUE_LIMIT = 1 << 48
 
 
 def recurrence_iterations(numerator: int, denominator: int) -> int:
-    """k, the divider iterations of one recurrence step: msb(num) - msb(den) + 1, or 0 when num < den."""
-    if numerator < denominator:
+    """k, the divider iterations of one recurrence step: msb(num) - msb(den) + 1, or 0 when msb(num) < msb(den)."""
+    if numerator == 0 or msb(numerator) < msb(denominator):
         return 0
     return msb(numerator) - msb(denominator) + 1
 

@@ -42,6 +42,9 @@ class SimResult:
     #: a move ended by a "rst" event: the outputs in the cycle after the reset edge, and "stray", the first step,
     #: done or busy rising edge seen after it (None: none)
     reset: dict[str, Any] | None = None
+    #: with "record_counters": step_count and cur_delay as each pulse's edge leaves them
+    step_counts: list[int] | None = None
+    cur_delays: list[int] | None = None
 
 
 @dataclass(frozen=True)
@@ -86,7 +89,7 @@ def simulate(
     stops: an optional stop (or list of stops) per move (None: no stop). Under pytest a hang (or any failure inside
     the simulation) raises SystemExit from the runner. extras: per move, more keys of the request (stepramp.enginetb:
     "min_gap", "load_lead" with "after_load", "gap_cycles", "events", "reset_watch_cycles", "inputs_after_start",
-    "start_held").
+    "start_held", "record_counters").
     """
     if stops is not None and len(stops) != len(plans):
         raise ValueError(f"{len(stops)} stops for {len(plans)} plans")

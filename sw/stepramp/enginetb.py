@@ -27,6 +27,9 @@ Optional keys for the control inputs (none of them changes a move that does not 
   start edge on, with this move's registers on the inputs, so that the engine takes them in the previous move's done
   cycle. Its timestamps count from the edge after the previous move's done cycle, where the docs say it is accepted.
 
+* "record_counters": true: with each pulse, also record step_count and cur_delay as the pulse's edge leaves them
+  (result keys "step_counts", "cur_delays").
+
 Every result also records "origin" (the absolute index of the edge its timestamps count from), "before" (the outputs
 in the cycle before the start edge; None for a held start) and "after_start" (the outputs in the cycle after it).
 """
@@ -105,17 +108,21 @@ async def _event(dut: Any, event: dict[str, Any], start_edge: int) -> None:
     await RisingEdge(dut.clk)
     sampled = _edge() - start_edge
     await FallingEdge(dut.clk)
-    getattr(dut, event["port"]).value = 0
+    if not event.get("_keep"):  # an event at the next edge drives the same port now
+        getattr(dut, event["port"]).value = 0
     assert sampled == at_cycle, f"{event['port']} sampled at edge {sampled}, requested {at_cycle}"
 
 
 def _events(move: dict[str, Any]) -> list[dict[str, Any]]:
-    events: list[dict[str, Any]] = list(move.get("events", []))
+    events: list[dict[str, Any]] = [dict(event) for event in move.get("events", [])]
     for event in events:
         if event["port"] not in EVENT_PORTS:
             raise ValueError(f"event port must be one of {EVENT_PORTS}: {event}")
         if event["port"] == "rst" and int(event["at_cycle"]) == 0:
             raise ValueError("a rst event needs at_cycle /= 0")
+        event["_keep"] = any(
+            other["port"] == event["port"] and int(other["at_cycle"]) == int(event["at_cycle"]) + 1 for other in events
+        )
     return events
 
 
@@ -145,8 +152,8 @@ async def _play(dut: Any, move: dict[str, Any], next_move: dict[str, Any] | None
     early = [e for e in events if int(e["at_cycle"]) < 0]
     if early and lead > 0:
         raise ValueError("events before the start cannot be combined with load_lead")
-    if hold_next and "inputs_after_start" in move:
-        raise ValueError("inputs_after_start cannot be combined with a held start of the next move")
+    if hold_next and ("inputs_after_start" in move or any(e["port"] in ("start", "load") for e in events)):
+        raise ValueError("inputs_after_start or start / load events cannot be combined with a held next start")
     if early:
         # idle events: pos_load or rst '1' for one clock, -at_cycle clocks before the start edge
         for j in range(-min(int(e["at_cycle"]) for e in early), 0, -1):
@@ -247,6 +254,9 @@ async def _observe(
     """Timestamp every STEP rising edge until done (or until a reset edge), then record the final outputs."""
     edges: list[int] = []
     states: list[int] = []
+    counters: dict[str, list[int]] | None = (
+        {"step_counts": [], "cur_delays": []} if move.get("record_counters") else None
+    )
     deadline = int(get_sim_time("ns")) + int(move["timeout_cycles"]) * CLK_PERIOD_NS
     reset_ns = None if reset_edge is None else (start_edge + reset_edge) * CLK_PERIOD_NS
     offset = 0
@@ -264,7 +274,10 @@ async def _observe(
         if int(dut.step.value) == 1 and (not edges or edges[-1] != offset):
             edges.append(offset)
             states.append(int(dut.state.value))
-    common = {"origin": start_edge, "before": before, "after_start": after_start}
+            if counters is not None:
+                counters["step_counts"].append(int(dut.step_count.value))
+                counters["cur_delays"].append(int(dut.cur_delay.value))
+    common: dict[str, Any] = {"origin": start_edge, "before": before, "after_start": after_start, **(counters or {})}
     if reset_ns is not None and int(dut.done.value) != 1:
         reset = await _watch_after_reset(dut, move, start_edge)
         for strobe in strobes:

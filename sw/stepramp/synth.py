@@ -3,14 +3,19 @@
 
 For each top: `ghdl synth` to Verilog, then yosys `synth_ice40` (iCE40 LUT4 / FF / carry counts), nextpnr-ice40
 for HX8K and UP5K (maximum clock frequency), and yosys `synth_xilinx -family xc7` (LUT / FF counts; no Xilinx
-timing here). Writes build/synth/report.json as
-    {"<top>": {"ice40_hx8k": {"lut4", "ff", "carry", "fmax_mhz"}, "ice40_up5k": {...}, "xc7": {"lut", "ff"}}}
+timing here). Every entity is reported too, as the top instantiates it (its generics): yosys `synth_ice40
+-noflatten` on the top's netlist gives each module's cells, counted with the entities below it, and nextpnr-ice40
+gives the fmax of each entity that has a clock (wrapped like the top, see pnr_wrapper). Writes
+build/synth/report.json as
+    {"<top>": {"ice40_hx8k": {"lut4", "ff", "carry", "fmax_mhz"}, "ice40_up5k": {...}, "xc7": {"lut", "ff"},
+               "entities": {"<entity>": {"lut4", "ff", "carry", "fmax_mhz"}}}}
 and build/synth/report.md.
 
     python -m stepramp.synth [--out DIR] [--no-pnr] [--record] [TOP ...]
 
---record writes the iCE40 LUT4 / FF counts to scripts/synth_baseline.json, the figure the regression's size test
-(tb/test_synth_size.py) holds the PLB-like top to (it fails above +10 %).
+--record writes the iCE40 LUT4 / FF counts per entity (synth_ice40 -noflatten, with the entities below it) to
+scripts/synth_baseline.json, the figures the regression's size test (tb/test_synth_size.py) holds every entity of
+the PLB-like top to (it fails above +10 %).
 """
 
 from __future__ import annotations
@@ -25,7 +30,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from stepramp.hdl import SYNTH_TOPS
+from stepramp.hdl import HDL_FILES, SYNTH_TOPS
 from stepramp.rtlcheck import analyse, synth
 
 #: The recorded size the regression holds the tops to.
@@ -74,6 +79,44 @@ def ice40_cells(top: str, verilog: Path, out: Path) -> tuple[dict[str, int], Pat
     if any("LATCH" in name.upper() for name in cells):
         raise RuntimeError(f"{top}: latch cells after synth_ice40: {cells}")
     return cells, json_path
+
+
+def _modules(stat: str) -> dict[str, dict[str, int]]:
+    """Cell counts of every module from a yosys `stat` of a hierarchical design (the "=== name ===" sections)."""
+    found: dict[str, dict[str, int]] = {}
+    for m in re.finditer(r"^=== (\S+) ===\s*$(.*?)(?=^=== |\Z)", stat, re.M | re.S):
+        if m.group(1) != "design":
+            found[m.group(1)] = _cells(m.group(2))
+    return found
+
+
+def entity_of(module: str) -> str:
+    """The VHDL entity of a ghdl synth module name (GHDL appends the generic values: stepramp_divider_50)."""
+    names = sorted((Path(f).stem for f in HDL_FILES), key=len, reverse=True)
+    return next((n for n in names if module == n or module.startswith(n + "_")), module)
+
+
+def entity_cells(top: str, verilog: Path, out: Path) -> dict[str, dict[str, int]]:
+    """iCE40 cells of every entity under top (synth_ice40 -noflatten), each with the entities it instantiates."""
+    stat_file = out / f"{top}_entities.stat.txt"
+    _run(
+        ["yosys", "-p", f"read_verilog {verilog}; synth_ice40 -noflatten -top {top}; tee -o {stat_file} stat"],
+        out,
+        out / f"{top}_entities.yosys.log",
+    )
+    own = _modules(stat_file.read_text())
+
+    def total(module: str) -> dict[str, int]:
+        cells: dict[str, int] = {}
+        for name, n in own[module].items():
+            for cell, count in total(name).items() if name in own else [(name, 1)]:
+                cells[cell] = cells.get(cell, 0) + n * count
+        return cells
+
+    result = {entity_of(m): total(m) for m in own}
+    if any("LATCH" in name.upper() for cells in result.values() for name in cells):
+        raise RuntimeError(f"{top}: latch cells after synth_ice40 -noflatten")
+    return result
 
 
 def ice40_summary(cells: dict[str, int]) -> dict[str, int]:
@@ -128,6 +171,23 @@ def pnr_wrapper(top: str, verilog: Path, clock: str) -> str:
     lines.append(f"  {top} core ({', '.join(conns)});")
     lines.append("endmodule")
     return "\n".join(lines) + "\n"
+
+
+def entity_fmax(module: str, verilog: Path, out: Path) -> float | None:
+    """HX8K fmax of one module of a netlist, wrapped like a top; None when it has no clock (combinational)."""
+    text = verilog.read_text()
+    header = re.search(rf"module {module}\s*\((.*?)\);", text, re.S)
+    if header is None or not re.search(r"input\s+clk\b", header.group(1)):
+        return None
+    wrapper = out / f"{module}_pnr.v"
+    wrapper.write_text(pnr_wrapper(module, verilog, "clk"))
+    wrapped = out / f"{module}_pnr_ice40.json"
+    _run(
+        ["yosys", "-p", f"read_verilog {verilog} {wrapper}; synth_ice40 -top {module}_pnr -json {wrapped}"],
+        out,
+        out / f"{module}_pnr.yosys.log",
+    )
+    return fmax(module, wrapped, "ice40_hx8k", out)
 
 
 def fmax(top: str, json_path: Path, device: str, out: Path) -> float:
@@ -192,6 +252,18 @@ def report_top(top: str, out: Path, pnr: bool = True) -> dict[str, Any]:
                 entry[device]["fmax_mhz"] = None
                 entry[device]["pnr_error"] = str(exc).splitlines()[-1][:200]
     entry["xc7"] = xc7(top, verilog, out)
+    entities = entity_cells(top, verilog, out)
+    modules = {entity_of(m): m for m in re.findall(r"^module (\w+)", verilog.read_text(), re.M)}
+    entry["entities"] = {}
+    for name, cells in sorted(entities.items(), key=lambda kv: -kv[1].get("SB_LUT4", 0)):
+        row: dict[str, Any] = dict(ice40_summary(cells))
+        if pnr and name != top:
+            try:
+                row["fmax_mhz"] = entity_fmax(modules[name], verilog, out)
+            except RuntimeError as exc:
+                row["fmax_mhz"] = None
+                row["pnr_error"] = str(exc).splitlines()[-1][:200]
+        entry["entities"][name] = row
     return entry
 
 
@@ -212,6 +284,17 @@ def markdown(report: dict[str, Any]) -> str:
             f"| {top} | {hx['lut4']} | {hx['ff']} | {hx['carry']} | {_fmax(hx)} | {_fmax(up)} | "
             f"{x['lut']} | {x['ff']} |"
         )
+    for top, e in report.items():
+        lines += [
+            "",
+            f"Entities of {top} (iCE40, synth_ice40 -noflatten, each with the entities it instantiates; fmax on HX8K):",
+            "",
+            "| entity | LUT4 | FF | carry | fmax (MHz) |",
+            "|---|---|---|---|---|",
+        ]
+        for name, row in e.get("entities", {}).items():
+            f = "-" if row.get("fmax_mhz") is None else str(row["fmax_mhz"])
+            lines.append(f"| {name} | {row['lut4']} | {row['ff']} | {row['carry']} | {f} |")
     return "\n".join(lines) + "\n"
 
 
@@ -232,7 +315,10 @@ def main(argv: list[str] | None = None) -> int:
     (out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
     (out / "report.md").write_text(markdown(report))
     if args.record:
-        sizes = {top: {k: e["ice40_hx8k"][k] for k in ("lut4", "ff")} for top, e in report.items()}
+        sizes = {
+            top: {name: {k: row[k] for k in ("lut4", "ff")} for name, row in e["entities"].items()}
+            for top, e in report.items()
+        }
         BASELINE.write_text(json.dumps(sizes, indent=2) + "\n")
         print(f"recorded: {BASELINE}")
     print(markdown(report), end="")
