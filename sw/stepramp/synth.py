@@ -173,8 +173,19 @@ def pnr_wrapper(top: str, verilog: Path, clock: str) -> str:
     return "\n".join(lines) + "\n"
 
 
+_ENTITY_FMAX: dict[str, float | None] = {}
+"""fmax per module name (entity and generics) once measured: the second top has the same entities."""
+
+
 def entity_fmax(module: str, verilog: Path, out: Path) -> float | None:
     """HX8K fmax of one module of a netlist, wrapped like a top; None when it has no clock (combinational)."""
+    if module in _ENTITY_FMAX:
+        return _ENTITY_FMAX[module]
+    _ENTITY_FMAX[module] = _entity_fmax(module, verilog, out)
+    return _ENTITY_FMAX[module]
+
+
+def _entity_fmax(module: str, verilog: Path, out: Path) -> float | None:
     text = verilog.read_text()
     header = re.search(rf"module {module}\s*\((.*?)\);", text, re.S)
     if header is None or not re.search(r"input\s+clk\b", header.group(1)):

@@ -1,0 +1,572 @@
+-- SPDX-License-Identifier: MIT
+-- stepramp_precompute: the ramp engine's precompute. While an interval counts down in the sequencer
+-- (stepramp_engine), it prepares the following one: the value the spec's rule order gives it (a register, or a
+-- recurrence step on stepramp_next_delay), through the fractional-carry accumulator into whole ticks (nxt_*), and
+-- in ACCEL and RUN also the soft-stop alternative of the same interval (alt_*). docs/stepramp_engine.md, "Theory
+-- of operation", "Latency budget" and "The soft-stop alternative", has the timing; the sequencer only copies the
+-- results at a pulse edge, and a result not ready by then is its LATE error.
+--
+-- Control strobes from the sequencer, all combinational decisions of the same clock edge (so the precompute starts
+-- at the very pulse edge, as the latency budget counts): begin_move (edge 0 of an accepted start), setup (edge 1),
+-- advance (a pulse loads nxt_*), take_alt (a pulse loads the alternative), finish (the move ends).
+
+library ieee;
+  use ieee.std_logic_1164.all;
+  use ieee.numeric_std.all;
+
+library work;
+  use work.stepramp_regs_pkg.all;
+
+entity stepramp_precompute is
+  generic (
+    G_DIV_WIDTH : positive := 50
+  );
+  port (
+    clk : in    std_logic;
+    rst : in    std_logic;
+    -- Control strobes from the sequencer.
+    begin_move : in    std_logic;
+    setup      : in    std_logic;
+    advance    : in    std_logic;
+    take_alt   : in    std_logic;
+    finish     : in    std_logic;
+    cur_state  : in    std_logic_vector(1 downto 0);
+    -- The move (the engine's active copy).
+    l          : in    std_logic_vector(30 downto 0);
+    sa         : in    std_logic_vector(30 downto 0);
+    sd         : in    std_logic_vector(30 downto 0);
+    c_first    : in    std_logic_vector(47 downto 0);
+    c_last     : in    std_logic_vector(47 downto 0);
+    c_sa       : in    std_logic_vector(47 downto 0);
+    c_sd       : in    std_logic_vector(47 downto 0);
+    accel_seed : in    std_logic_vector(47 downto 0);
+    decel_seed : in    std_logic_vector(47 downto 0);
+    cruise     : in    std_logic_vector(63 downto 0);
+    stop_ratio : in    std_logic_vector(31 downto 0);
+    -- The next interval, ready to be copied at the pulse edge.
+    nxt_ok    : out   std_logic;
+    nxt_d     : out   std_logic_vector(32 downto 0);
+    nxt_state : out   std_logic_vector(1 downto 0);
+    nxt_last  : out   std_logic;
+    nxt_code  : out   std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
+    -- The soft-stop alternative of the next interval, and whether a soft stop is in effect.
+    alt_ok    : out   std_logic;
+    alt_kind  : out   std_logic_vector(1 downto 0);
+    alt_d     : out   std_logic_vector(32 downto 0);
+    alt_one   : out   std_logic;
+    alt_code  : out   std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
+    stop_mode : out   std_logic
+  );
+end entity stepramp_precompute;
+
+architecture rtl of stepramp_precompute is
+
+  -- FSM states of the interval now counting (cur_state; the same encoding as the engine's state port).
+  constant C_ST_ACCEL : std_logic_vector(1 downto 0) := "01";
+  constant C_ST_RUN   : std_logic_vector(1 downto 0) := "10";
+  constant C_ST_DECEL : std_logic_vector(1 downto 0) := "11";
+
+  -- Precompute of the next interval (constants, not an enum, so that GHDL's VPI shows a plain vector).
+  constant C_PC_IDLE   : std_logic_vector(2 downto 0) := "000";
+  constant C_PC_IDX    : std_logic_vector(2 downto 0) := "001";
+  constant C_PC_DECIDE : std_logic_vector(2 downto 0) := "010";
+  constant C_PC_WAIT   : std_logic_vector(2 downto 0) := "011";
+  constant C_PC_ADD    : std_logic_vector(2 downto 0) := "100";
+  -- The soft-stop alternative of the next interval.
+  constant C_PC_ALT_WAIT : std_logic_vector(2 downto 0) := "101";
+  constant C_PC_ALT_ADD  : std_logic_vector(2 downto 0) := "110";
+
+  -- What a soft stop decided at the pulse ending the current interval does (alt_kind; stepramp_engine reads it).
+  constant C_ALT_IGNORE : std_logic_vector(1 downto 0) := "00"; -- nothing: DECEL, last pulse, or p + m >= L
+  constant C_ALT_LOAD   : std_logic_vector(1 downto 0) := "10"; -- m >= 1: the next interval is the alternative
+  constant C_ALT_END    : std_logic_vector(1 downto 0) := "01"; -- m = 0: the move ends with this pulse
+
+  constant C_Q16_PAD : unsigned(15 downto 0) := (others => '0');
+
+  -- The move, as numbers.
+  signal p_l          : unsigned(30 downto 0);
+  signal p_sa         : unsigned(30 downto 0);
+  signal p_sd         : unsigned(30 downto 0);
+  signal p_c_first    : unsigned(47 downto 0);
+  signal p_c_last     : unsigned(47 downto 0);
+  signal p_c_sa       : unsigned(47 downto 0);
+  signal p_c_sd       : unsigned(47 downto 0);
+  signal p_accel_seed : unsigned(47 downto 0);
+  signal p_decel_seed : unsigned(47 downto 0);
+  signal p_cruise     : unsigned(63 downto 0);
+  signal p_stop_ratio : unsigned(31 downto 0);
+  signal p_run_m      : unsigned(30 downto 0); -- L - sd + 1: m of a soft stop in RUN (set at edge 1)
+  signal state_r      : std_logic_vector(1 downto 0);
+
+  -- The accumulator fraction after the interval now counting.
+  signal acc : unsigned(31 downto 0);
+
+  -- Next interval.
+  signal nxt_ok_r    : std_logic;
+  signal nxt_d_r     : unsigned(32 downto 0);
+  signal nxt_acc     : unsigned(31 downto 0);
+  signal nxt_code_r  : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
+  signal nxt_state_r : std_logic_vector(1 downto 0);
+  signal nxt_last_r  : std_logic;
+
+  -- pc_j is the index of the interval being prepared, pc_jm1 = pc_j - 1, pc_m = L - pc_j.
+  signal pc_state    : std_logic_vector(2 downto 0);
+  signal seed_wait   : std_logic; -- the accel seed load of this move is not answered yet
+  signal pc_j        : unsigned(30 downto 0);
+  signal pc_jm1      : unsigned(30 downto 0);
+  signal pc_m        : unsigned(30 downto 0);
+  signal dec_started : std_logic;
+  -- Recurrence state: A_{j-2} while accelerating, D_{L-j+1} while decelerating (never both in one move).
+  signal rec_val : unsigned(47 downto 0);
+  signal rec_rem : unsigned(32 downto 0);
+  signal v_r     : unsigned(63 downto 0); -- Q32.32 value of interval pc_j (then of the alternative)
+  signal v_code  : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
+  -- The integer part of v_r is 0 (in parallel with the accumulator's carry chain).
+  signal v_int_zero : std_logic;
+
+  -- Soft stop. stop_mode: a soft stop is in effect; the precompute then follows the stop's decel ramp,
+  -- pc_m = L' - pc_j. While interval c counts down (ACCEL or RUN), the alternative "soft stop decided at pulse c"
+  -- is prepared after the normal next interval: alt_kind (what it does), and for m >= 1 the value of interval
+  -- c + 1 in the stop (c_last when m = 1, else D_(m-1) from D_m := D), through the same accumulator step as a
+  -- normal value. D is the normal value of interval c + 1 just prepared (A_c or c_sa in ACCEL, cruise in RUN),
+  -- truncated to Q32.16.
+  signal stop_mode_r : std_logic;
+  signal cur_prod    : unsigned(62 downto 0); -- c * stop_ratio, Q47.16, for the ACCEL interval c now counting
+  signal prod_step   : std_logic;             -- pc_j <= sa: the next pulse adds stop_ratio to cur_prod
+  signal first_pend  : std_logic;             -- pulse 0 has not loaded interval 1 yet (it adds stop_ratio too)
+  signal alt_kind_r  : std_logic_vector(1 downto 0);
+  signal alt_one_r   : std_logic;             -- m = 1
+  signal alt_mm1     : unsigned(30 downto 0); -- m - 1
+  signal alt_dval    : unsigned(47 downto 0); -- D: the Q32.16 value of interval c + 1 in the plan
+  signal alt_ok_r    : std_logic;
+  signal alt_d_r     : unsigned(32 downto 0);
+  signal alt_acc     : unsigned(31 downto 0);
+  signal alt_code_r  : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
+  signal alt_rec_val : unsigned(47 downto 0); -- D_(m-1) and its remainder: the stop's recurrence state
+  signal alt_rec_rem : unsigned(32 downto 0);
+
+  -- Next-delay unit.
+  signal nd_flush     : std_logic;
+  signal req_r        : std_logic;
+  signal req_seed_r   : std_logic;
+  signal req_decel_r  : std_logic;
+  signal req_index_r  : unsigned(30 downto 0);
+  signal req_alt_r    : std_logic; -- the request is the soft-stop alternative: value D, remainder 0
+  signal nd_req_value : std_logic_vector(47 downto 0);
+  signal nd_req_rem   : std_logic_vector(32 downto 0);
+  signal nd_busy      : std_logic;
+  signal nd_valid     : std_logic;
+  signal nd_value     : std_logic_vector(47 downto 0);
+  signal nd_rem       : std_logic_vector(32 downto 0);
+  signal nd_ovf       : std_logic;
+
+begin
+
+  -- The numerator 2 * Q32.16 + remainder needs 50 bits; the divider stops at 64.
+  assert G_DIV_WIDTH >= 50 and G_DIV_WIDTH <= 64
+    report "stepramp_precompute: G_DIV_WIDTH must be in 50 .. 64"
+    severity failure;
+
+  p_l          <= unsigned(l);
+  p_sa         <= unsigned(sa);
+  p_sd         <= unsigned(sd);
+  p_c_first    <= unsigned(c_first);
+  p_c_last     <= unsigned(c_last);
+  p_c_sa       <= unsigned(c_sa);
+  p_c_sd       <= unsigned(c_sd);
+  p_accel_seed <= unsigned(accel_seed);
+  p_decel_seed <= unsigned(decel_seed);
+  p_cruise     <= unsigned(cruise);
+  p_stop_ratio <= unsigned(stop_ratio);
+  state_r      <= cur_state;
+
+  v_int_zero <= '1' when v_r(63 downto 32) = 0 else
+                '0';
+
+  -- A seed load carries its seed; a recurrence step carries the running value (and its remainder); the first value
+  -- of a soft stop's ramp is a step from D_m := D with remainder 0.
+  nd_req_value <= std_logic_vector(p_accel_seed) when req_seed_r = '1' and req_decel_r = '0' else
+                  std_logic_vector(p_decel_seed) when req_seed_r = '1' else
+                  std_logic_vector(alt_dval) when req_alt_r = '1' else
+                  std_logic_vector(rec_val);
+  nd_req_rem   <= (others => '0') when req_alt_r = '1' else
+                  std_logic_vector(rec_rem);
+
+  next_delay_inst : entity work.stepramp_next_delay
+    generic map (
+      G_DIV_WIDTH => G_DIV_WIDTH
+    )
+    port map (
+      clk       => clk,
+      rst       => rst,
+      flush     => nd_flush,
+      req       => req_r,
+      req_seed  => req_seed_r,
+      req_decel => req_decel_r,
+      req_index => std_logic_vector(req_index_r),
+      req_value => nd_req_value,
+      req_rem   => nd_req_rem,
+      busy      => nd_busy,
+      ans_valid => nd_valid,
+      ans_value => nd_value,
+      ans_rem   => nd_rem,
+      ans_ovf   => nd_ovf
+    );
+
+  pc_proc : process (clk) is
+
+    variable v_sum  : unsigned(64 downto 0);
+    variable v_low  : unsigned(32 downto 0);
+    variable v_zero : std_logic;
+    variable v_m    : unsigned(30 downto 0);
+    variable v_big  : std_logic;
+
+  begin
+
+    if rising_edge(clk) then
+      nd_flush <= '0';
+      v_m      := (others => '0');
+      v_big    := '0';
+      -- The fractional-carry accumulator step of the value in v_r (used by C_PC_ADD and C_PC_ALT_ADD: one adder),
+      -- carry-select: the fraction's sum and the integer part + 1 are computed side by side and the fraction's carry
+      -- picks the integer part, so no carry ripples through all 65 bits. "s >> 32 = 0" (no ticks) follows from the
+      -- same carry and v_r's integer part.
+      v_low := ('0' & v_r(31 downto 0)) + ('0' & acc);
+      if (v_low(32) = '1') then
+        v_sum := (('0' & v_r(63 downto 32)) + 1) & v_low(31 downto 0);
+      else
+        v_sum := ('0' & v_r(63 downto 32)) & v_low(31 downto 0);
+      end if;
+      v_zero := v_int_zero and not v_low(32);
+
+      -- pc_j <= sa, registered off the pulse path (read at pulse edges after pulse 0 only).
+      if (pc_j <= p_sa) then
+        prod_step <= '1';
+      else
+        prod_step <= '0';
+      end if;
+
+      -- Request handshake: the unit takes req at the first edge where it is not busy (always the first one in
+      -- practice: it is flushed at start and serves at most one request per interval).
+      if (req_r = '1' and nd_busy = '0') then
+        req_r <= '0';
+      end if;
+
+      -- The accel seed load issued at setup is answered before the first precompute needs it.
+      if (seed_wait = '1' and req_r = '0' and nd_valid = '1') then
+        rec_val   <= unsigned(nd_value);
+        rec_rem   <= unsigned(nd_rem);
+        seed_wait <= '0';
+      end if;
+
+      -- Precompute of interval pc_j. Its last step (C_PC_ADD) is the only wide adder of the engine, and it is off
+      -- the countdown path: the pulse edge only copies its results.
+      case pc_state is
+
+        when C_PC_IDLE =>
+
+          null;
+
+        when C_PC_IDX =>
+
+          pc_jm1   <= pc_j;
+          pc_j     <= pc_j + 1;
+          pc_m     <= pc_m - 1;
+          pc_state <= C_PC_DECIDE;
+
+          -- The soft stop decided at pulse c = pc_j (the end of the interval now counting, L - c = pc_m):
+          -- m = floor(c * stop_ratio / 2^16) in ACCEL, L - sd + 1 in RUN; ignored in DECEL, after a stop, and
+          -- when c + m >= L.
+          if (state_r = C_ST_RUN) then
+            v_m   := p_run_m;
+            v_big := '0';
+          else
+            v_m := cur_prod(46 downto 16);
+            if (cur_prod(62 downto 47) /= 0) then
+              v_big := '1';
+            else
+              v_big := '0';
+            end if;
+          end if;
+          alt_kind_r <= C_ALT_IGNORE;
+          if (stop_mode_r = '0' and (state_r = C_ST_ACCEL or state_r = C_ST_RUN)) then
+            if (v_big = '1' or v_m >= pc_m) then
+              alt_kind_r <= C_ALT_IGNORE;
+            elsif (v_m = 0) then
+              alt_kind_r <= C_ALT_END;
+            else
+              alt_kind_r <= C_ALT_LOAD;
+            end if;
+          end if;
+          alt_mm1 <= v_m - 1;
+          if (v_m = 1) then
+            alt_one_r <= '1';
+          else
+            alt_one_r <= '0';
+          end if;
+
+        when C_PC_DECIDE =>
+
+          if (seed_wait = '0') then
+            -- Ramp phase of interval j: ACCEL if j < sa, RUN if sa <= j < sd, DECEL if j >= sd (sa <= sd); all
+            -- intervals of a soft stop are DECEL.
+            if (stop_mode_r = '1') then
+              nxt_state_r <= C_ST_DECEL;
+            elsif (pc_j < p_sa) then
+              nxt_state_r <= C_ST_ACCEL;
+            elsif (pc_j < p_sd) then
+              nxt_state_r <= C_ST_RUN;
+            else
+              nxt_state_r <= C_ST_DECEL;
+            end if;
+
+            if (pc_m = 0) then
+              nxt_last_r <= '1';
+            else
+              nxt_last_r <= '0';
+            end if;
+
+            v_code    <= C_ERR_NONE;
+            req_alt_r <= '0';
+
+            -- The spec's rule order (j >= 2 here, so rule 1 never applies). In a soft stop: c_last at L', before
+            -- it the stop's decel ramp D_(L'-j) from D_(L'-j+1).
+            if (pc_m = 0) then
+              v_r      <= p_c_last & C_Q16_PAD;
+              pc_state <= C_PC_ADD;
+            elsif (stop_mode_r = '1') then
+              req_r       <= '1';
+              req_seed_r  <= '0';
+              req_decel_r <= '1';
+              req_index_r <= pc_m;
+              pc_state    <= C_PC_WAIT;
+            elsif (pc_j = p_sa) then
+              v_r      <= p_c_sa & C_Q16_PAD;
+              pc_state <= C_PC_ADD;
+            elsif (pc_j = p_sd) then
+              v_r      <= p_c_sd & C_Q16_PAD;
+              pc_state <= C_PC_ADD;
+            elsif (pc_j < p_sa) then
+              -- A_{j-1} from A_{j-2}.
+              req_r       <= '1';
+              req_seed_r  <= '0';
+              req_decel_r <= '0';
+              req_index_r <= pc_jm1;
+              pc_state    <= C_PC_WAIT;
+            elsif (pc_j > p_sd) then
+              -- D_{L-j}: the seed itself at j = sd + 1, else from D_{L-j+1}.
+              req_r       <= '1';
+              req_seed_r  <= not dec_started;
+              req_decel_r <= '1';
+              req_index_r <= pc_m;
+              dec_started <= '1';
+              pc_state    <= C_PC_WAIT;
+            else
+              v_r      <= p_cruise;
+              pc_state <= C_PC_ADD;
+            end if;
+          end if;
+
+        when C_PC_WAIT =>
+
+          if (req_r = '0' and nd_valid = '1') then
+            rec_val <= unsigned(nd_value);
+            rec_rem <= unsigned(nd_rem);
+            v_r     <= unsigned(nd_value) & C_Q16_PAD;
+            if (nd_ovf = '1') then
+              v_code <= C_ERR_RANGE;
+            end if;
+            pc_state <= C_PC_ADD;
+          end if;
+
+        when C_PC_ADD =>
+
+          -- The fractional-carry accumulator: s = acc + v, the interval lasts s >> 32 ticks.
+          nxt_d_r <= v_sum(64 downto 32);
+          nxt_acc <= v_sum(31 downto 0);
+          if (v_code /= C_ERR_NONE) then
+            nxt_code_r <= v_code;
+          elsif (v_zero = '1') then
+            -- Two pulses on one tick cannot be emitted (only a recurrence value can get here).
+            nxt_code_r <= C_ERR_ZERO_TICKS;
+          else
+            nxt_code_r <= C_ERR_NONE;
+          end if;
+          nxt_ok_r <= '1';
+          pc_state <= C_PC_IDLE;
+
+          -- Then the soft-stop alternative of the same interval (the next-delay unit is free now). Its D is the
+          -- value just added: the plan's interval c + 1 (A_c, c_sa or cruise), Q32.16.
+          v_code   <= C_ERR_NONE;
+          alt_dval <= v_r(63 downto 16);
+          if (alt_kind_r = C_ALT_LOAD) then
+            if (alt_one_r = '1') then
+              v_r      <= p_c_last & C_Q16_PAD;
+              pc_state <= C_PC_ALT_ADD;
+            else
+              -- D_(m-1) = D + (2 D) div (4 m - 1): the unit's decel step at index m - 1.
+              req_r       <= '1';
+              req_seed_r  <= '0';
+              req_decel_r <= '1';
+              req_alt_r   <= '1';
+              req_index_r <= alt_mm1;
+              pc_state    <= C_PC_ALT_WAIT;
+            end if;
+          end if;
+
+        when C_PC_ALT_WAIT =>
+
+          if (req_r = '0' and nd_valid = '1') then
+            alt_rec_val <= unsigned(nd_value);
+            alt_rec_rem <= unsigned(nd_rem);
+            v_r         <= unsigned(nd_value) & C_Q16_PAD;
+            if (nd_ovf = '1') then
+              v_code <= C_ERR_RANGE;
+            end if;
+            pc_state <= C_PC_ALT_ADD;
+          end if;
+
+        when C_PC_ALT_ADD =>
+
+          alt_d_r <= v_sum(64 downto 32);
+          alt_acc <= v_sum(31 downto 0);
+          if (v_code /= C_ERR_NONE) then
+            alt_code_r <= v_code;
+          elsif (v_zero = '1') then
+            alt_code_r <= C_ERR_ZERO_TICKS;
+          else
+            alt_code_r <= C_ERR_NONE;
+          end if;
+          alt_ok_r <= '1';
+          pc_state <= C_PC_IDLE;
+
+        when others =>
+
+          pc_state <= C_PC_IDLE;
+
+      end case;
+
+      -- The sequencer's decisions of this edge (after the case: they win over it).
+      if (begin_move = '1') then
+        nd_flush    <= '1';
+        pc_state    <= C_PC_IDLE;
+        req_r       <= '0';
+        seed_wait   <= '0';
+        nxt_ok_r    <= '0';
+        stop_mode_r <= '0';
+        alt_kind_r  <= C_ALT_IGNORE;
+        alt_ok_r    <= '0';
+      end if;
+
+      if (setup = '1') then
+        -- Interval 1 is c_first; with acc = 0 its ticks and fraction are plain slices.
+        nxt_d_r    <= resize(p_c_first(47 downto 16), 33);
+        nxt_acc    <= p_c_first(15 downto 0) & C_Q16_PAD;
+        nxt_code_r <= C_ERR_NONE;
+        nxt_ok_r   <= '1';
+        if (p_sa > 1) then
+          nxt_state_r <= C_ST_ACCEL;
+        elsif (p_sd > 1) then
+          nxt_state_r <= C_ST_RUN;
+        else
+          nxt_state_r <= C_ST_DECEL;
+        end if;
+        if (p_l = 1) then
+          nxt_last_r <= '1';
+        else
+          nxt_last_r <= '0';
+        end if;
+
+        pc_j        <= to_unsigned(1, 31);
+        pc_m        <= p_l - 1;
+        p_run_m     <= p_l - p_sd + 1;
+        dec_started <= '0';
+        cur_prod    <= (others => '0');
+        first_pend  <= '1';
+        -- Load the accel seed A_0 through the unit (at index 0), like the decel seed later: the unit sees the
+        -- start of every value sequence, so a closed-form mode can take its constants from the seeds.
+        req_r       <= '1';
+        req_seed_r  <= '1';
+        req_decel_r <= '0';
+        req_index_r <= (others => '0');
+        req_alt_r   <= '0';
+        seed_wait   <= '1';
+      end if;
+
+      -- Pulse edge: the next interval starts; an alternative still being prepared is dropped (the unit is flushed
+      -- before the next request).
+      if (advance = '1' or take_alt = '1') then
+        nxt_ok_r   <= '0';
+        alt_ok_r   <= '0';
+        alt_kind_r <= C_ALT_IGNORE;
+        if (pc_state /= C_PC_IDLE) then
+          nd_flush <= '1';
+          req_r    <= '0';
+        end if;
+      end if;
+
+      if (advance = '1') then
+        acc <= nxt_acc;
+        -- The interval loaded is pc_j (<= sa: the running product follows it). pc_j is 1 at pulse 0 (sa >= 1 there,
+        -- the parameter check has passed), and stable for at least two clocks before any later pulse edge, so the
+        -- registered compare (prod_step) is current.
+        if (first_pend = '1' or prod_step = '1') then
+          cur_prod <= cur_prod + p_stop_ratio;
+        end if;
+        first_pend <= '0';
+        if (nxt_last_r = '0') then
+          pc_state <= C_PC_IDX;
+        else
+          pc_state <= C_PC_IDLE;
+        end if;
+      end if;
+
+      -- Soft stop takes effect: interval p + 1 is the alternative, L' = p + m; the precompute continues the stop's
+      -- ramp from D_(m-1) (pc_m = L' - (p + 1) = m - 1).
+      if (take_alt = '1') then
+        acc         <= alt_acc;
+        stop_mode_r <= '1';
+        rec_val     <= alt_rec_val;
+        rec_rem     <= alt_rec_rem;
+        pc_m        <= alt_mm1;
+        if (alt_one_r = '0') then
+          pc_state <= C_PC_IDX;
+        else
+          pc_state <= C_PC_IDLE;
+        end if;
+      end if;
+
+      if (finish = '1') then
+        pc_state    <= C_PC_IDLE;
+        req_r       <= '0';
+        seed_wait   <= '0';
+        stop_mode_r <= '0';
+      end if;
+
+      if (rst = '1') then
+        pc_state    <= C_PC_IDLE;
+        nd_flush    <= '0';
+        req_r       <= '0';
+        seed_wait   <= '0';
+        nxt_ok_r    <= '0';
+        stop_mode_r <= '0';
+        alt_ok_r    <= '0';
+        alt_kind_r  <= C_ALT_IGNORE;
+      end if;
+    end if;
+
+  end process pc_proc;
+
+  nxt_ok    <= nxt_ok_r;
+  nxt_d     <= std_logic_vector(nxt_d_r);
+  nxt_state <= nxt_state_r;
+  nxt_last  <= nxt_last_r;
+  nxt_code  <= nxt_code_r;
+  alt_ok    <= alt_ok_r;
+  alt_kind  <= alt_kind_r;
+  alt_d     <= std_logic_vector(alt_d_r);
+  alt_one   <= alt_one_r;
+  alt_code  <= alt_code_r;
+  stop_mode <= stop_mode_r;
+
+end architecture rtl;
