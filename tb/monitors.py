@@ -408,6 +408,26 @@ class MotionMonitors:
             m.start()
         return self
 
+    @classmethod
+    def for_outputs(
+        cls, dut: Any, outputs: Any, enable: bool, position: int, names: dict[str, str] | None = None
+    ) -> MotionMonitors:
+        """Started monitors for a stepramp.driver.Outputs configuration (mode by name) and the current position."""
+        from stepramp.driver import MODES
+
+        return cls(
+            dut,
+            mode=MODES[outputs.mode],
+            step_width=outputs.step_width,
+            dir_setup=outputs.dir_setup,
+            dir_hold=outputs.dir_hold,
+            position=position,
+            ustep_log2=outputs.ustep_log2,
+            pwm_period=outputs.pwm_period,
+            enable=enable,
+            names=names,
+        ).start()
+
     def stop(self) -> None:
         for m in self.all:
             m.stop()

@@ -19,7 +19,7 @@ from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, First, RisingEdge, Timer
 
 from monitors import MotionMonitors
-from stepramp.driver import MODES, Outputs, Status, StepRamp
+from stepramp.driver import Outputs, Status, StepRamp
 from stepramp.gtkw import LAYOUTS, missing_in, signal_paths
 from stepramp.ipif import IpifError, IpifMaster
 from stepramp.plan import Plan
@@ -143,19 +143,8 @@ class PeripheralTb:
 
     def _start_monitors(self, position: int) -> None:
         """STEP width, DIR setup/hold, shoot-through and electrical position monitors for the current settings."""
-        o = self.outputs
-        self.monitors = MotionMonitors(
-            self.dut,
-            mode=MODES[o.mode],
-            step_width=o.step_width,
-            dir_setup=o.dir_setup,
-            dir_hold=o.dir_hold,
-            position=position,
-            ustep_log2=o.ustep_log2,
-            pwm_period=o.pwm_period,
-            enable=self.enabled,
-            names={"clk": "aclk" if self.top == "stepramp_axil" else "clk", "step": "step", "dir": "dir"},
-        ).start()
+        clk = "aclk" if self.top == "stepramp_axil" else "clk"
+        self.monitors = MotionMonitors.for_outputs(self.dut, self.outputs, self.enabled, position, names={"clk": clk})
 
     async def configure(self, outputs: Outputs, enable: bool = True) -> None:
         """Program the stepping outputs (while stopped) and restart the monitors with the new settings."""

@@ -10,11 +10,12 @@ from __future__ import annotations
 import random
 
 import pytest
-from cocotb.triggers import FallingEdge, RisingEdge
+from cocotb.triggers import FallingEdge, RisingEdge, SimTimeoutError, with_timeout
+from cocotb.utils import get_sim_time
 
 from stepramp.blocks import divide, iter_msb_pairs
 from stepramp.hdl import run_cocotb
-from tbutil import build_dir, cocotb, env_int, now_cycles, start_clock_and_reset
+from tbutil import CLK_PERIOD_NS, build_dir, cocotb, env_int, now_cycles, start_clock_and_reset
 
 
 def operand_pairs(width: int, n_random: int, seed: int) -> list[tuple[int, int]]:
@@ -31,7 +32,7 @@ def operand_pairs(width: int, n_random: int, seed: int) -> list[tuple[int, int]]
     return pairs
 
 
-@cocotb.test()
+@cocotb.test()  # no constant limit: the number of pairs (N_PAIRS) and the width vary; computed in the body
 async def divider_against_model(dut) -> None:
     """Back-to-back divisions with start held high: each result and latency checked against the model."""
     width = len(dut.numerator)
@@ -49,8 +50,14 @@ async def divider_against_model(dut) -> None:
     dut.start.value = 1
     await RisingEdge(dut.clk)
     sample_edge = now_cycles()  # this edge samples start (the divider is idle)
+    # Limit: every pair at the worst latency (width + 1 clocks, asserted below) plus its sampling clock, +50%.
+    limit_ns = 3 * len(pairs) * (width + 2) * CLK_PERIOD_NS // 2
+    deadline_ns = round(get_sim_time("ns")) + limit_ns
     for index, (n, d) in enumerate(pairs):
-        await RisingEdge(dut.done)
+        try:
+            await with_timeout(RisingEdge(dut.done), max(deadline_ns - round(get_sim_time("ns")), 1), "ns")
+        except SimTimeoutError:
+            raise AssertionError(f"no done for pair {index} ({n}/{d}) within the limit of {limit_ns} ns") from None
         done_edge = now_cycles()
         expect = divide(n, d, width)
         got = (int(dut.quotient.value), int(dut.remainder.value), bool(int(dut.div_zero.value)))
@@ -73,7 +80,7 @@ async def divider_against_model(dut) -> None:
     dut._log.info("width %d: %d divisions, latency mean %.3f max %d", width, len(pairs), mean, max(latencies))
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=2, timeout_unit="us")  # measured 0.4 us at width 32
 async def divider_ignores_start_while_busy(dut) -> None:
     """A start pulse during a division changes nothing: the first result comes out, then the divider idles."""
     width = len(dut.numerator)

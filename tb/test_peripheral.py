@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import json
+import math
 import os
 import random
 from typing import Any
@@ -24,10 +25,11 @@ from stepramp.driver import Outputs, StepRampError, plan_writes
 from stepramp.hdl import run_cocotb
 from stepramp.model import edges as model_edges
 from stepramp.model import edges_with_stop as model_edges_with_stop
+from stepramp.model import last_edge
 from stepramp.plan import Plan, plan_move
 from stepramp.profiles import PROFILES, PROFILES_BY_NAME
 from stepramp.regmap import ERROR_CODES, ID_VALUE, REGISTERS, REGISTERS_BY_NAME, RW, offset
-from tbutil import build_dir, cocotb
+from tbutil import CLK_PERIOD_NS, build_dir, cocotb
 
 ERR = {name: code for name, (code, _) in ERROR_CODES.items()}
 MAPPED = {r.offset for r in REGISTERS}
@@ -42,7 +44,7 @@ def valid_plan() -> Plan:
     return plan_move(**PROFILES_BY_NAME["trap_basic"].args())
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=8, timeout_unit="us")  # measured 1.6 us (the slower top)
 async def reset_values_and_id(dut) -> None:
     """Every register reads its documented reset value."""
     tb = make_tb(dut)
@@ -53,7 +55,7 @@ async def reset_values_and_id(dut) -> None:
     assert await tb.bus.read(offset("ID")) == ID_VALUE
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=60, timeout_unit="us")  # measured 14 us (the slower top)
 async def read_write_every_register(dut) -> None:
     """RW fields keep what is written (bits outside fields read 0); RO registers ignore writes without error."""
     tb = make_tb(dut, idle=True)
@@ -71,7 +73,7 @@ async def read_write_every_register(dut) -> None:
             assert got == want, f"{reg.name}: wrote {pattern:#x}, read {got:#x}, expected {want:#x}"
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=50, timeout_unit="us")  # measured 10 us (the slower top)
 async def byte_enables(dut) -> None:
     """Each byte lane of a write changes only its byte."""
     tb = make_tb(dut)
@@ -89,7 +91,7 @@ async def byte_enables(dut) -> None:
             assert got == want, f"{name} be={be:04b}: {got:#x} expected {want:#x}"
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=5, timeout_unit="us")  # measured 1.2 us (the slower top)
 async def concurrent_reads_and_writes(dut) -> None:
     """Reads and writes issued at the same time from several coroutines (on AXI they overlap on the channels,
     with idle cycles and backpressure): every write lands, every read returns its register's value."""
@@ -116,7 +118,7 @@ async def concurrent_reads_and_writes(dut) -> None:
         assert await tb.bus.read(addr) == values[addr], f"write to {addr:#x} lost or corrupted"
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=8, timeout_unit="us")  # measured 1.8 us (the slower top)
 async def unmapped_offsets_answer_with_error(dut) -> None:
     """Every offset of the 128-byte window that is not a register answers with IP2Bus_Error / SLVERR."""
     tb = make_tb(dut)
@@ -138,7 +140,7 @@ async def unmapped_offsets_answer_with_error(dut) -> None:
     assert await tb.bus.read(offset("ID")) == ID_VALUE
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=8, timeout_unit="us")  # measured 2.0 us (the slower top)
 async def w1c_flags_and_interrupt(dut) -> None:
     """DONE/ERROR are sticky until written 1; irq follows them when enabled."""
     tb = make_tb(dut)
@@ -193,7 +195,7 @@ BAD_VALUES: list[tuple[str, dict[str, int], str]] = [
 ]
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=2500, timeout_unit="us")  # measured 618 us (the slower top)
 async def bad_register_values_flag_an_error(dut) -> None:
     """Each bad register value: ERROR with its cause, DONE, not a single step pulse, and the core still works."""
     tb = make_tb(dut)
@@ -227,7 +229,7 @@ async def bad_register_values_flag_an_error(dut) -> None:
     tb.finish()
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=2500, timeout_unit="us")  # measured 552 us (the slower top)
 async def position_register(dut) -> None:
     """POSITION is written while stopped; a write during a move is ignored and flagged POS_BUSY."""
     tb = make_tb(dut)
@@ -247,7 +249,7 @@ async def position_register(dut) -> None:
     tb.finish()
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=3, timeout_unit="ms")  # measured 723 us (the slower top)
 async def motion_registers_are_shadowed(dut) -> None:
     """Writing the next move's registers during a move does not disturb it; the next START uses them."""
     tb = make_tb(dut, idle=True)
@@ -271,7 +273,7 @@ async def motion_registers_are_shadowed(dut) -> None:
     tb.finish()
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=2500, timeout_unit="us")  # measured 548 us (the slower top)
 async def start_while_busy_is_ignored(dut) -> None:
     """A second START during a move changes nothing."""
     tb = make_tb(dut)
@@ -303,7 +305,7 @@ STOP_CASES = [
 ]
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=12, timeout_unit="ms")  # measured 2.6 ms (the slower top)
 async def soft_and_hard_stop(dut) -> None:
     """SOFT_STOP and HARD_STOP through the bus in ACCEL, RUN and DECEL: every edge as the model predicts, position
     equal to the pulses seen, a soft stop ending at the slow end of a decel ramp, no pulse after a hard stop."""
@@ -348,7 +350,7 @@ async def soft_and_hard_stop(dut) -> None:
     tb.finish()
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=1500, timeout_unit="us")  # measured 343 us (the slower top)
 async def hard_stop_cancels_a_held_start(dut) -> None:
     """HARD_STOP or SOFT_STOP while the stepping logic holds a START for DIR setup, or HARD_STOP in the same CTRL
     write as START: DONE without error, no STEP pulse, POSITION unchanged; the next move runs as the model says."""
@@ -399,7 +401,7 @@ async def hard_stop_cancels_a_held_start(dut) -> None:
     tb.finish()
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=2, timeout_unit="ms")  # measured 408 us (the slower top)
 async def stepping_configuration(dut) -> None:
     """ENABLE follows CTRL.ENABLE and gates the windings; DRIVE .. PWM_PERIOD are written only while stopped."""
     tb = make_tb(dut)
@@ -432,7 +434,18 @@ async def stepping_configuration(dut) -> None:
     tb.finish()
 
 
-@cocotb.test()
+def profiles_limit_us(names: list[str]) -> int:
+    """Sim-time limit for playing these profiles back to back: twice their model last edges plus 2000 clocks each
+    (bus accesses, DIR setup), plus 100 us for reset and configuration."""
+    cycles = sum((last_edge(plan_move(**PROFILES_BY_NAME[name].args())) or 0) + 2000 for name in names)
+    return math.ceil(2 * cycles * CLK_PERIOD_NS / 1000) + 100
+
+
+# Limit: from the profiles this run is given (PROFILE_NAMES), as the model says they last (about 2x the measured time).
+PROFILES_LIMIT_US = profiles_limit_us(json.loads(os.environ.get("PROFILE_NAMES", "[]")))
+
+
+@cocotb.test(timeout_time=PROFILES_LIMIT_US, timeout_unit="us")
 async def profiles_through_the_bus(dut) -> None:
     """Every requested profile, programmed by the driver from physical units, matches the model edge for edge."""
     names = json.loads(os.environ.get("PROFILE_NAMES", "[]"))

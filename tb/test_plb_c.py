@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import ctypes
 import json
+import math
 import os
 import re
 from pathlib import Path
@@ -24,10 +25,11 @@ from peripheral_tb import PeripheralTb
 from stepramp import clib
 from stepramp.hdl import run_cocotb
 from stepramp.model import edges as model_edges
+from stepramp.model import last_edge
 from stepramp.plan import Plan, plan_move
 from stepramp.profiles import PROFILES_BY_NAME, Profile
 from stepramp.regmap import offset
-from tbutil import REPO, build_dir, cocotb
+from tbutil import CLK_PERIOD_NS, REPO, build_dir, cocotb
 
 C_DIR = REPO / "sw" / "c"
 C_LIB = C_DIR / "build" / "libstepramp.so"
@@ -77,7 +79,18 @@ def c_plan_move(so: ctypes.CDLL, prof: Profile) -> Plan:
     return plan
 
 
-@cocotb.test()
+def profiles_limit_us(names: list[str]) -> int:
+    """Sim-time limit for playing these profiles back to back: twice their model last edges plus 2000 clocks each
+    (bus accesses, DIR setup), plus 100 us for reset and configuration."""
+    cycles = sum((last_edge(plan_move(**PROFILES_BY_NAME[name].args())) or 0) + 2000 for name in names)
+    return math.ceil(2 * cycles * CLK_PERIOD_NS / 1000) + 100
+
+
+# Limit: from the profiles this run is given (PROFILE_NAMES), as the model says they last: 3.5 ms, measured 1.6 ms.
+PROFILES_LIMIT_US = profiles_limit_us(json.loads(os.environ.get("PROFILE_NAMES", "[]")))
+
+
+@cocotb.test(timeout_time=PROFILES_LIMIT_US, timeout_unit="us")
 async def c_plans_through_the_bus(dut) -> None:
     """Each profile planned by the C library and programmed over the bus matches the model edge for edge."""
     so = ctypes.CDLL(os.environ["STEPRAMP_C_LIB"])
@@ -123,7 +136,7 @@ def c_driver_writes(so: ctypes.CDLL, prof: Profile) -> list[Write]:
     return writes
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=PROFILES_LIMIT_US, timeout_unit="us")  # the same profiles, the same limit
 async def c_driver_writes_replayed(dut) -> None:
     """The C driver's own bus writes for each move, replayed on the bus: the motion registers, then START as a
     byte write. The move matches the model, and the interrupt enables in CTRL byte 1 survive the START."""

@@ -13,6 +13,7 @@ e - 1 (so edge e samples them); "high after edge e" is the cycle after it.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -250,7 +251,7 @@ class StepRecorder:
         self.task.cancel()
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=500, timeout_unit="us")  # measured 118 us
 async def windings_follow_steps(dut) -> None:
     """Modes 0 .. 3 (and 5 .. 7 = 0): the state after every step is the model's for position mod n, forwards,
     backwards and across reversals, starting from positive and negative positions."""
@@ -319,7 +320,13 @@ def pwm_cases() -> list[tuple[int, int, list[int]]]:
     return cases
 
 
-@cocotb.test()
+# Limit: 4x the clocks it waits (per position the PWM latency and one carrier period), which vary with the generics.
+PWM_DUTY_LIMIT_US = math.ceil(
+    4 * (sum(len(ps) * (PWM_LATENCY + period + 1) for _, period, ps in pwm_cases()) + 100) * CLK_PERIOD_NS / 1000
+)
+
+
+@cocotb.test(timeout_time=PWM_DUTY_LIMIT_US, timeout_unit="us")  # 692 us at the defaults, measured 170 us
 async def pwm_duty_per_position(dut) -> None:
     """Mode 4: on-clocks of each bridge input over a carrier period equal the model's duty and polarity (exactly)
     for several ustep_log2 and pwm_period values, positions around the whole cycle and negative ones."""
@@ -339,7 +346,11 @@ async def pwm_duty_per_position(dut) -> None:
     dut._log.info("%d PWM positions measured", checked)
 
 
-@cocotb.test()
+# Limit: 4x the clocks it waits (the PWM latency per position, 2 periods x 4 * G_MICROSTEPS positions).
+PWM_TABLE_LIMIT_US = math.ceil(4 * (2 * (4 << LG) * (PWM_LATENCY + 1) + 100) * CLK_PERIOD_NS / 1000)
+
+
+@cocotb.test(timeout_time=PWM_TABLE_LIMIT_US, timeout_unit="us")  # 163 us at the defaults, measured 39 us
 async def pwm_table_matches_model(dut) -> None:
     """The elaborated table (ieee.math_real) equals the model's for every electrical position: with
     pwm_period = 2^G_DUTY_BITS the duty register is the magnitude itself; with 65535 the multiplier's full range."""
@@ -369,7 +380,7 @@ async def pwm_table_matches_model(dut) -> None:
             await FallingEdge(dut.clk)
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=1, timeout_unit="ms")  # measured 217 us at every generic set
 async def pwm_motion_with_monitors(dut) -> None:
     """Mode 4 moves in both directions with every monitor on (polarity at each step, duty now and then)."""
     eng: FakeEngine | None = None
@@ -407,7 +418,7 @@ async def pwm_motion_with_monitors(dut) -> None:
 # --------------------------------------------------------------------------------------------------------------
 # Mode and enable changes while stopped.
 # --------------------------------------------------------------------------------------------------------------
-@cocotb.test()
+@cocotb.test(timeout_time=40, timeout_unit="us")  # measured 8.6 us
 async def mode_changes_while_stopped(dut) -> None:
     """Every mode value at several positions: the pins show the model's state one clock after the change (PWM:
     after its pipeline), and mode 0 / 5 .. 7 switch everything off."""
@@ -430,7 +441,7 @@ async def mode_changes_while_stopped(dut) -> None:
                 assert got == want, f"mode {mode} position {pos}: {got}, expected {want}"
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=80, timeout_unit="us")  # measured 20 us
 async def enable_gates_windings(dut) -> None:
     """enable_o is enable_in one clock later; with enable_in = 0 every winding input is 0 in every mode (PWM and
     pwm_period <= 1 too) while STEP/DIR keep working; switching back restores the state of the position."""
@@ -489,7 +500,7 @@ async def enable_gates_windings(dut) -> None:
 # --------------------------------------------------------------------------------------------------------------
 # STEP width.
 # --------------------------------------------------------------------------------------------------------------
-@cocotb.test()
+@cocotb.test(timeout_time=80, timeout_unit="us")  # measured 17 us
 async def step_width_exact(dut) -> None:
     """step_o rises one clock after eng_step and stays high exactly max(step_width, 1) clocks."""
     cfg = Config(mode=sm.MODE_FULL)
@@ -515,7 +526,7 @@ async def step_width_exact(dut) -> None:
         assert rises == [e + sm.STEP_LATENCY for e in eng.step_edges[n0:]], (rises, eng.step_edges[n0:])
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=12, timeout_unit="us")  # measured 3.0 us
 async def step_overlap_restarts_width(dut) -> None:
     """A pulse that comes while STEP is still high (step_width > interval: the driver never programs this)
     restarts the width: one STEP pulse, high until step_width clocks after the later pulse."""
@@ -561,7 +572,7 @@ class GateRecorder:
             t.cancel()
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=800, timeout_unit="us")  # measured 185 us
 async def start_gate_timing(dut) -> None:
     """start_out 1 clock after start_req when DIR stays; on a change DIR waits for dir_hold after the last STEP
     rising edge, start_out for max(dir_setup, 5) clocks to the first STEP rising edge; either way the first STEP
@@ -665,7 +676,7 @@ async def start_gate_timing(dut) -> None:
         )
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=20, timeout_unit="us")  # measured 4.5 us
 async def start_dropped_while_busy(dut) -> None:
     """A start_req while the engine is busy or while the gate holds a start is dropped: no start_out, no DIR change."""
     cfg = Config(mode=sm.MODE_HALF, dir_setup=50, dir_hold=50)
@@ -694,7 +705,7 @@ async def start_dropped_while_busy(dut) -> None:
     assert rec.dir_edges[0] > q and int(dut.dir_o.value) == 1 and int(dut.gate_busy.value) == 0
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=80, timeout_unit="us")  # measured 19 us
 async def hard_stop_cancels_a_held_start(dut) -> None:
     """hard_stop while the gate holds a start (DIR hold, DIR setup) or with the start_req it accepts: start_out and
     stop_out together after that edge (the engine accepts and ends the move at once), no DIR change from then on."""
@@ -777,7 +788,7 @@ async def hard_stop_cancels_a_held_start(dut) -> None:
     rec.stop()
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=4, timeout_unit="us")  # measured 0.9 us
 async def dir_fault_flags_engine_direction(dut) -> None:
     """An engine pulse whose direction differs from DIR (engine started around the gate) sets dir_fault until the
     next accepted start_req."""
@@ -808,7 +819,7 @@ def assert_fails(dut: Any, mon: Any, what: str) -> None:
     raise AssertionError(f"{what}: the monitor did not fail")
 
 
-@cocotb.test()
+@cocotb.test(timeout_time=35, timeout_unit="us")  # measured 7.7 us
 async def monitors_fail_on_wrong_settings(dut) -> None:
     """Each monitor, told a setting other than the one programmed, reports violations (and passes with the right
     one on the same run): width + 1, exact width - 1, setup + 1, hold + 1, a position off by one, the wrong mode, the

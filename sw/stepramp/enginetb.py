@@ -44,7 +44,7 @@ from typing import Any
 
 import cocotb
 from cocotb.clock import Clock
-from cocotb.triggers import ClockCycles, FallingEdge, First, ReadOnly, RisingEdge, Timer
+from cocotb.triggers import ClockCycles, FallingEdge, First, ReadOnly, RisingEdge, SimTimeoutError, Timer, with_timeout
 from cocotb.utils import get_sim_time
 
 from stepramp.gtkw import LAYOUTS, missing_in, signal_paths
@@ -302,6 +302,20 @@ async def _observe(
     return result
 
 
+def _limit_cycles(moves: list[dict[str, Any]]) -> int:
+    """Clocks a whole request may take: each move's own budget (timeout_cycles) plus the clocks played around it
+    (idle events, load lead, strobes after done, the reset watch, the gap) and 20 clocks of slack."""
+    total = 0
+    for move in moves:
+        raw_stop = move.get("stop")
+        stops = [] if raw_stop is None else [raw_stop] if isinstance(raw_stop, dict) else raw_stop
+        at_cycles = [abs(int(x["at_cycle"])) for x in [*stops, *move.get("events", [])]]
+        total += int(move["timeout_cycles"]) + max(at_cycles, default=0) + int(move.get("load_lead", 0))
+        total += int(move.get("reset_watch_cycles", 100)) + int(move.get("gap_cycles", 5)) + 20
+    return total
+
+
+# No constant limit: a request holds any number of moves of any length; the limit is computed in the body.
 @cocotb.test()
 async def play_moves(dut: Any) -> None:
     """Play every move of the request, back to back, and write what was observed."""
@@ -327,14 +341,25 @@ async def play_moves(dut: Any) -> None:
 
     results = []
     moves = request["moves"]
-    for i, move in enumerate(moves):
-        next_move = moves[i + 1] if i + 1 < len(moves) else None
-        result = await _play(dut, move, next_move)
-        results.append(result)
-        if not result["done"] and "reset" not in result:
-            break  # the engine hung: report what was seen, the caller fails the test
-        if not (next_move and next_move.get("start_held")):
-            await ClockCycles(dut.clk, int(move.get("gap_cycles", 5)))
+
+    async def play_all() -> None:
+        for i, move in enumerate(moves):
+            next_move = moves[i + 1] if i + 1 < len(moves) else None
+            result = await _play(dut, move, next_move)
+            results.append(result)
+            if not result["done"] and "reset" not in result:
+                break  # the engine hung: report what was seen, the caller fails the test
+            if not (next_move and next_move.get("start_held")):
+                await ClockCycles(dut.clk, int(move.get("gap_cycles", 5)))
+
+    # Limit: the sum of the moves' cycle budgets and the clocks around them (_limit_cycles), at 10 ns a clock.
+    limit_ns = _limit_cycles(moves) * CLK_PERIOD_NS
+    try:
+        await with_timeout(play_all(), limit_ns, "ns")
+        timed_out = False
+    except SimTimeoutError:
+        timed_out = True
     Path(os.environ["STEPRAMP_SIM_RESULT"]).write_text(json.dumps({"results": results}))
+    assert not timed_out, f"the moves ran past their sim-time limit of {limit_ns} ns (after {len(results)} moves)"
     hung = [i for i, r in enumerate(results) if not r["done"] and "reset" not in r]
     assert not hung, f"no done within the cycle budget for move {hung[0]}"
