@@ -412,7 +412,8 @@ class MotionMonitors:
     def for_outputs(
         cls, dut: Any, outputs: Any, enable: bool, position: int, names: dict[str, str] | None = None
     ) -> MotionMonitors:
-        """Started monitors for a stepramp.driver.Outputs configuration (mode by name) and the current position."""
+        """Started monitors for a stepramp.driver.Outputs configuration (mode by name) and the current position, on
+        a top's pins (STEP and DIR are `step` and `dir` there; `names` may rename more)."""
         from stepramp.driver import MODES
 
         return cls(
@@ -425,7 +426,7 @@ class MotionMonitors:
             ustep_log2=outputs.ustep_log2,
             pwm_period=outputs.pwm_period,
             enable=enable,
-            names=names,
+            names={"step": "step", "dir": "dir", **(names or {})},
         ).start()
 
     def stop(self) -> None:

@@ -23,20 +23,31 @@ Checked just before each pulse edge p (the interval now counting is p; pulse 0 e
   over stepramp.model.soft_stop_values), alt_one = (m = 1), alt_code = 0. At pulse 0 (no interval counts: the
   sequencer itself ends a move whose stop came before pulse 0), at the last pulse and once a stop is in effect:
   "00";
-* stop_mode = '1' exactly after a take_alt of the current move.
+* stop_mode = '1' exactly after a take_alt of the current move;
+* white box: the accumulator fraction after the interval, the internal registers nxt_acc and alt_acc (named in
+  "Theory of operation"), equal to the model's. A value one Q32.16 LSB off changes the ticks only when the sum
+  crosses a tick (about once in 2^16), the fraction at once.
 
 A soft stop taken at pulse p switches the expected intervals to the stop's (soft_stop_values: DECEL, nxt_last at
 the new last interval p + m); with alt_one the stop's only interval is c_last and the move finishes at pulse p + 1.
 After begin_move: nxt_ok, alt_ok, stop_mode '0' and alt_kind "00"; after a reset likewise.
 
+Moves marked early (the cocotb test early_pulses) pulse as soon as the precompute allows instead: one clock after
+nxt_ok rises (after alt_ok too where the soft stop is taken). There nxt_ok and alt_ok must rise exactly at the edge
+"Latency budget" gives (a register ready for a pulse at E + 4, the decel seed E + 6, a recurrence step E + 8 + k,
+the alternative 3 + 2 + k after the normal value, c_last as the alternative 1 after it; k from
+stepramp.blocks.next_delay on the model's values), and an alternative still in the making at a pulse edge is
+dropped without delaying or disturbing the next interval.
+
 The cocotb tests: plan_intervals (trapezoids with m0 = 0 and 1, a cruise of one and two intervals, sd = L,
 triangles), short_moves (sa = 1, sa = 2 and 3, sa = sd = L, sa = sd = 1, N = 0 .. 3, a first interval above 2^16
 ticks, intervals of 1 .. 8 ticks), rule_order (hand-made registers that make each rule of the spec's order
 visible: c_sa /= c_sd with sa = sd, c_sa / c_sd /= c_last with sa = sd = L, c_sa /= c_first with sa = 1, and an
-interval of 0 ticks), soft_stops (taken in ACCEL with m >= 2, m = 1, m = 0, at p = 1 and p = sa - 1, in RUN with
-m >= 2 and m = 1, in a triangle, plus a random one), long_accel_ramp (a 300-interval accel ramp to the speed limit,
-stopped near its end) and aborts_and_restarts (finish, as a hard stop does, or a reset at random clocks of the
-precompute, also during a stop, then the next move exact from its edge 0). Moves follow each other back to back
+interval of 0 ticks; a plan from plan_move holds equal values wherever two rules match), soft_stops (taken in
+ACCEL with m >= 2, m = 1, m = 0, at p = 1 and p = sa - 1, in RUN with m >= 2 and m = 1, in a triangle, plus a
+random one), long_accel_ramp (a 300-interval accel ramp to the speed limit, stopped near its end),
+aborts_and_restarts (finish, as a hard stop does, or a reset at random clocks of the precompute, also during a
+stop, then the next move exact from its edge 0) and early_pulses. Moves follow each other back to back
 (begin_move at the edge after finish) or after a few idle clocks. The random draws print their seed and replay with
 PRECOMPUTE_SEED=<seed> pytest tb/test_precompute.py.
 """
@@ -53,14 +64,16 @@ from dataclasses import dataclass
 from typing import Any
 
 from cocotb.triggers import ClockCycles, FallingEdge, First, RisingEdge
+from cocotb.utils import get_sim_time
 
+from stepramp.blocks import next_delay
 from stepramp.hdl import run_cocotb
 from stepramp.model import ACCEL, DECEL, RUN, interval_values, phase_of, soft_stop_length, soft_stop_values, tick_times
 from stepramp.model import phases as model_phases
 from stepramp.plan import FRAC_CRUISE, FRAC_RAMP, MIN_INTERVAL_CLKS, Plan, plan_move
 from stepramp.profiles import PROFILES_BY_NAME, Profile
 from stepramp.regmap import ERROR_CODES
-from tbutil import build_dir, cocotb, start_clock_and_reset
+from tbutil import CLK_PERIOD_NS, build_dir, cocotb, start_clock_and_reset
 
 SEED_ENV = "PRECOMPUTE_SEED"
 #: Longest distance between two pulse edges in the bench (clocks); see the module docstring.
@@ -74,7 +87,12 @@ ALT_IGNORE, ALT_END, ALT_LOAD = 0b00, 0b01, 0b10
 ERR_NONE = ERROR_CODES["NONE"][0]
 ERR_ZERO_TICKS = ERROR_CODES["ZERO_TICKS"][0]
 FRAC_MASK = (1 << FRAC_CRUISE) - 1
+SHIFT = FRAC_CRUISE - FRAC_RAMP  # Q32.16 -> Q32.32
 ONE_TICK = 1 << FRAC_RAMP  # one tick in Q32.16
+#: "Latency budget": a register value is ready for a pulse at E + 4, one from the next-delay unit at E + 6 + the
+#: unit's latency (a seed: 0, E + 6; a recurrence step: 2 + k, E + 8 + k).
+REGISTER_READY = 4
+UNIT_READY = 6
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -84,23 +102,29 @@ ONE_TICK = 1 << FRAC_RAMP  # one tick in Q32.16
 
 @dataclass(frozen=True)
 class Interval:
-    """One interval as the precompute must offer it in nxt_*."""
+    """One interval as the precompute must offer it in nxt_* (frac: the accumulator fraction after it, the internal
+    nxt_acc; ready: the X of "ready for a pulse at E + X" in "Latency budget", E the edge that starts the interval
+    before it; None for interval 1, prepared at setup, and for a soft stop's first interval, the alternative)."""
 
     ticks: int
     state: int
     last: bool
     code: int
+    frac: int
+    ready: int | None
 
 
 @dataclass(frozen=True)
 class Alternative:
-    """The soft-stop alternative "decided at pulse p" as alt_* must show it (ticks, one, code only for LOAD)."""
+    """The soft-stop alternative "decided at pulse p" as alt_* must show it (the rest only for LOAD)."""
 
     kind: int
     m: int | None = None
     ticks: int = 0
     one: bool = False
     code: int = ERR_NONE
+    frac: int = 0  # the internal alt_acc
+    ready: int = 0  # X: ready for a pulse at E + X, E the edge of pulse p - 1
 
 
 def accumulate(values: list[int]) -> tuple[list[int], list[int]]:
@@ -115,25 +139,51 @@ def accumulate(values: list[int]) -> tuple[list[int], list[int]]:
     return ticks, fracs
 
 
-def intervals_of(ticks: list[int], states: list[str]) -> list[Interval]:
-    last = len(ticks)
+def intervals_of(values: list[int], states: list[str], ready: list[int | None]) -> list[Interval]:
+    ticks, fracs = accumulate(values)
+    last = len(values)
     return [
-        Interval(t, STATE[s], i == last, ERR_ZERO_TICKS if t == 0 else ERR_NONE)
-        for i, (t, s) in enumerate(zip(ticks, states, strict=True), start=1)
+        Interval(t, STATE[s], i == last, ERR_ZERO_TICKS if t == 0 else ERR_NONE, f, x)
+        for i, (t, s, f, x) in enumerate(zip(ticks, states, fracs, ready, strict=True), start=1)
     ]
 
 
 class Expect:
-    """What a plan makes the precompute offer: the intervals 1 .. L, and per pulse the alternative."""
+    """What a plan makes the precompute offer: the intervals 1 .. L, and per pulse the alternative.
+
+    The values and ticks come from stepramp.model. The latencies are the formulas of "Latency budget": a register
+    is ready for a pulse at E + 4, a value from the next-delay unit at E + 6 + its latency (a seed: 0, a step:
+    2 + k, stepramp.blocks.next_delay), the alternative 3 + its latency after the normal value of the same interval
+    (m = 1, c_last: 1 after). The recurrence requests are run here on stepramp.blocks.next_delay and each answer is
+    held equal to the model's value, so the latencies belong to the model's values."""
 
     def __init__(self, plan: Plan) -> None:
         self.plan = plan
         self.values = list(interval_values(plan))
-        self.ticks, self.fracs = accumulate(self.values)
         times = tick_times(plan)
         # the accumulator here is the spec's: the same as the model's tick times
+        self.ticks, self.fracs = accumulate(self.values)
         assert self.ticks == [b - a for a, b in itertools.pairwise(times)], "accumulator != tick_times"
-        self.intervals = intervals_of(self.ticks, model_phases(plan))
+        self.intervals = intervals_of(self.values, model_phases(plan), self._ready())
+
+    def _ready(self) -> list[int | None]:
+        plan, length = self.plan, self.plan.steps - 1
+        ready: list[int | None] = [None][:length]  # interval 1: c_first, at setup
+        acc = (plan.accel_seed, 0)  # A_(n-1) and its remainder
+        dec: tuple[int, int] | None = None  # D_(m+1) and its remainder, once the decel seed is loaded
+        for j in range(2, length + 1):  # the rule order of DECIDE (j >= 2)
+            if j == length or j in (plan.sa, plan.sd) or plan.sa < j < plan.sd:
+                ready.append(REGISTER_READY)
+                continue
+            if j < plan.sa:
+                ans = next_delay(False, False, j - 1, *acc)
+                acc = (ans.value, ans.remainder)
+            else:
+                ans = next_delay(dec is None, True, length - j, *(dec or (plan.decel_seed, 0)))
+                dec = (ans.value, ans.remainder)
+            assert ans.value << SHIFT == self.values[j - 1], f"interval {j}: the unit's answer is not the model's"
+            ready.append(UNIT_READY + ans.latency)
+        return ready
 
     def alternative(self, p: int) -> Alternative:
         """Soft stop decided at pulse p >= 1 (the end of interval p)."""
@@ -146,14 +196,33 @@ class Expect:
         assert values is not None and values[:p] == self.values[:p] and len(values) == p + m
         s = self.fracs[p - 1] + values[p]  # the accumulator just continues after interval p
         ticks = s >> FRAC_CRUISE
-        return Alternative(ALT_LOAD, m, ticks, m == 1, ERR_ZERO_TICKS if ticks == 0 else ERR_NONE)
+        normal = self.intervals[p].ready  # interval p + 1 of the plan: D
+        assert normal is not None
+        if m == 1:
+            ready = normal + 1  # c_last: ALT_ADD right after ADD
+        else:
+            ans = next_delay(False, True, m - 1, self.values[p] >> SHIFT, 0)  # D_(m-1) from D_m := D, r = 0
+            assert ans.value << SHIFT == values[p]
+            ready = normal + 3 + ans.latency
+        code = ERR_ZERO_TICKS if ticks == 0 else ERR_NONE
+        return Alternative(ALT_LOAD, m, ticks, m == 1, code, s & FRAC_MASK, ready)
 
     def stop_intervals(self, p: int) -> list[Interval]:
         """Intervals 1 .. p + m of the move after a soft stop (m >= 1) taken at pulse p."""
+        m = soft_stop_length(self.plan, p)
         values = soft_stop_values(self.plan, p)
-        assert values is not None
-        ticks, _ = accumulate(values)
-        return intervals_of(ticks, model_phases(self.plan)[:p] + [DECEL] * (len(values) - p))
+        assert m is not None and values is not None and len(values) == p + m
+        ready: list[int | None] = [iv.ready for iv in self.intervals[:p]] + [None]  # p + 1: the alternative
+        if m >= 2:
+            dec = (self.values[p] >> SHIFT, 0)
+            for j in range(p + 1, p + m):  # interval j gets D_(p+m-j); its request comes during interval j - 1
+                ans = next_delay(False, True, p + m - j, *dec)
+                dec = (ans.value, ans.remainder)
+                assert ans.value << SHIFT == values[j - 1]
+                if j > p + 1:
+                    ready.append(UNIT_READY + ans.latency)
+            ready.append(REGISTER_READY)  # c_last
+        return intervals_of(values, model_phases(self.plan)[:p] + [DECEL] * m, ready)
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -187,9 +256,8 @@ def designed(name: str, steps: int, period: float, n_a: float, n_d: float, presc
     spr, fclk = 200.0, 1e6
     alpha = 2.0 * math.pi / spr
     v = fclk / prescale / period
-    return Profile(
-        name, steps, alpha * v * v / (2.0 * n_a), alpha * v * v / (2.0 * n_d), alpha * v, spr, fclk, prescale
-    )
+    accel, decel = alpha * v * v / (2.0 * n_a), alpha * v * v / (2.0 * n_d)
+    return Profile(name, steps, accel, decel, alpha * v, spr, fclk, prescale)
 
 
 def named(name: str, **kw: Any) -> Move:
@@ -232,16 +300,15 @@ def rule_order_plans() -> list[Move]:
     assert accumulate(list(interval_values(zero)))[0][1] == 0
     moves.append(Move("zero_ticks at interval 2", zero))
     # each case tests what it says: the first matching register wins, and the next one would differ
-    shift = FRAC_CRUISE - FRAC_RAMP
     for move, (index, win, lose) in zip(
         moves[:3],
         [(tri.sa, "c_sa", ("c_sd",)), (9, "c_last", ("c_sa", "c_sd")), (1, "c_first", ("c_sa",))],
         strict=True,
     ):
         value = list(interval_values(move.plan))[index - 1]
-        assert value == getattr(move.plan, win) << shift, move.name
-        assert all(value != getattr(move.plan, r) << shift for r in lose), move.name
-    assert list(interval_values(moves[2].plan))[-1] != moves[2].plan.c_sd << shift
+        assert value == getattr(move.plan, win) << SHIFT, move.name
+        assert all(value != getattr(move.plan, r) << SHIFT for r in lose), move.name
+    assert list(interval_values(moves[2].plan))[-1] != moves[2].plan.c_sd << SHIFT
     return moves
 
 
@@ -318,22 +385,35 @@ class Sequencer:
     def check_pulse(
         self, where: str, nxt: Interval | None, alt: Alternative, stop_mode: bool, early: bool = False
     ) -> bool:
-        """The outputs just before a pulse edge. early: the edge comes right after nxt_ok rose, so an alternative
-        may still be in the making (alt_ok = '0': then only alt_kind is checked)."""
-        dut = self.dut
-        ports = ("nxt_ok", "nxt_d", "nxt_state", "nxt_last", "nxt_code", "alt_ok", "alt_kind", "alt_d", "alt_one")
-        got = {p: read(dut, p) for p in (*ports, "alt_code", "stop_mode")}
+        """The outputs just before a pulse edge (and the internal accumulator fractions nxt_acc, alt_acc: a value one
+        LSB off shows there at once, in the ticks only when it crosses a tick). early: the edge comes right after
+        nxt_ok rose, so an alternative may still be in the making (alt_ok = '0': then only alt_kind is checked)."""
+        ports = ("nxt_ok", "nxt_d", "nxt_state", "nxt_last", "nxt_code", "nxt_acc")
+        ports += ("alt_ok", "alt_kind", "alt_d", "alt_one", "alt_code", "alt_acc", "stop_mode")
+        got = {p: read(self.dut, p) for p in ports}
         want = {"alt_kind": alt.kind, "stop_mode": int(stop_mode)}
         if nxt is not None:
             want.update(nxt_ok=1, nxt_d=nxt.ticks, nxt_state=nxt.state, nxt_last=int(nxt.last), nxt_code=nxt.code)
+            want.update(nxt_acc=nxt.frac)
             self.stats["intervals"] += 1
         if alt.kind == ALT_LOAD and early and got["alt_ok"] == 0:
             self.stats["alt dropped in the making"] += 1
         elif alt.kind == ALT_LOAD:
-            want.update(alt_ok=1, alt_d=alt.ticks, alt_one=int(alt.one), alt_code=alt.code)
+            want.update(alt_ok=1, alt_d=alt.ticks, alt_one=int(alt.one), alt_code=alt.code, alt_acc=alt.frac)
             self.stats["alt m = 1" if alt.one else "alt m >= 2"] += 1
         self.stats[f"alt_kind {alt.kind:02b}"] += 1
         return self.expect(where, got, want)
+
+    async def when_ready(self, where: str, port: str, ready: int, edge_ns: float) -> None:
+        """Wait for port to rise; it must rise at edge E + ready - 1 (ready for a pulse at E + ready)."""
+        limit = ClockCycles(self.dut.clk, GAP_MAX)
+        if await First(RisingEdge(getattr(self.dut, port)), limit) is limit:
+            self.failures.append(f"{where}: {port} not '1' within {GAP_MAX} clocks (budget: E + {ready})")
+            return
+        got = round((get_sim_time("ns") - edge_ns) / CLK_PERIOD_NS) + 1
+        self.stats[f"{port} latency"] += 1
+        if got != ready:
+            self.failures.append(f"{where}: {port} ready for a pulse at E + {got}, the budget says E + {ready}")
 
     async def play(self, move: Move) -> None:
         """One move from edge 0 (called at a falling edge, returns at the falling edge after its last edge)."""
@@ -397,12 +477,17 @@ class Sequencer:
                 self.stats[f"abort {abort[0]} during a soft stop"] += stopped
                 break
             k += 1
-            early = move.early and k < len(seq) and k != move.soft_at
+            early = move.early and k < len(seq)
             if early:
-                # the sequencer's earliest pulse: the edge after the one at which nxt_ok rises
-                limit = ClockCycles(dut.clk, GAP_MAX)
-                if await First(RisingEdge(dut.nxt_ok), limit) is limit:
-                    self.failures.append(f"{where}: nxt_ok of interval {k + 1} not within {GAP_MAX} clocks")
+                # The sequencer's earliest pulse: the edge after the one at which nxt_ok rises (and alt_ok, where the
+                # soft stop is to be taken), which must be exactly the edge "Latency budget" gives.
+                edge = get_sim_time("ns") - CLK_PERIOD_NS // 2  # E: the pulse edge just passed
+                ready = seq[k].ready
+                assert ready is not None
+                await self.when_ready(f"{move.name}: pulse {k}: interval {k + 1}", "nxt_ok", ready, edge)
+                nalt = exp.alternative(k) if k == move.soft_at and not stopped else None
+                if nalt is not None and nalt.kind == ALT_LOAD:
+                    await self.when_ready(f"{move.name}: pulse {k}: alternative", "alt_ok", nalt.ready, edge)
                 await FallingEdge(dut.clk)
             else:
                 await ClockCycles(dut.clk, gap - 1, rising=False)
@@ -589,21 +674,30 @@ async def aborts_and_restarts(dut) -> None:
 
 @cocotb.test(timeout_time=3, timeout_unit="ms")
 async def early_pulses(dut) -> None:
-    """Pulse edges as early as nxt_ok allows (one clock after it rises): the alternative still in the making is
-    dropped at the pulse edge (the next-delay unit flushed), and every following interval and alternative is still
-    the model's, also a soft stop taken (at its normal time) after many dropped alternatives."""
-    tri = plan_move(**PROFILES_BY_NAME["triangle_asym"].args())
-    trap = plan_move(**PROFILES_BY_NAME["trap_asym"].args())
-    cruise1 = plan_move(**PROFILES_BY_NAME["trap_cruise_one_interval"].args())
+    """Pulse edges as early as the precompute allows: one clock after nxt_ok rises (after alt_ok where a soft stop
+    is taken). nxt_ok and alt_ok must rise exactly when "Latency budget" says (a register E + 4, the decel seed
+    E + 6, a recurrence step E + 8 + k, the alternative 3 + 2 + k after the normal value, c_last as the alternative
+    1 after it); the alternative still in the making at an early pulse is dropped (the next-delay unit flushed),
+    and every following interval and alternative is still the model's."""
+    plans = {
+        n: plan_move(**PROFILES_BY_NAME[n].args())
+        for n in ("triangle_asym", "trap_asym", "trap_cruise_one_interval", "ratio_decel_50", "trap_run_to_stop")
+    }
     moves = [
-        Move("triangle_asym early", tri, early=True),
-        dataclasses.replace(soft("trap_asym early", trap, 40, ALT_LOAD, RUN, (2, 100)), early=True),
-        dataclasses.replace(soft("trap_cruise_one_interval early", cruise1, 15, ALT_LOAD, ACCEL, (2, 100)), early=True),
+        Move("triangle_asym early", plans["triangle_asym"], early=True),
+        named("trap_m0_one", early=True),
+        named("run_start_short_ramps", early=True),
+        soft("trap_asym early", plans["trap_asym"], 40, ALT_LOAD, RUN, (2, 100)),
+        soft("trap_cruise_one_interval early", plans["trap_cruise_one_interval"], 15, ALT_LOAD, ACCEL, (2, 100)),
+        soft("ratio_decel_50 early", plans["ratio_decel_50"], 55, ALT_LOAD, ACCEL, (1, 1)),
+        soft("trap_run_to_stop early", plans["trap_run_to_stop"], 30, ALT_LOAD, RUN, (1, 1)),
     ]
     seq = Sequencer(dut)
-    await seq.run(moves)
-    assert seq.stats["alt dropped in the making"] >= 50, seq.stats
-    assert seq.stats["soft stop RUN m >= 2"] == 1 and seq.stats["soft stop ACCEL m >= 2"] == 1, seq.stats
+    await seq.run([dataclasses.replace(m, early=True) for m in moves])
+    s = seq.stats
+    assert s["alt dropped in the making"] >= 100 and s["nxt_ok latency"] >= 400 and s["alt_ok latency"] == 4, s
+    assert s["soft stop RUN m >= 2"] == 1 and s["soft stop ACCEL m >= 2"] == 1, s
+    assert s["soft stop RUN m = 1"] == 1 and s["soft stop ACCEL m = 1"] == 1, s
 
 
 def test_precompute() -> None:

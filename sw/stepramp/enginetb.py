@@ -309,8 +309,8 @@ def _limit_cycles(moves: list[dict[str, Any]]) -> int:
     for move in moves:
         raw_stop = move.get("stop")
         stops = [] if raw_stop is None else [raw_stop] if isinstance(raw_stop, dict) else raw_stop
-        at_cycles = [abs(int(x["at_cycle"])) for x in [*stops, *move.get("events", [])]]
-        total += int(move["timeout_cycles"]) + max(at_cycles, default=0) + int(move.get("load_lead", 0))
+        at_cycles = [0, *(int(x["at_cycle"]) for x in [*stops, *move.get("events", [])])]
+        total += int(move["timeout_cycles"]) + max(at_cycles) - min(at_cycles) + int(move.get("load_lead", 0))
         total += int(move.get("reset_watch_cycles", 100)) + int(move.get("gap_cycles", 5)) + 20
     return total
 

@@ -207,14 +207,14 @@ class RtlSession:
 try:
     import cocotb
     from cocotb.clock import Clock
-    from cocotb.triggers import ClockCycles, FallingEdge, First, RisingEdge, Timer
+    from cocotb.triggers import ClockCycles, FallingEdge, First, RisingEdge, SimTimeoutError, Timer, with_timeout
     from cocotb.utils import get_sim_time
 except ImportError:  # the front end does not need cocotb
     cocotb = None  # type: ignore[assignment]
 
 
 if cocotb is not None:
-
+    # No constant limit: the session serves a whole interactive shell; each step carries its own limit (below).
     @cocotb.test()
     async def session(dut: Any) -> None:
         """Serve the front end's requests until it quits or goes away."""
@@ -224,19 +224,34 @@ if cocotb is not None:
         cfg: dict[str, Any] = json.loads(os.environ["STEPRAMP_SESSION_CONFIG"])
         period_ps = round(1e12 / cfg["fclk"])
         Clock(dut.clk, period_ps, unit="ps").start()
-        bus = IpifMaster(dut, dut.clk, period_ps // 1000 or 1)
-        dut.rst.value = 1
-        await ClockCycles(dut.clk, 3)
-        await FallingEdge(dut.clk)
-        dut.rst.value = 0
-        await ClockCycles(dut.clk, 2)
-        pins = StepWatch(dut.step, dut.core_inst.busy, period_ps)
 
+        async def limited(work: Any, clocks: int, what: str) -> Any:
+            """Await work within a simulated-time limit of `clocks` clock periods; fail clearly if it hangs."""
+            try:
+                return await with_timeout(work, clocks * period_ps, "ps")
+            except SimTimeoutError:
+                raise SessionError(f"{what}: no end within its limit of {clocks} clocks of simulated time") from None
+
+        bus = IpifMaster(dut, dut.clk, period_ps // 1000 or 1)
         drv = StepRamp(bus, fclk=cfg["fclk"], spr=cfg["spr"], prescale=cfg["prescale"])
-        await drv.check_id()
-        await drv.configure_outputs(Outputs(mode=cfg["mode"], dir_setup=cfg["dir_setup"], dir_hold=cfg["dir_setup"]))
-        await drv.set_enable(True)
-        await drv.enable_irq()
+
+        async def setup() -> StepWatch:
+            dut.rst.value = 1
+            await ClockCycles(dut.clk, 3)
+            await FallingEdge(dut.clk)
+            dut.rst.value = 0
+            await ClockCycles(dut.clk, 2)
+            pins = StepWatch(dut.step, dut.core_inst.busy, period_ps)
+            await drv.check_id()
+            await drv.configure_outputs(
+                Outputs(mode=cfg["mode"], dir_setup=cfg["dir_setup"], dir_hold=cfg["dir_setup"])
+            )
+            await drv.set_enable(True)
+            await drv.enable_irq()
+            return pins
+
+        # Limit: the reset and the configuration writes, measured at 20 clocks, 5x over.
+        pins: StepWatch = await limited(setup(), 100, "reset and configuration")
 
         async def idle() -> None:
             if not int(dut.irq.value):  # irq may have risen during the status read
@@ -247,26 +262,33 @@ if cocotb is not None:
                 plan = drv.plan(req["steps"], req["accel"], req["decel"], req["speed"])
             except ValueError as exc:
                 return {"value_error": str(exc)}
-            mark = pins.mark()
-            start_s = get_sim_time("ps") * 1e-12
-            await drv.program(plan)
-            await drv.start()
             # A hang fails the move instead of the session waiting for ever: the model's last edge, plus DIR
             # setup/hold and slack, in polls of at most _POLL_CYCLES.
             budget = (last_edge(plan) or 0) + 2 * cfg["dir_setup"] + _POLL_CYCLES
-            try:
-                await drv.wait_done(idle=idle, polls=budget // _POLL_CYCLES + 10)
-            except StepRampError as exc:
-                return {"core_error": str(exc), "position": await drv.position()}
-            end_s = get_sim_time("ps") * 1e-12
-            position = await drv.position()
-            return {
-                "plan": dataclasses.asdict(plan),
-                "edges": pins.since(*mark),
-                "position": position,
-                "start_s": start_s,
-                "end_s": end_s,
-            }
+            polls = budget // _POLL_CYCLES + 10
+
+            async def run() -> dict[str, Any]:
+                mark = pins.mark()
+                start_s = get_sim_time("ps") * 1e-12
+                await drv.program(plan)
+                await drv.start()
+                try:
+                    await drv.wait_done(idle=idle, polls=polls)
+                except StepRampError as exc:
+                    return {"core_error": str(exc), "position": await drv.position()}
+                end_s = get_sim_time("ps") * 1e-12
+                position = await drv.position()
+                return {
+                    "plan": dataclasses.asdict(plan),
+                    "edges": pins.since(*mark),
+                    "position": position,
+                    "start_s": start_s,
+                    "end_s": end_s,
+                }
+
+            # Limit: twice wait_done's own bound (polls of _POLL_CYCLES idle clocks and a <= 100-clock STATUS read).
+            result: dict[str, Any] = await limited(run(), 2 * polls * (_POLL_CYCLES + 100), f"move {req}")
+            return result
 
         sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
         sock.connect(os.environ["STEPRAMP_SESSION_SOCKET"])
