@@ -623,9 +623,16 @@ def test_engine_error_codes() -> None:
         for label, plan, stop, code, k in runtime
     ]
     assert {code for *_, code, _ in cases} == set(range(13))
+    # Each move's cycle budget from where it is expected to end (a move rejected at edge 2 may hold intervals of
+    # 2^32 ticks, which the model-based default budget would wait for): a hang fails within a few thousand clocks.
+    budgets = [
+        max([FIRST_PULSE_LATENCY, *expected[-1:], *([stop.at_cycle] if stop else [])]) + 2000 + 4 * plan.prescale
+        for _, plan, stop, _, expected in cases
+    ]
     results = simulate(
         [c[1] for c in cases],
         build_dir("engine_error_codes"),
+        budgets=budgets,
         stops=[c[2] for c in cases],
         extras=[{"gap_cycles": 20} for _ in cases],
     )
