@@ -315,8 +315,18 @@ def _limit_cycles(moves: list[dict[str, Any]]) -> int:
     return total
 
 
-# No constant limit: a request holds any number of moves of any length; the limit is computed in the body.
-@cocotb.test()
+def _backstop_ns() -> int:
+    """The decorator's limit: twice the body's (computed from the request the simulation is started with), or
+    1000 s of simulated time when the module is imported without one."""
+    path = os.environ.get("STEPRAMP_SIM_REQUEST")
+    if not path or not Path(path).exists():
+        return 1000 * 10**9
+    return 2 * (_limit_cycles(json.loads(Path(path).read_text())["moves"]) + 1000) * CLK_PERIOD_NS
+
+
+# A request holds any number of moves of any length: the body holds the moves to a limit computed from the request
+# (with a clear message); the decorator is a backstop.
+@cocotb.test(timeout_time=_backstop_ns(), timeout_unit="ns")
 async def play_moves(dut: Any) -> None:
     """Play every move of the request, back to back, and write what was observed."""
     request = json.loads(Path(os.environ["STEPRAMP_SIM_REQUEST"]).read_text())

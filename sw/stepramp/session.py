@@ -214,8 +214,9 @@ except ImportError:  # the front end does not need cocotb
 
 
 if cocotb is not None:
-    # No constant limit: the session serves a whole interactive shell; each step carries its own limit (below).
-    @cocotb.test()
+    # The session serves a whole interactive shell; each step carries its own limit (below).
+    # The decorator's backstop: an hour of simulated time (about 4,500 demo moves at 250 kHz).
+    @cocotb.test(timeout_time=3_600_000, timeout_unit="ms")
     async def session(dut: Any) -> None:
         """Serve the front end's requests until it quits or goes away."""
         from stepramp.ipif import IpifMaster  # needs cocotb-bus
