@@ -11,6 +11,7 @@ time the stepping logic holds a start back for DIR setup/hold.
 from __future__ import annotations
 
 import itertools
+import math
 import random
 from collections.abc import Iterator
 from typing import Any
@@ -22,7 +23,9 @@ from monitors import MotionMonitors
 from stepramp.driver import Outputs, Status, StepRamp
 from stepramp.gtkw import LAYOUTS, missing_in, signal_paths
 from stepramp.ipif import IpifError, IpifMaster
-from stepramp.plan import Plan
+from stepramp.model import last_edge
+from stepramp.plan import Plan, plan_move
+from stepramp.profiles import PROFILES_BY_NAME
 from stepramp.stepwatch import StepWatch
 from tbutil import CLK_PERIOD_NS
 
@@ -148,15 +151,7 @@ class PeripheralTb:
 
     async def configure(self, outputs: Outputs, enable: bool = True) -> None:
         """Program the stepping outputs (while stopped) and restart the monitors with the new settings."""
-        self.finish()
-        drv = self.driver()
-        await drv.configure_outputs(outputs)
-        await drv.set_enable(enable)
-        self.outputs, self.enabled = outputs, enable
-        # The PWM duty follows a new mode after the serial multipliers (stepramp.stepper.winding_latency, < 40
-        # clocks): let the outputs settle before the monitors look at them.
-        await ClockCycles(self.clk, 100)
-        self._start_monitors(position=await drv.position())
+        await reconfigure(self, outputs, enable)
 
     def finish(self) -> None:
         """Stop the monitors and raise if any of them saw a violation (call at the end of every motion test)."""
@@ -189,4 +184,25 @@ class PeripheralTb:
         return self.edges_since(n_steps, n_starts), status
 
 
-__all__ = ["AxilAccess", "AxilError", "BusError", "PeripheralTb", "pauses"]
+async def reconfigure(tb: Any, outputs: Outputs, enable: bool) -> None:
+    """A bench's configure (PeripheralTb, tb/test_core.py's CoreTb): stop and check its monitors, program the stepping
+    outputs through its driver (while stopped), and restart the monitors with the new settings."""
+    tb.finish()
+    drv = tb.driver()
+    await drv.configure_outputs(outputs)
+    await drv.set_enable(enable)
+    tb.outputs, tb.enabled = outputs, enable
+    # The PWM duty follows a new mode after the serial multipliers (stepramp.stepper.winding_latency, < 40 clocks):
+    # let the outputs settle before the monitors look at them.
+    await ClockCycles(tb.clk, 100)
+    tb._start_monitors(position=await drv.position())
+
+
+def profiles_limit_us(names: list[str]) -> int:
+    """Sim-time limit for playing these profiles back to back: twice their model last edges plus 2000 clocks each
+    (bus accesses, DIR setup), plus 100 us for reset and configuration."""
+    cycles = sum((last_edge(plan_move(**PROFILES_BY_NAME[name].args())) or 0) + 2000 for name in names)
+    return math.ceil(2 * cycles * CLK_PERIOD_NS / 1000) + 100
+
+
+__all__ = ["AxilAccess", "AxilError", "BusError", "PeripheralTb", "pauses", "profiles_limit_us", "reconfigure"]

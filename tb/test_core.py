@@ -39,6 +39,7 @@ from cocotb.triggers import ClockCycles, FallingEdge, First, Lock, ReadOnly, Ris
 from cocotb.utils import get_sim_time
 
 from monitors import MotionMonitors, StepWidthMonitor
+from peripheral_tb import reconfigure
 from stepramp import stepper as sm
 from stepramp.driver import MODES, Outputs, StepRamp
 from stepramp.hdl import run_cocotb
@@ -240,13 +241,7 @@ class CoreTb:
 
     async def configure(self, outputs: Outputs, enable: bool = True) -> None:
         """Program the stepping outputs (while stopped) and restart the monitors with the new settings."""
-        self.finish()
-        drv = self.driver()
-        await drv.configure_outputs(outputs)
-        await drv.set_enable(enable)
-        self.outputs, self.enabled = outputs, enable
-        await ClockCycles(self.clk, 100)  # a new PWM duty settles within stepramp.stepper.winding_latency
-        self._start_monitors(position=await drv.position())
+        await reconfigure(self, outputs, enable)
 
     async def irq_or(self, cycles: int) -> None:
         await First(RisingEdge(self.dut.irq), Timer(cycles * CLK_PERIOD_NS, unit="ns"))

@@ -12,7 +12,6 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import json
-import math
 import os
 import random
 from typing import Any
@@ -20,16 +19,15 @@ from typing import Any
 import pytest
 from cocotb.triggers import ClockCycles, RisingEdge
 
-from peripheral_tb import BusError, PeripheralTb
+from peripheral_tb import BusError, PeripheralTb, profiles_limit_us
 from stepramp.driver import Outputs, StepRampError, plan_writes
 from stepramp.hdl import run_cocotb
 from stepramp.model import edges as model_edges
 from stepramp.model import edges_with_stop as model_edges_with_stop
-from stepramp.model import last_edge
 from stepramp.plan import Plan, plan_move
 from stepramp.profiles import PROFILES, PROFILES_BY_NAME
 from stepramp.regmap import ERROR_CODES, ID_VALUE, REGISTERS, REGISTERS_BY_NAME, RW, offset
-from tbutil import CLK_PERIOD_NS, build_dir, cocotb
+from tbutil import build_dir, cocotb
 
 ERR = {name: code for name, (code, _) in ERROR_CODES.items()}
 MAPPED = {r.offset for r in REGISTERS}
@@ -432,13 +430,6 @@ async def stepping_configuration(dut) -> None:
     assert int(dut.enable.value) == 0
     assert [int(getattr(dut, pin).value) for pin in ("a1", "a2", "b1", "b2")] == [0, 0, 0, 0]
     tb.finish()
-
-
-def profiles_limit_us(names: list[str]) -> int:
-    """Sim-time limit for playing these profiles back to back: twice their model last edges plus 2000 clocks each
-    (bus accesses, DIR setup), plus 100 us for reset and configuration."""
-    cycles = sum((last_edge(plan_move(**PROFILES_BY_NAME[name].args())) or 0) + 2000 for name in names)
-    return math.ceil(2 * cycles * CLK_PERIOD_NS / 1000) + 100
 
 
 # Limit: from the profiles this run is given (PROFILE_NAMES), as the model says they last (about 2x the measured time).

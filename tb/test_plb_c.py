@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import ctypes
 import json
-import math
 import os
 import re
 from pathlib import Path
@@ -21,15 +20,14 @@ from typing import Any
 
 import pytest
 
-from peripheral_tb import PeripheralTb
+from peripheral_tb import PeripheralTb, profiles_limit_us
 from stepramp import clib
 from stepramp.hdl import run_cocotb
 from stepramp.model import edges as model_edges
-from stepramp.model import last_edge
 from stepramp.plan import Plan, plan_move
 from stepramp.profiles import PROFILES_BY_NAME, Profile
 from stepramp.regmap import offset
-from tbutil import CLK_PERIOD_NS, REPO, build_dir, cocotb
+from tbutil import REPO, build_dir, cocotb
 
 C_DIR = REPO / "sw" / "c"
 C_LIB = C_DIR / "build" / "libstepramp.so"
@@ -77,13 +75,6 @@ def c_plan_move(so: ctypes.CDLL, prof: Profile) -> Plan:
     plan = Plan(**c_values)
     assert plan == py_plan, f"{prof.name}: C plan {plan} differs from Python's {py_plan}"
     return plan
-
-
-def profiles_limit_us(names: list[str]) -> int:
-    """Sim-time limit for playing these profiles back to back: twice their model last edges plus 2000 clocks each
-    (bus accesses, DIR setup), plus 100 us for reset and configuration."""
-    cycles = sum((last_edge(plan_move(**PROFILES_BY_NAME[name].args())) or 0) + 2000 for name in names)
-    return math.ceil(2 * cycles * CLK_PERIOD_NS / 1000) + 100
 
 
 # Limit: from the profiles this run is given (PROFILE_NAMES), as the model says they last: 3.5 ms, measured 1.6 ms.
