@@ -1,19 +1,18 @@
 -- SPDX-License-Identifier: MIT
--- stepramp_divider: iterative unsigned divider, operands aligned by two priority encoders.
+-- stepramp_divider: iterative unsigned radix-4 divider that starts at the numerator's most significant '1'.
 --
--- A restoring divider normally runs G_WIDTH iterations. Here the divisor is first shifted left so that its
--- most significant '1' lines up with the numerator's (the shift comes from two priority encoders), so only
--- msb(N) - msb(D) + 1 iterations are needed. The ramp's quotients are small, so a division usually takes a
--- handful of cycles.
+-- A restoring divider normally runs one iteration per numerator bit. This one takes two numerator bits per clock
+-- (radix 4: the partial remainder times 4 plus the next bit pair is compared with D, 2 D and 3 D at once, and the
+-- largest multiple that fits is subtracted). The quotient has no '1' above the numerator's most significant '1',
+-- so a priority encoder on the numerator gives the first bit pair worth an iteration: floor(msb(N) / 2) + 1
+-- iterations. The partial remainder starts at 0 and takes the bit pairs in turn (picked by the iteration counter:
+-- no barrel shifter), and it stays below D, so the subtractors are only G_DEN_WIDTH + 3 bits wide, not G_WIDTH.
 --
 -- Latency, from the rising edge that samples start to the rising edge that raises done:
---   1                           when D = 0 (div_zero = '1'), or msb(N) < msb(D) (N < D: quotient 0, remainder N;
---                               also N = 0)
---   1 + msb(N) - msb(D) + 1     otherwise (at most G_WIDTH + 1; N < D with msb(N) = msb(D) takes this path: 2)
--- The alignment compares only the two msb indices (no wide comparator), and each iteration is one subtraction whose
--- borrow decides the quotient bit.
+--   1                            when D = 0 (div_zero = '1') or N = 0 (quotient 0, remainder 0)
+--   1 + floor(msb(N) / 2) + 1    otherwise (at most 1 + ceil(G_WIDTH / 2))
 -- start is sampled only when busy = '0'. done is a one-cycle strobe; quotient, remainder and div_zero are valid
--- from done on and held until the next start. On D = 0: quotient all ones, remainder = N.
+-- from done on and held until the next start. On D = 0: quotient all ones, remainder = N mod 2^G_DEN_WIDTH.
 
 library ieee;
   use ieee.std_logic_1164.all;
@@ -24,25 +23,30 @@ library work;
 
 entity stepramp_divider is
   generic (
-    G_WIDTH : positive := 32
+    G_WIDTH     : positive := 32;
+    G_DEN_WIDTH : positive := 32
   );
   port (
     clk         : in    std_logic;
     rst         : in    std_logic;
     start       : in    std_logic;
     numerator   : in    std_logic_vector(G_WIDTH - 1 downto 0);
-    denominator : in    std_logic_vector(G_WIDTH - 1 downto 0);
+    denominator : in    std_logic_vector(G_DEN_WIDTH - 1 downto 0);
     busy        : out   std_logic;
     done        : out   std_logic;
     div_zero    : out   std_logic;
     quotient    : out   std_logic_vector(G_WIDTH - 1 downto 0);
-    remainder   : out   std_logic_vector(G_WIDTH - 1 downto 0)
+    remainder   : out   std_logic_vector(G_DEN_WIDTH - 1 downto 0)
   );
 end entity stepramp_divider;
 
 architecture rtl of stepramp_divider is
 
   constant C_IDX_W : positive := clog2(G_WIDTH);
+  -- The numerator as bit pairs: padded to an even width.
+  constant C_PAIRS : positive := (G_WIDTH + 1) / 2;
+  -- The partial remainder times 4 plus a bit pair (below 4 D), and a trial difference with its sign.
+  constant C_DW : positive := G_DEN_WIDTH;
 
   -- State encoding as constants (not an enum) so that GHDL's VPI shows it as a plain vector.
   constant C_IDLE  : std_logic_vector(1 downto 0) := "00";
@@ -50,23 +54,25 @@ architecture rtl of stepramp_divider is
   constant C_ITER  : std_logic_vector(1 downto 0) := "10";
 
   signal state    : std_logic_vector(1 downto 0);
-  signal num_r    : unsigned(G_WIDTH - 1 downto 0);
-  signal den_r    : unsigned(G_WIDTH - 1 downto 0);
-  signal rem_r    : unsigned(G_WIDTH - 1 downto 0);
-  signal dsh_r    : unsigned(G_WIDTH - 1 downto 0);
+  signal num_r    : unsigned(2 * C_PAIRS - 1 downto 0);
+  signal den_r    : unsigned(G_DEN_WIDTH - 1 downto 0);
+  signal den3_r   : unsigned(G_DEN_WIDTH + 1 downto 0); -- 3 D
+  signal rem_r    : unsigned(G_DEN_WIDTH - 1 downto 0);
   signal quo_r    : unsigned(G_WIDTH - 1 downto 0);
   signal cnt_r    : unsigned(C_IDX_W - 1 downto 0);
   signal done_r   : std_logic;
   signal dz_r     : std_logic;
   signal num_msb  : std_logic_vector(C_IDX_W - 1 downto 0);
-  signal den_msb  : std_logic_vector(C_IDX_W - 1 downto 0);
   signal num_zero : std_logic;
-  signal den_zero : std_logic;
 
 begin
 
-  assert G_WIDTH >= 2 and G_WIDTH <= 64
-    report "stepramp_divider: G_WIDTH must be in 2 .. 64"
+  assert G_WIDTH >= 3 and G_WIDTH <= 64
+    report "stepramp_divider: G_WIDTH must be in 3 .. 64"
+    severity failure;
+
+  assert G_DEN_WIDTH >= 1 and G_DEN_WIDTH <= G_WIDTH
+    report "stepramp_divider: G_DEN_WIDTH must be in 1 .. G_WIDTH"
     severity failure;
 
   num_enc_inst : entity work.stepramp_prio_enc
@@ -74,25 +80,18 @@ begin
       G_WIDTH => G_WIDTH
     )
     port map (
-      din   => std_logic_vector(num_r),
+      din   => std_logic_vector(num_r(G_WIDTH - 1 downto 0)),
       index => num_msb,
       zero  => num_zero
     );
 
-  den_enc_inst : entity work.stepramp_prio_enc
-    generic map (
-      G_WIDTH => G_WIDTH
-    )
-    port map (
-      din   => std_logic_vector(den_r),
-      index => den_msb,
-      zero  => den_zero
-    );
-
   div_proc : process (clk) is
 
-    variable shift : unsigned(C_IDX_W - 1 downto 0);
-    variable diff  : unsigned(G_WIDTH downto 0);
+    variable pair  : unsigned(1 downto 0);
+    variable trial : unsigned(C_DW + 2 downto 0); -- 4 * remainder + pair, below 4 D (one spare bit: the sign below)
+    variable d1    : unsigned(C_DW + 2 downto 0); -- trial - D
+    variable d2    : unsigned(C_DW + 2 downto 0); -- trial - 2 D
+    variable d3    : unsigned(C_DW + 2 downto 0); -- trial - 3 D
 
   begin
 
@@ -104,7 +103,7 @@ begin
         when C_IDLE =>
 
           if (start = '1') then
-            num_r <= unsigned(numerator);
+            num_r <= resize(unsigned(numerator), 2 * C_PAIRS);
             den_r <= unsigned(denominator);
             dz_r  <= '0';
             state <= C_ALIGN;
@@ -112,40 +111,45 @@ begin
 
         when C_ALIGN =>
 
-          if (den_zero = '1') then
+          rem_r  <= (others => '0');
+          quo_r  <= (others => '0');
+          cnt_r  <= shift_right(unsigned(num_msb), 1);
+          den3_r <= ('0' & den_r & '0') + ("00" & den_r);
+          if (den_r = 0) then
             quo_r  <= (others => '1');
-            rem_r  <= num_r;
+            rem_r  <= num_r(G_DEN_WIDTH - 1 downto 0);
             dz_r   <= '1';
             done_r <= '1';
             state  <= C_IDLE;
-          elsif (num_zero = '1' or unsigned(num_msb) < unsigned(den_msb)) then
-            -- N < D (also N = 0): nothing to iterate.
-            quo_r  <= (others => '0');
-            rem_r  <= num_r;
+          elsif (num_zero = '1') then
             done_r <= '1';
             state  <= C_IDLE;
           else
-            -- msb(N) >= msb(D) (D > 0), so the shifted divisor still fits in G_WIDTH bits.
-            shift := unsigned(num_msb) - unsigned(den_msb);
-            dsh_r <= shift_left(den_r, to_integer(shift));
-            rem_r <= num_r;
-            quo_r <= (others => '0');
-            cnt_r <= shift;
             state <= C_ITER;
           end if;
 
         when C_ITER =>
 
-          -- One restoring step per clock, from the aligned position down to bit 0: the borrow of rem - dsh decides.
-          diff := ('0' & rem_r) - ('0' & dsh_r);
-          if (diff(G_WIDTH) = '0') then
-            rem_r <= diff(G_WIDTH - 1 downto 0);
-            quo_r <= quo_r(G_WIDTH - 2 downto 0) & '1';
+          -- One radix-4 step per clock, bit pair cnt_r down to pair 0: the largest of 3 D, 2 D, D that fits.
+          pair(1) := num_r(2 * to_integer(cnt_r) + 1);
+          pair(0) := num_r(2 * to_integer(cnt_r));
+          trial   := '0' & rem_r & pair;
+          d1      := trial - ("000" & den_r);
+          d2      := trial - ("00" & den_r & '0');
+          d3      := trial - ('0' & den3_r);
+          if (d3(C_DW + 2) = '0') then
+            rem_r <= d3(C_DW - 1 downto 0);
+            quo_r <= quo_r(G_WIDTH - 3 downto 0) & "11";
+          elsif (d2(C_DW + 2) = '0') then
+            rem_r <= d2(C_DW - 1 downto 0);
+            quo_r <= quo_r(G_WIDTH - 3 downto 0) & "10";
+          elsif (d1(C_DW + 2) = '0') then
+            rem_r <= d1(C_DW - 1 downto 0);
+            quo_r <= quo_r(G_WIDTH - 3 downto 0) & "01";
           else
-            quo_r <= quo_r(G_WIDTH - 2 downto 0) & '0';
+            rem_r <= trial(C_DW - 1 downto 0);
+            quo_r <= quo_r(G_WIDTH - 3 downto 0) & "00";
           end if;
-
-          dsh_r <= shift_right(dsh_r, 1);
 
           if (cnt_r = 0) then
             done_r <= '1';

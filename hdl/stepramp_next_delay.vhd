@@ -12,10 +12,9 @@
 --
 -- Timing: req is sampled at an edge e when busy = '0' (and flush = '0'). A seed is registered at e itself
 -- (ans_valid is '1' in the cycle after edge e). A recurrence step starts the divider at e; the divider raises done
--- at e + 1 + k (k = msb(num) - msb(den) + 1, or 0 when num < den) and the answer is registered at e + 2 + k
--- (ans_valid '1' in the cycle after that edge). With a 48-bit value, num < 2^50 and den >= 5 (accel) or >= 7
--- (decel, index >= 1), so k <= 48. ans_* hold until the next answer. flush abandons a request in flight (it also
--- resets the divider), so a new move never waits for an old division.
+-- at e + 1 + k (k = msb(num) + 1, or 0 when num = 0) and the answer is registered at e + 2 + k (ans_valid '1' in
+-- the cycle after that edge). With a 48-bit value, num < 2^50, so k <= 50. ans_* hold until the next answer.
+-- flush abandons a request in flight (it also resets the divider), so a new move never waits for an old division.
 
 library ieee;
   use ieee.std_logic_1164.all;
@@ -46,6 +45,8 @@ end entity stepramp_next_delay;
 architecture rtl of stepramp_next_delay is
 
   constant C_W : positive := G_DIV_WIDTH;
+  -- The denominator 4 * index + 1 or + 3 of a 31-bit index: 33 bits (and so is the remainder, below it).
+  constant C_DEN_W : positive := 33;
 
   signal pending     : std_logic;
   signal decel_r     : std_logic;
@@ -62,9 +63,9 @@ architecture rtl of stepramp_next_delay is
   signal div_done  : std_logic;
   signal div_zero  : std_logic;
   signal div_num   : std_logic_vector(C_W - 1 downto 0);
-  signal div_den   : std_logic_vector(C_W - 1 downto 0);
+  signal div_den   : std_logic_vector(C_DEN_W - 1 downto 0);
   signal div_q     : std_logic_vector(C_W - 1 downto 0);
-  signal div_r     : std_logic_vector(C_W - 1 downto 0);
+  signal div_r     : std_logic_vector(C_DEN_W - 1 downto 0);
   -- value -/+ quotient, one bit wider than the divider so that a borrow or a carry out of 48 bits is visible.
   signal result : unsigned(C_W downto 0);
 
@@ -82,14 +83,15 @@ begin
 
   -- num = 2 * value + remainder; den = 4 * index + 1 (accel) or 4 * index + 3 (decel): just wiring.
   div_num <= std_logic_vector(resize(unsigned(req_value & '0'), C_W) + resize(unsigned(req_rem), C_W));
-  div_den <= std_logic_vector(resize(unsigned(req_index & req_decel & '1'), C_W));
+  div_den <= req_index & req_decel & '1';
 
   result <= resize(value_r, C_W + 1) + resize(unsigned(div_q), C_W + 1) when decel_r = '1' else
             resize(value_r, C_W + 1) - resize(unsigned(div_q), C_W + 1);
 
   divider_inst : entity work.stepramp_divider
     generic map (
-      G_WIDTH => C_W
+      G_WIDTH     => C_W,
+      G_DEN_WIDTH => C_DEN_W
     )
     port map (
       clk         => clk,
@@ -127,8 +129,8 @@ begin
         pending     <= '0';
         valid_r     <= '1';
         ans_value_r <= result(47 downto 0);
-        -- The remainder is below den < 2^33, so its upper bits are zero.
-        ans_rem_r <= unsigned(div_r(32 downto 0));
+        -- The remainder is below den < 2^33.
+        ans_rem_r <= unsigned(div_r);
         -- Out of the Q32.16 range (a borrow shows as the top bit): the engine stops with an error.
         if (result(C_W downto 48) /= 0 or div_zero = '1') then
           ovf_r <= '1';

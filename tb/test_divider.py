@@ -1,8 +1,9 @@
 # SPDX-License-Identifier: MIT
 """stepramp_divider: quotient, remainder, div_zero and latency in cycles against the reference model.
 
-Width 8: all 65,536 operand pairs. Width 32: every corner pair (0, 1, max, powers of two, all-ones,
-N = D, N < D) and random pairs, at least 20,000 in all.
+Width 8: all 65,536 operand pairs. Width 32, and the next-delay unit's 50-bit numerator over a 33-bit
+denominator: every corner pair (0, 1, max, powers of two, all-ones, N = D, N < D) and random pairs, at least
+20,000 in all.
 """
 
 from __future__ import annotations
@@ -18,16 +19,16 @@ from stepramp.hdl import run_cocotb
 from tbutil import CLK_PERIOD_NS, build_dir, cocotb, env_int, now_cycles, start_clock_and_reset
 
 
-def operand_pairs(width: int, n_random: int, seed: int) -> list[tuple[int, int]]:
+def operand_pairs(width: int, den_width: int, n_random: int, seed: int) -> list[tuple[int, int]]:
     """Exhaustive for small widths; corners plus random pairs of varied magnitude otherwise."""
     if width <= 8:
-        return [(n, d) for n in range(1 << width) for d in range(1 << width)]
+        return [(n, d) for n in range(1 << width) for d in range(1 << den_width)]
     rng = random.Random(seed)
-    pairs = list(iter_msb_pairs(width))
+    pairs = [(n, d) for n, d in iter_msb_pairs(width) if d < 1 << den_width]
     while len(pairs) < n_random:
-        # Random bit lengths, so that every alignment distance is exercised, not only huge/huge.
+        # Random bit lengths, so that every quotient length is exercised, not only huge/huge.
         n = rng.getrandbits(rng.randint(0, width))
-        d = rng.getrandbits(rng.randint(0, width))
+        d = rng.getrandbits(rng.randint(0, den_width))
         pairs.append((n, d))
     return pairs
 
@@ -40,8 +41,8 @@ BACKSTOP_US = 2 * env_int("N_PAIRS", 20000) * (64 + 2) * CLK_PERIOD_NS // 1000 +
 @cocotb.test(timeout_time=BACKSTOP_US, timeout_unit="us")
 async def divider_against_model(dut) -> None:
     """Back-to-back divisions with start held high: each result and latency checked against the model."""
-    width = len(dut.numerator)
-    pairs = operand_pairs(width, env_int("N_PAIRS", 20000), env_int("PAIR_SEED", 1))
+    width, den_width = len(dut.numerator), len(dut.denominator)
+    pairs = operand_pairs(width, den_width, env_int("N_PAIRS", 20000), env_int("PAIR_SEED", 1))
     dut.start.value = 0
     dut.numerator.value = 0
     dut.denominator.value = 0
@@ -55,8 +56,10 @@ async def divider_against_model(dut) -> None:
     dut.start.value = 1
     await RisingEdge(dut.clk)
     sample_edge = now_cycles()  # this edge samples start (the divider is idle)
-    # Limit: every pair at the worst latency (width + 1 clocks, asserted below) plus its sampling clock, +50%.
-    limit_ns = 3 * len(pairs) * (width + 2) * CLK_PERIOD_NS // 2
+    # Limit: every pair at the worst latency (1 + ceil(width / 2) clocks, asserted below) plus its sampling clock,
+    # +50%.
+    worst = 1 + (width + 1) // 2
+    limit_ns = 3 * len(pairs) * (worst + 1) * CLK_PERIOD_NS // 2
     deadline_ns = round(get_sim_time("ns")) + limit_ns
     for index, (n, d) in enumerate(pairs):
         try:
@@ -64,7 +67,7 @@ async def divider_against_model(dut) -> None:
         except SimTimeoutError:
             raise AssertionError(f"no done for pair {index} ({n}/{d}) within the limit of {limit_ns} ns") from None
         done_edge = now_cycles()
-        expect = divide(n, d, width)
+        expect = divide(n, d, width, den_width)
         got = (int(dut.quotient.value), int(dut.remainder.value), bool(int(dut.div_zero.value)))
         latency = done_edge - sample_edge
         latencies.append(latency)
@@ -80,7 +83,7 @@ async def divider_against_model(dut) -> None:
         sample_edge = done_edge + 1
     await FallingEdge(dut.clk)
     assert not failures, "\n".join(failures)
-    assert max(latencies) <= width + 1
+    assert max(latencies) == worst
     mean = sum(latencies) / len(latencies)
     dut._log.info("width %d: %d divisions, latency mean %.3f max %d", width, len(pairs), mean, max(latencies))
 
@@ -113,12 +116,12 @@ async def divider_ignores_start_while_busy(dut) -> None:
         assert int(dut.done.value) == 0
 
 
-@pytest.mark.parametrize("width", [8, 32])
-def test_divider(width: int) -> None:
+@pytest.mark.parametrize(("width", "den_width"), [(8, 8), (32, 32), (50, 33)])
+def test_divider(width: int, den_width: int) -> None:
     run_cocotb(
         "stepramp_divider",
         "test_divider",
-        build_dir(f"divider_w{width}"),
-        parameters={"G_WIDTH": width},
+        build_dir(f"divider_w{width}_{den_width}"),
+        parameters={"G_WIDTH": width, "G_DEN_WIDTH": den_width},
         extra_env={"N_PAIRS": "20000", "PAIR_SEED": "2026"},
     )

@@ -667,10 +667,10 @@ def test_engine_error_codes() -> None:
 DOC_BUDGET = {
     "register": 4,
     "decel seed": 6,
-    "accel step": {2**20: 28, 2**24: 32, 2**30: 38},
-    "soft stop in RUN": {20: 29, 1024: 35, 16384: 39},
-    "soft stop at sa - 1": {30: 29, 4096: 37},
-    "soft stop in ACCEL": {2**20: 52, 2**24: 60, 2**30: 72},
+    "accel step": {2**20: 19, 2**24: 21, 2**30: 24},
+    "soft stop in RUN": {20: 20, 1024: 23, 16384: 25},
+    "soft stop at sa - 1": {30: 20, 4096: 24},
+    "soft stop in ACCEL": {2**20: 35, 2**24: 39, 2**30: 45},
 }
 
 
@@ -699,8 +699,8 @@ def budget_cases() -> list[tuple[str, Plan, Stop | None, int | None]]:
         lambda c1: hand_plan(4, sa=1, sd=1, c_first=c1, decel_seed=50 * Q16),
         None,
     )
-    for a0 in (2**19, 2**20, 2**21, 2**24, 2**30, 2**47):  # k = 19, 20, 21, 24, 30, 47
-        k = recurrence_iterations(2 * a0, 5)
+    for a0 in (2**19, 2**20, 2**21, 2**24, 2**30, 2**47):  # k = 11, 11, 12, 13, 16, 24
+        k = recurrence_iterations(2 * a0)
         both_sides(
             f"accel step A_1 from A_0 = 2^{a0.bit_length() - 1} (k = {k})",
             8 + k,
@@ -709,9 +709,9 @@ def budget_cases() -> list[tuple[str, Plan, Stop | None, int | None]]:
             "hard",
         )
     # a decel step D_1 from D_2 (den 7) while the decel seed's interval (D_2 ticks) counts: late at pulse 2
-    for ticks in (27, 28):
-        need = 8 + recurrence_iterations(2 * ticks * Q16, 7)
-        assert need == 28
+    for ticks in (18, 19):
+        need = 8 + recurrence_iterations(2 * ticks * Q16)
+        assert need == 19
         late = 2 if ticks < need else None
         cases.append(
             (
@@ -732,7 +732,7 @@ def budget_cases() -> list[tuple[str, Plan, Stop | None, int | None]]:
     )
     # with m = 2, D_1 = D + 2D div 7: from a register as D at E + 9 + k
     for ticks in (20, 1024, 16384):
-        k = recurrence_iterations(2 * ticks * Q16, 7)
+        k = recurrence_iterations(2 * ticks * Q16)
         both_sides(
             f"soft stop in RUN, D = cruise = {ticks} ticks (k = {k})",
             9 + k,
@@ -741,7 +741,7 @@ def budget_cases() -> list[tuple[str, Plan, Stop | None, int | None]]:
             "soft",
         )
     for ticks in (30, 4096):
-        k = recurrence_iterations(2 * ticks * Q16, 7)
+        k = recurrence_iterations(2 * ticks * Q16)
         both_sides(
             f"soft stop at pulse sa - 1, D = c_sa = {ticks} ticks (k = {k})",
             9 + k,
@@ -754,7 +754,7 @@ def budget_cases() -> list[tuple[str, Plan, Stop | None, int | None]]:
     # ... and from an accel step as D (two divisions) at E + 13 + k1 + k2
     for a0 in (2**20, 2**24, 2**30):
         a1 = a0 - 2 * a0 // 5
-        k1, k2 = recurrence_iterations(2 * a0, 5), recurrence_iterations(2 * a1, 7)
+        k1, k2 = recurrence_iterations(2 * a0), recurrence_iterations(2 * a1)
         both_sides(
             f"soft stop in ACCEL, D = A_1 from A_0 = 2^{a0.bit_length() - 1} (k1 + k2 = {k1} + {k2})",
             13 + k1 + k2,
@@ -767,7 +767,7 @@ def budget_cases() -> list[tuple[str, Plan, Stop | None, int | None]]:
 
 def test_engine_latency_budget() -> None:
     """The latency budget of docs/stepramp_engine.md at its edges (PRESCALE 1): one clock less than the budget of
-    the next value (a register, the decel seed, an accel step with k = 19 .. 47, a decel step, the soft-stop
+    the next value (a register, the decel seed, an accel step with k = 11 .. 24, a decel step, the soft-stop
     alternative from a register or from an accel step) ends the move with LATE at the pulse that needed it (that
     pulse emitted), the budget itself runs the move as the model says. Thresholds from the docs' formulas with k
     from the operands (and equal to the docs' table where it has the case), edges from the model."""

@@ -37,21 +37,24 @@ class Division:
 
 
 def divider_latency(numerator: int, denominator: int) -> int:
-    """Documented latency: 1 when D = 0 or msb(N) < msb(D) (N = 0 included), else 1 + msb(N) - msb(D) + 1 (N < D
-    with equal msb included: the alignment compares only the msb indices)."""
-    if denominator == 0 or numerator == 0 or msb(numerator) < msb(denominator):
+    """Documented latency: 1 when D = 0 or N = 0, else 1 + floor(msb(N) / 2) + 1 (radix 4: one iteration per
+    numerator bit pair from the pair that holds its most significant '1' down; the quotient has no '1' above it)."""
+    if denominator == 0 or numerator == 0:
         return 1
-    return 1 + msb(numerator) - msb(denominator) + 1
+    return 1 + msb(numerator) // 2 + 1
 
 
-def divide(numerator: int, denominator: int, width: int) -> Division:
-    """What the divider answers for numerator / denominator at a given width."""
+def divide(numerator: int, denominator: int, width: int, den_width: int | None = None) -> Division:
+    """What the divider answers for numerator / denominator: a width-bit numerator and quotient, a den_width-bit
+    denominator and remainder (den_width defaults to width). On D = 0 the quotient is all ones and the remainder
+    the numerator's low den_width bits."""
+    den_width = width if den_width is None else den_width
     limit = 1 << width
-    if not (0 <= numerator < limit and 0 <= denominator < limit):
-        raise ValueError(f"operands {numerator}, {denominator} do not fit in {width} bits")
+    if not (0 <= numerator < limit and 0 <= denominator < 1 << den_width):
+        raise ValueError(f"operands {numerator}, {denominator} do not fit in {width} / {den_width} bits")
     latency = divider_latency(numerator, denominator)
     if denominator == 0:
-        return Division(limit - 1, numerator, True, latency)
+        return Division(limit - 1, numerator % (1 << den_width), True, latency)
     q, r = divmod(numerator, denominator)
     return Division(q, r, False, latency)
 
@@ -102,11 +105,12 @@ def iter_msb_pairs(width: int) -> Iterator[tuple[int, int]]:
 RAMP_VALUE_LIMIT = 1 << 48
 
 
-def recurrence_iterations(numerator: int, denominator: int) -> int:
-    """k, the divider iterations of one recurrence step: msb(num) - msb(den) + 1, or 0 when msb(num) < msb(den)."""
-    if numerator == 0 or msb(numerator) < msb(denominator):
+def recurrence_iterations(numerator: int) -> int:
+    """k, the divider iterations of one recurrence step: floor(msb(num) / 2) + 1, or 0 when num = 0 (the
+    denominator, never 0 here, does not change it)."""
+    if numerator == 0:
         return 0
-    return msb(numerator) - msb(denominator) + 1
+    return msb(numerator) // 2 + 1
 
 
 @dataclass(frozen=True)
@@ -126,7 +130,7 @@ def next_delay(seed: bool, decel: bool, index: int, value: int, remainder: int) 
     decel (answer D_m, m = index):  num = 2 D_(m+1) + r, den = 4m + 3, D_m = D_(m+1) + num div den
 
     (docs/algorithm.md with the answer's index; 4m + 3 is the spec's 4m' - 1, m' = m + 1), registered 2 + k edges
-    after the sampling edge, k = recurrence_iterations(num, den).
+    after the sampling edge, k = recurrence_iterations(num).
     """
     if seed:
         return NextDelayAnswer(value, 0, False, 0)
@@ -134,6 +138,4 @@ def next_delay(seed: bool, decel: bool, index: int, value: int, remainder: int) 
     denominator = 4 * index + (3 if decel else 1)
     q, r = divmod(numerator, denominator)
     result = value + q if decel else value - q
-    return NextDelayAnswer(
-        result, r, not 0 <= result < RAMP_VALUE_LIMIT, 2 + recurrence_iterations(numerator, denominator)
-    )
+    return NextDelayAnswer(result, r, not 0 <= result < RAMP_VALUE_LIMIT, 2 + recurrence_iterations(numerator))

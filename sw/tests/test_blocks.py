@@ -41,20 +41,29 @@ def test_divide_satisfies_the_division_identity() -> None:
 
 
 def test_divider_latency_formula() -> None:
-    # Trivial cases finish in the constant; otherwise one iteration per quotient bit position.
+    # Trivial cases finish in the constant; otherwise one iteration per numerator bit pair from its msb down.
     assert divider_latency(5, 0) == 1
-    assert divider_latency(3, 7) == 1  # msb(N) < msb(D)
-    assert divider_latency(5, 7) == 2  # N < D with equal msb: one iteration gives quotient 0
     assert divider_latency(0, 7) == 1
-    assert divider_latency(7, 7) == 2
+    assert divider_latency(1, 1) == 2
+    assert divider_latency(3, 7) == 2  # N < D still iterates over N's bit pairs: quotient 0
+    assert divider_latency(7, 7) == 3  # msb 2: pairs 1 and 0
     assert divider_latency(8, 7) == 3
     assert divider_latency(16, 7) == 4
-    assert divider_latency((1 << 32) - 1, 1) == 33
-    assert max(divider_latency(n, d) for n, d in iter_msb_pairs(32)) == 33
-    # Iterations cover exactly the quotient's bit positions.
+    assert divider_latency((1 << 32) - 1, 1) == 17
+    assert max(divider_latency(n, d) for n, d in iter_msb_pairs(32)) == 17
+    # The iterations cover every bit pair of the quotient (and of the numerator).
     for n, d in iter_msb_pairs(16):
-        if d and n >= d:
-            assert (n // d).bit_length() in (divider_latency(n, d) - 1, divider_latency(n, d) - 2)
+        if d and n:
+            assert (n // d).bit_length() <= n.bit_length() <= 2 * (divider_latency(n, d) - 1) <= n.bit_length() + 1
+
+
+def test_divide_narrow_denominator() -> None:
+    # A 50-bit numerator over a 33-bit denominator (the next-delay unit's shape); D = 0 keeps N's low bits.
+    assert divide((1 << 50) - 1, 5, 50, 33) == divide((1 << 50) - 1, 5, 50)
+    assert divide(1 << 40, 0, 50, 33).remainder == 0
+    assert divide((1 << 40) + 9, 0, 50, 33).remainder == 9
+    with pytest.raises(ValueError, match="do not fit"):
+        divide(1, 1 << 33, 50, 33)
 
 
 def test_corner_pairs_cover_the_issue_list() -> None:
