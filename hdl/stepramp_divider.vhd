@@ -5,8 +5,8 @@
 -- (radix 4: the partial remainder times 4 plus the next bit pair is compared with D, 2 D and 3 D at once, and the
 -- largest multiple that fits is subtracted). The quotient has no '1' above the numerator's most significant '1',
 -- so a priority encoder on the numerator gives the first bit pair worth an iteration: floor(msb(N) / 2) + 1
--- iterations. The partial remainder starts at 0 and takes the bit pairs in turn (picked by the iteration counter:
--- no barrel shifter), and it stays below D, so the subtractors are only G_DEN_WIDTH + 3 bits wide, not G_WIDTH.
+-- iterations. The partial remainder starts at 0 and takes the bit pairs in turn (picked by a one-hot select that
+-- shifts down: no barrel shifter), and it stays below D, so the subtractors are only G_DEN_WIDTH + 3 bits wide.
 --
 -- Latency, from the rising edge that samples start to the rising edge that raises done:
 --   1                            when D = 0 (div_zero = '1') or N = 0 (quotient 0, remainder 0)
@@ -53,13 +53,14 @@ architecture rtl of stepramp_divider is
   constant C_ALIGN : std_logic_vector(1 downto 0) := "01";
   constant C_ITER  : std_logic_vector(1 downto 0) := "10";
 
-  signal state    : std_logic_vector(1 downto 0);
-  signal num_r    : unsigned(2 * C_PAIRS - 1 downto 0);
-  signal den_r    : unsigned(G_DEN_WIDTH - 1 downto 0);
-  signal den3_r   : unsigned(G_DEN_WIDTH + 1 downto 0); -- 3 D
-  signal rem_r    : unsigned(G_DEN_WIDTH - 1 downto 0);
-  signal quo_r    : unsigned(G_WIDTH - 1 downto 0);
-  signal cnt_r    : unsigned(C_IDX_W - 1 downto 0);
+  signal state  : std_logic_vector(1 downto 0);
+  signal num_r  : unsigned(2 * C_PAIRS - 1 downto 0);
+  signal den_r  : unsigned(G_DEN_WIDTH - 1 downto 0);
+  signal den3_r : unsigned(G_DEN_WIDTH + 1 downto 0); -- 3 D
+  signal rem_r  : unsigned(G_DEN_WIDTH - 1 downto 0);
+  signal quo_r  : unsigned(G_WIDTH - 1 downto 0);
+  -- One-hot: the bit pair this iteration takes (the last iteration takes pair 0).
+  signal sel_r    : std_logic_vector(C_PAIRS - 1 downto 0);
   signal done_r   : std_logic;
   signal dz_r     : std_logic;
   signal num_msb  : std_logic_vector(C_IDX_W - 1 downto 0);
@@ -87,7 +88,10 @@ begin
 
   div_proc : process (clk) is
 
-    variable pair  : unsigned(1 downto 0);
+    variable pair : unsigned(1 downto 0);
+    -- The selected pair's high and low bit, one place per pair (all zero but the selected one).
+    variable hi_v  : std_logic_vector(C_PAIRS - 1 downto 0);
+    variable lo_v  : std_logic_vector(C_PAIRS - 1 downto 0);
     variable trial : unsigned(C_DW + 2 downto 0); -- 4 * remainder + pair, below 4 D (one spare bit: the sign below)
     variable d1    : unsigned(C_DW + 2 downto 0); -- trial - D
     variable d2    : unsigned(C_DW + 2 downto 0); -- trial - 2 D
@@ -111,10 +115,11 @@ begin
 
         when C_ALIGN =>
 
-          rem_r  <= (others => '0');
-          quo_r  <= (others => '0');
-          cnt_r  <= shift_right(unsigned(num_msb), 1);
-          den3_r <= ('0' & den_r & '0') + ("00" & den_r);
+          rem_r                                                <= (others => '0');
+          quo_r                                                <= (others => '0');
+          sel_r                                                <= (others => '0');
+          sel_r(to_integer(shift_right(unsigned(num_msb), 1))) <= '1';
+          den3_r                                               <= ('0' & den_r & '0') + ("00" & den_r);
           if (den_r = 0) then
             quo_r  <= (others => '1');
             rem_r  <= num_r(G_DEN_WIDTH - 1 downto 0);
@@ -130,13 +135,28 @@ begin
 
         when C_ITER =>
 
-          -- One radix-4 step per clock, bit pair cnt_r down to pair 0: the largest of 3 D, 2 D, D that fits.
-          pair(1) := num_r(2 * to_integer(cnt_r) + 1);
-          pair(0) := num_r(2 * to_integer(cnt_r));
-          trial   := '0' & rem_r & pair;
-          d1      := trial - ("000" & den_r);
-          d2      := trial - ("00" & den_r & '0');
-          d3      := trial - ('0' & den3_r);
+          -- One radix-4 step per clock, from the selected bit pair down to pair 0: the largest of 3 D, 2 D, D that
+          -- fits. The pair comes through an AND-OR of the one-hot select (a register), not a multiplexer decoded
+          -- from a counter.
+          for i in 0 to C_PAIRS - 1 loop
+
+            hi_v(i) := sel_r(i) and num_r(2 * i + 1);
+            lo_v(i) := sel_r(i) and num_r(2 * i);
+
+          end loop;
+
+          pair := "00";
+          if (unsigned(hi_v) /= 0) then
+            pair(1) := '1';
+          end if;
+          if (unsigned(lo_v) /= 0) then
+            pair(0) := '1';
+          end if;
+
+          trial := '0' & rem_r & pair;
+          d1    := trial - ("000" & den_r);
+          d2    := trial - ("00" & den_r & '0');
+          d3    := trial - ('0' & den3_r);
           if (d3(C_DW + 2) = '0') then
             rem_r <= d3(C_DW - 1 downto 0);
             quo_r <= quo_r(G_WIDTH - 3 downto 0) & "11";
@@ -151,11 +171,11 @@ begin
             quo_r <= quo_r(G_WIDTH - 3 downto 0) & "00";
           end if;
 
-          if (cnt_r = 0) then
+          if (sel_r(0) = '1') then
             done_r <= '1';
             state  <= C_IDLE;
           else
-            cnt_r <= cnt_r - 1;
+            sel_r <= '0' & sel_r(C_PAIRS - 1 downto 1);
           end if;
 
         when others =>
