@@ -10,6 +10,20 @@
 -- writing them during a move, or while a start is held back, only prepares the next move (shadowing). Sticky
 -- DONE/ERROR are set by the engine's strobes and cleared by writing 1; a set and a clear in the same cycle keep the
 -- flag set, so no event is lost.
+--
+-- Read-back RAM. The storage words (STEPS .. STOP_RATIO, DRIVE .. STEP_SPACE) are kept twice. The flip-flop copy
+-- (mem) drives the engine and the stepping logic, which take every word at once (the engine latches the whole move
+-- at START). A write-through shadow copy in an inferred RAM answers the bus reads, so there is no wide read
+-- multiplexer over the flip-flops (it cost about 600 iCE40 LUT4). The RAM is 32 words by 32 bits, indexed by the
+-- word address, with one write enable per byte lane and one read port registered and enabled by rd: its output
+-- register holds the read data of a storage word until the next read, like rdata_r, which holds the live words (ID,
+-- CTRL, STATUS, POSITION, CUR_DELAY, STEP_COUNT; 0 for an unmapped offset); ram_sel_r, loaded with them, picks one of
+-- the two. The RAM takes exactly the writes that reach mem (byte-merged and masked; not the refused ones). A RAM
+-- cannot be reset, so a flag per storage word (written) tells whether it was written since reset: until then a read
+-- returns the word's reset value through rdata_r, and the first write fills all four lanes of the RAM word (the lanes
+-- not enabled with the reset value, which mem still holds), so from then on the RAM word equals mem. A read and a
+-- write in one cycle read the old word, as mem does. ghdl synth makes it four 32 x 8 memories (one per lane); yosys
+-- maps each to an iCE40 SB_RAM40_4K (emulating the read-before-write in logic) or to an xc7 RAM32M.
 
 library ieee;
   use ieee.std_logic_1164.all;
@@ -79,15 +93,29 @@ architecture rtl of stepramp_regfile is
   -- The plain read/write words: the motion registers STEPS .. STOP_RATIO, and the stepping configuration DRIVE ..
   -- STEP_SPACE (written only while stopped). One register per word, indexed by word offset, reached with constant
   -- indices only (loops below), so no memory is inferred; the words in between are never written (constant 0).
+  -- ram is their read-back copy (header), indexed by the word address; only its storage words are ever read.
   constant C_FIRST_W      : natural := C_REG_STEPS / 4;
   constant C_LAST_MOVE_W  : natural := C_REG_STOP_RATIO / 4;
   constant C_FIRST_CFG_W  : natural := C_REG_DRIVE / 4;
   constant C_LAST_W       : natural := C_REG_STEP_SPACE / 4;
   constant C_ERR_CODE_MSB : natural := C_STATUS_ERR_CODE_LSB + C_STATUS_ERR_CODE_W - 1;
+  constant C_WORDS        : natural := 2 ** (C_ADDR_BITS - 2);
 
   type reg_array_t is array (C_FIRST_W to C_LAST_W) of std_logic_vector(31 downto 0);
 
+  type ram_t is array (0 to C_WORDS - 1) of std_logic_vector(31 downto 0);
+
   signal mem : reg_array_t;
+
+  -- The read-back RAM: its port (word address, lane write enables, write data) and registered read data; written
+  -- tells, per storage word, whether it was written since reset; ram_sel_r picks ram_q over rdata_r for the read.
+  signal ram       : ram_t;
+  signal ram_addr  : natural range 0 to C_WORDS - 1;
+  signal ram_we    : std_logic_vector(3 downto 0);
+  signal ram_wdata : std_logic_vector(31 downto 0);
+  signal ram_q     : std_logic_vector(31 downto 0);
+  signal written   : std_logic_vector(C_FIRST_W to C_LAST_W);
+  signal ram_sel_r : std_logic;
 
   signal irq_done_en  : std_logic;
   signal enable_r     : std_logic;
@@ -182,12 +210,43 @@ architecture rtl of stepramp_regfile is
 
   end function storage_mask;
 
+  -- Reset value of a storage register.
+  function reset_value (
+    w : natural
+  ) return std_logic_vector is
+  begin
+
+    if (w = word(C_REG_PRESCALE) or w = word(C_REG_STEP_WIDTH) or w = word(C_REG_STEP_SPACE)) then
+      return x"00000001";
+    else
+      return x"00000000";
+    end if;
+
+  end function reset_value;
+
+  -- v when c, else 0 (the terms of an AND-OR multiplexer).
+  function gate (
+    v : std_logic_vector(31 downto 0);
+    c : boolean
+  ) return std_logic_vector is
+  begin
+
+    if (c) then
+      return v;
+    else
+      return x"00000000";
+    end if;
+
+  end function gate;
+
 begin
 
   bus_proc : process (clk) is
 
     variable w        : natural range 0 to 2 ** (C_ADDR_BITS - 2) - 1;
     variable rd_v     : std_logic_vector(31 downto 0);
+    variable ctrl_v   : std_logic_vector(31 downto 0);
+    variable stat_v   : std_logic_vector(31 downto 0);
     variable mapped   : boolean;
     variable new_ctrl : std_logic_vector(31 downto 0);
     variable clr      : std_logic_vector(31 downto 0);
@@ -222,7 +281,8 @@ begin
           for i in mem'range loop
 
             if (i = w) then
-              mem(i) <= merge(mem(i), wdata, be) and storage_mask(i);
+              mem(i)     <= merge(mem(i), wdata, be) and storage_mask(i);
+              written(i) <= '1';
             end if;
 
           end loop;
@@ -258,42 +318,43 @@ begin
       end if;
 
       if (rd = '1') then
-        ack_r <= '1';
-        rd_v  := (others => '0');
+        ack_r     <= '1';
+        ram_sel_r <= '0';
 
         if (not mapped) then
           err_r <= '1';
-        elsif (is_storage(w)) then
-
-          for i in mem'range loop
-
-            if (i = w) then
-              rd_v := mem(i);
-            end if;
-
-          end loop;
-
-        elsif (w = word(C_REG_ID)) then
-          rd_v := C_ID_VALUE;
-        elsif (w = word(C_REG_CTRL)) then
-          rd_v(C_CTRL_IRQ_DONE_EN_LSB)  := irq_done_en;
-          rd_v(C_CTRL_IRQ_ERROR_EN_LSB) := irq_error_en;
-          rd_v(C_CTRL_ENABLE_LSB)       := enable_r;
-        elsif (w = word(C_REG_STATUS)) then
-          rd_v(C_STATUS_STATE_LSB + 1 downto C_STATUS_STATE_LSB) := eng_state;
-          rd_v(C_STATUS_BUSY_LSB)                                := eng_busy;
-          rd_v(C_STATUS_DIR_LSB)                                 := eng_dir;
-          rd_v(C_STATUS_DONE_LSB)                                := done_flag;
-          rd_v(C_STATUS_ERROR_LSB)                               := error_flag;
-          rd_v(C_STATUS_DIR_FAULT_LSB)                           := dir_fault;
-          rd_v(C_ERR_CODE_MSB downto C_STATUS_ERR_CODE_LSB)      := err_code_r;
-        elsif (w = word(C_REG_POSITION)) then
-          rd_v := eng_position;
-        elsif (w = word(C_REG_CUR_DELAY)) then
-          rd_v := eng_cur_delay;
-        elsif (w = word(C_REG_STEP_COUNT)) then
-          rd_v(30 downto 0) := eng_step_count;
         end if;
+
+        -- A storage word comes from the RAM once written since reset, before that as its reset value from rdata_r.
+        for i in written'range loop
+
+          if (i = w) then
+            ram_sel_r <= written(i);
+          end if;
+
+        end loop;
+
+        -- The live words, or a storage word's reset value: at most one term is selected (none for an unmapped
+        -- offset), so an AND-OR multiplexer, smaller than an if chain.
+        ctrl_v := (others => '0');
+        stat_v := (others => '0');
+
+        ctrl_v(C_CTRL_IRQ_DONE_EN_LSB)  := irq_done_en;
+        ctrl_v(C_CTRL_IRQ_ERROR_EN_LSB) := irq_error_en;
+        ctrl_v(C_CTRL_ENABLE_LSB)       := enable_r;
+
+        stat_v(C_STATUS_STATE_LSB + 1 downto C_STATUS_STATE_LSB) := eng_state;
+        stat_v(C_STATUS_BUSY_LSB)                                := eng_busy;
+        stat_v(C_STATUS_DIR_LSB)                                 := eng_dir;
+        stat_v(C_STATUS_DONE_LSB)                                := done_flag;
+        stat_v(C_STATUS_ERROR_LSB)                               := error_flag;
+        stat_v(C_STATUS_DIR_FAULT_LSB)                           := dir_fault;
+        stat_v(C_ERR_CODE_MSB downto C_STATUS_ERR_CODE_LSB)      := err_code_r;
+
+        rd_v := gate(reset_value(w), is_storage(w)) or gate(C_ID_VALUE, w = word(C_REG_ID)) or
+                gate(ctrl_v, w = word(C_REG_CTRL)) or gate(stat_v, w = word(C_REG_STATUS)) or
+                gate(eng_position, w = word(C_REG_POSITION)) or gate(eng_cur_delay, w = word(C_REG_CUR_DELAY)) or
+                gate('0' & eng_step_count, w = word(C_REG_STEP_COUNT));
 
         rdata_r <= rd_v;
       end if;
@@ -341,6 +402,8 @@ begin
         error_flag   <= '0';
         err_code_r   <= C_ERR_NONE;
         rdata_r      <= (others => '0');
+        ram_sel_r    <= '0';
+        written      <= (others => '0');
 
         for i in mem'range loop
 
@@ -356,7 +419,65 @@ begin
 
   end process bus_proc;
 
-  rdata <= rdata_r;
+  -- The RAM's write port: the storage writes that bus_proc accepts into mem, with the same byte merge and mask. A
+  -- word's first write since reset enables every lane, the disabled ones taking the reset value (what mem holds).
+  ram_addr <= to_integer(unsigned(addr(C_ADDR_BITS - 1 downto 2)));
+
+  ram_wr_proc : process (wr, ram_addr, wdata, be, eng_busy, written) is
+
+    variable fresh : std_logic;
+
+  begin
+
+    fresh := '0';
+
+    for i in written'range loop
+
+      if (i = ram_addr) then
+        fresh := not written(i);
+      end if;
+
+    end loop;
+
+    ram_wdata <= merge(reset_value(ram_addr), wdata, be) and storage_mask(ram_addr);
+    ram_we    <= (others => '0');
+
+    if (wr = '1' and is_storage(ram_addr) and not (is_config(ram_addr) and eng_busy = '1')) then
+
+      for b in 0 to 3 loop
+
+        ram_we(b) <= be(b) or fresh;
+
+      end loop;
+
+    end if;
+
+  end process ram_wr_proc;
+
+  -- The RAM: a write port with one enable per byte lane, and a read port registered and enabled by rd, so ram_q
+  -- holds the last read until the next, like rdata_r; a read in the cycle of a write reads the old word. No reset.
+  ram_proc : process (clk) is
+  begin
+
+    if rising_edge(clk) then
+
+      for b in 0 to 3 loop
+
+        if (ram_we(b) = '1') then
+          ram(ram_addr)(8 * b + 7 downto 8 * b) <= ram_wdata(8 * b + 7 downto 8 * b);
+        end if;
+
+      end loop;
+
+      if (rd = '1') then
+        ram_q <= ram(ram_addr);
+      end if;
+    end if;
+
+  end process ram_proc;
+
+  rdata <= ram_q when ram_sel_r = '1' else
+           rdata_r;
   ack   <= ack_r;
   err   <= err_r;
   irq   <= irq_r;
