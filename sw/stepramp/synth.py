@@ -128,7 +128,13 @@ def ice40_summary(cells: dict[str, int]) -> dict[str, int]:
         "lut4": cells.get("SB_LUT4", 0),
         "ff": sum(n for name, n in cells.items() if name.startswith("SB_DFF")),
         "carry": cells.get("SB_CARRY", 0),
+        # 4 kbit block RAMs (the register file's read-back copy)
+        "ebr": sum(n for name, n in cells.items() if name.startswith("SB_RAM40")),
     }
+
+
+#: LUT sites of the xc7 distributed-RAM cells (a RAM32M is four LUT6 in a SLICEM, and so on).
+XC7_LUTRAM_SITES = {"RAM32M": 4, "RAM64M": 4, "RAM32X1D": 2, "RAM64X1D": 2, "RAM32X1S": 1, "RAM64X1S": 1}
 
 
 _PORT = re.compile(r"(input|output)\s+(?:\[(\d+):(\d+)\]\s+)?(\w+)")
@@ -240,6 +246,8 @@ def xc7(top: str, verilog: Path, out: Path) -> dict[str, int]:
     return {
         "lut": sum(n for name, n in cells.items() if re.fullmatch(r"LUT\d", name)),
         "ff": sum(n for name, n in cells.items() if re.fullmatch(r"FD[A-Z]*", name)),
+        # LUTs used as memory (not in "lut"; Vivado's "Slice LUTs" counts both)
+        "lutram": sum(XC7_LUTRAM_SITES.get(name, 0) * n for name, n in cells.items()),
     }
 
 
@@ -290,14 +298,15 @@ def _fmax(entry: dict[str, Any]) -> str:
 
 def markdown(report: dict[str, Any]) -> str:
     lines = [
-        "| top | iCE40 HX8K LUT4 | FF | carry | HX8K fmax (MHz) | UP5K fmax (MHz) | xc7 LUT | xc7 FF |",
-        "|---|---|---|---|---|---|---|---|",
+        "| top | iCE40 HX8K LUT4 | FF | carry | EBR | HX8K fmax (MHz) | UP5K fmax (MHz) | xc7 LUT | xc7 LUTRAM | "
+        "xc7 FF |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for top, e in report.items():
         hx, up, x = e["ice40_hx8k"], e["ice40_up5k"], e["xc7"]
         lines.append(
-            f"| {top} | {hx['lut4']} | {hx['ff']} | {hx['carry']} | {_fmax(hx)} | {_fmax(up)} | "
-            f"{x['lut']} | {x['ff']} |"
+            f"| {top} | {hx['lut4']} | {hx['ff']} | {hx['carry']} | {hx.get('ebr', 0)} | {_fmax(hx)} | {_fmax(up)} | "
+            f"{x['lut']} | {x.get('lutram', 0)} | {x['ff']} |"
         )
     for top, e in report.items():
         lines += [
