@@ -45,8 +45,6 @@ architecture rtl of stepramp_divider is
   constant C_IDX_W : positive := clog2(G_WIDTH);
   -- The numerator as bit pairs: padded to an even width.
   constant C_PAIRS : positive := (G_WIDTH + 1) / 2;
-  -- The partial remainder times 4 plus a bit pair (below 4 D), and a trial difference with its sign.
-  constant C_DW : positive := G_DEN_WIDTH;
 
   -- State encoding as constants (not an enum) so that GHDL's VPI shows it as a plain vector.
   constant C_IDLE  : std_logic_vector(1 downto 0) := "00";
@@ -90,12 +88,13 @@ begin
 
     variable pair : unsigned(1 downto 0);
     -- The selected pair's high and low bit, one place per pair (all zero but the selected one).
-    variable hi_v  : std_logic_vector(C_PAIRS - 1 downto 0);
-    variable lo_v  : std_logic_vector(C_PAIRS - 1 downto 0);
-    variable trial : unsigned(C_DW + 2 downto 0); -- 4 * remainder + pair, below 4 D (one spare bit: the sign below)
-    variable d1    : unsigned(C_DW + 2 downto 0); -- trial - D
-    variable d2    : unsigned(C_DW + 2 downto 0); -- trial - 2 D
-    variable d3    : unsigned(C_DW + 2 downto 0); -- trial - 3 D
+    variable hi_v : std_logic_vector(C_PAIRS - 1 downto 0);
+    variable lo_v : std_logic_vector(C_PAIRS - 1 downto 0);
+    -- 4 * remainder + pair, below 4 D, with one spare bit: the sign of the trial differences below.
+    variable trial : unsigned(G_DEN_WIDTH + 2 downto 0);
+    variable d1    : unsigned(G_DEN_WIDTH + 2 downto 0); -- trial - D
+    variable d2    : unsigned(G_DEN_WIDTH + 2 downto 0); -- trial - 2 D
+    variable d3    : unsigned(G_DEN_WIDTH + 2 downto 0); -- trial - 3 D
 
   begin
 
@@ -157,17 +156,17 @@ begin
           d1    := trial - ("000" & den_r);
           d2    := trial - ("00" & den_r & '0');
           d3    := trial - ('0' & den3_r);
-          if (d3(C_DW + 2) = '0') then
-            rem_r <= d3(C_DW - 1 downto 0);
+          if (d3(G_DEN_WIDTH + 2) = '0') then
+            rem_r <= d3(G_DEN_WIDTH - 1 downto 0);
             quo_r <= quo_r(G_WIDTH - 3 downto 0) & "11";
-          elsif (d2(C_DW + 2) = '0') then
-            rem_r <= d2(C_DW - 1 downto 0);
+          elsif (d2(G_DEN_WIDTH + 2) = '0') then
+            rem_r <= d2(G_DEN_WIDTH - 1 downto 0);
             quo_r <= quo_r(G_WIDTH - 3 downto 0) & "10";
-          elsif (d1(C_DW + 2) = '0') then
-            rem_r <= d1(C_DW - 1 downto 0);
+          elsif (d1(G_DEN_WIDTH + 2) = '0') then
+            rem_r <= d1(G_DEN_WIDTH - 1 downto 0);
             quo_r <= quo_r(G_WIDTH - 3 downto 0) & "01";
           else
-            rem_r <= trial(C_DW - 1 downto 0);
+            rem_r <= trial(G_DEN_WIDTH - 1 downto 0);
             quo_r <= quo_r(G_WIDTH - 3 downto 0) & "00";
           end if;
 

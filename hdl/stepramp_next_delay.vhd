@@ -12,8 +12,9 @@
 --
 -- Timing: req is sampled at an edge e when busy = '0' (and flush = '0'). A seed is registered at e itself
 -- (ans_valid is '1' in the cycle after edge e). A recurrence step starts the divider at e; the divider raises done
--- at e + 1 + k (k = msb(num) + 1, or 0 when num = 0) and the answer is registered at e + 2 + k (ans_valid '1' in
--- the cycle after that edge). With a 48-bit value, num < 2^50, so k <= 50. ans_* hold until the next answer.
+-- at e + 1 + k (k = floor(msb(num) / 2) + 1 radix-4 iterations, or 0 when num = 0) and the answer is registered at
+-- e + 2 + k (ans_valid '1' in the cycle after that edge). With a 48-bit value, num < 2^50, so k <= 25. ans_* hold
+-- until the next answer.
 -- flush abandons a request in flight (it also resets the divider), so a new move never waits for an old division.
 
 library ieee;
