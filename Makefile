@@ -33,17 +33,17 @@ lint: setup
 	$(VENV)/bin/vsg -c vsg.yaml -f $(VHDL) -ap -of summary
 
 synth-check: setup
-	$(PY) -m stepramp.rtlcheck --out build/synth_check
+	$(PY) -m stepramp.tools.rtlcheck --out build/synth_check
 
 test: lint
 	$(BACKEND) $(PY) -m pytest -n $(JOBS) -rA --durations=5
 
 synth:
 	@scripts/bootstrap.sh $(VENV) synth
-	$(PY) -m stepramp.synth --out build/synth
+	$(PY) -m stepramp.tools.synth --out build/synth
 
 demo: setup
-	$(BACKEND) $(PY) -m stepramp.demo --out build/demo
+	$(BACKEND) $(PY) -m stepramp.tools.demo --out build/demo
 
 shell: setup
 	$(BACKEND) $(VENV)/bin/stepramp shell

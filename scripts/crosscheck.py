@@ -17,9 +17,9 @@ import sys
 import time
 from pathlib import Path
 
-from stepramp.ideal import pulse_times
-from stepramp.model import tick_times
-from stepramp.plan import plan_move
+from stepramp.board.plan import plan_move
+from stepramp.models.engine import tick_times
+from stepramp.models.ideal import pulse_times
 
 BIN = Path(sys.executable).parent / "stepramp"
 

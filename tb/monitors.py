@@ -13,7 +13,7 @@ PWM duty measurement samples the pins clock by clock, for one carrier period now
   from the STEP pulses and DIR (so the electrical position follows the step count in both directions); in PWM mode
   the polarity at every step and the duty measured over a carrier period now and then.
 
-The rules come from stepramp.stepper (the model), never from the RTL. Times are converted to clock periods
+The rules come from stepramp.models.stepping (the model), never from the RTL. Times are converted to clock periods
 (tbutil.CLK_PERIOD_NS unless told otherwise).
 """
 
@@ -26,7 +26,7 @@ import cocotb
 from cocotb.triggers import ClockCycles, ReadOnly, RisingEdge
 from cocotb.utils import get_sim_time
 
-from stepramp import stepper as sm
+from stepramp.models import stepping as sm
 from tbutil import CLK_PERIOD_NS
 
 
@@ -200,9 +200,9 @@ class ShootThroughMonitor(Monitor):
 
 class ElectricalMonitor(Monitor):
     """The windings follow the step count: after each STEP rising edge, the position (start value +1 per STEP with
-    DIR = 0, -1 with DIR = 1) gives the expected winding state from stepramp.stepper.
+    DIR = 0, -1 with DIR = 1) gives the expected winding state from stepramp.models.stepping.
 
-    Every check is made `settle` clocks after the STEP rising edge (default: stepramp.stepper.winding_latency: 0
+    Every check is made `settle` clocks after the STEP rising edge (default: stepramp.models.stepping.winding_latency: 0
     for the on/off modes, 2 * duty_bits + 6 for PWM). On/off modes (0 .. 3, 5 .. 7): a1, a2, b1, b2 equal the
     model's levels. PWM mode (4): at every step the polarity (the input of the wrong sign is '0', an input with a
     duty of the full period is '1'); and after every `pwm_every`-th step (and at start) the on-clocks of each input
@@ -412,9 +412,9 @@ class MotionMonitors:
     def for_outputs(
         cls, dut: Any, outputs: Any, enable: bool, position: int, names: dict[str, str] | None = None
     ) -> MotionMonitors:
-        """Started monitors for a stepramp.driver.Outputs configuration (mode by name) and the current position, on
-        a top's pins (STEP and DIR are `step` and `dir` there; `names` may rename more)."""
-        from stepramp.driver import MODES
+        """Started monitors for a stepramp.board.driver.Outputs configuration (mode by name) and the current position,
+        on a top's pins (STEP and DIR are `step` and `dir` there; `names` may rename more)."""
+        from stepramp.board.driver import MODES
 
         return cls(
             dut,

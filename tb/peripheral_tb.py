@@ -4,7 +4,7 @@
 The bus master is stepramp/ipif.py's IpifMaster for the PLB-like top, or cocotbext-axi's AxiLiteMaster (wrapped to the
 driver's read/write interface) for the AXI4-Lite top; with `idle` the masters insert idle cycles and, on AXI,
 backpressure on every channel. The engine's own start edge (edge 0 of the model) is taken from the rising edge of
-the core's (engine's) busy, so step edges are compared with stepramp.model whatever the bus timing and whatever
+the core's (engine's) busy, so step edges are compared with stepramp.models.engine whatever the bus timing and whatever
 time the stepping logic holds a start back for DIR setup/hold.
 """
 
@@ -20,13 +20,13 @@ from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, First, RisingEdge, Timer
 
 from monitors import MotionMonitors
-from stepramp.driver import Outputs, Status, StepRamp
-from stepramp.gtkw import LAYOUTS, missing_in, signal_paths
-from stepramp.ipif import IpifError, IpifMaster
-from stepramp.model import last_edge
-from stepramp.plan import Plan, plan_move
-from stepramp.profiles import PROFILES_BY_NAME
-from stepramp.stepwatch import StepWatch
+from stepramp.board.driver import Outputs, Status, StepRamp
+from stepramp.board.plan import Plan, plan_move
+from stepramp.models.engine import last_edge
+from stepramp.sim.ipif import IpifError, IpifMaster
+from stepramp.sim.profiles import PROFILES_BY_NAME
+from stepramp.sim.stepwatch import StepWatch
+from stepramp.sim.waves import LAYOUTS, missing_in, signal_paths
 from tbutil import CLK_PERIOD_NS
 
 
@@ -171,7 +171,7 @@ class PeripheralTb:
         await First(RisingEdge(self.dut.irq), Timer(cycles * CLK_PERIOD_NS, unit="ns"))
 
     def edges_since(self, first_step: int, first_start: int) -> list[int]:
-        """STEP pin edges of a move in the model's convention (stepramp.stepwatch.StepWatch.since)."""
+        """STEP pin edges of a move in the model's convention (stepramp.sim.stepwatch.StepWatch.since)."""
         assert self.pins is not None, "reset() first"
         return self.pins.since(first_step, first_start)
 
@@ -192,8 +192,8 @@ async def reconfigure(tb: Any, outputs: Outputs, enable: bool) -> None:
     await drv.configure_outputs(outputs)
     await drv.set_enable(enable)
     tb.outputs, tb.enabled = outputs, enable
-    # The PWM duty follows a new mode after the serial multipliers (stepramp.stepper.winding_latency, < 40 clocks):
-    # let the outputs settle before the monitors look at them.
+    # The PWM duty follows a new mode after the serial multipliers (stepramp.models.stepping.winding_latency, < 40
+    # clocks): let the outputs settle before the monitors look at them.
     await ClockCycles(tb.clk, 100)
     tb._start_monitors(position=await drv.position())
 

@@ -3,12 +3,12 @@
 
 The two bus tops only adapt a bus to stepramp_core's register port (docs/stepramp_plb.md: one-cycle wr / rd strobes
 with addr, wdata and be; ack, with err for an unmapped offset and rdata for a read, one clock later). CoreMaster
-below is a master for that port with the driver's async read / write interface, so stepramp.driver.StepRamp
+below is a master for that port with the driver's async read / write interface, so stepramp.board.driver.StepRamp
 programs the core exactly as it programs a board; the master checks the port's timing on every access (no answer in
 the strobe's own cycle, ack in the next one, ack for one clock only) and watches ack and err for answers nobody
-asked for. Expected values come from stepramp.regmap (registers), stepramp.model (every STEP edge, stops),
-stepramp.stepper (windings, through the motion monitors of tb/monitors.py) and the rules of docs/stepramp_plb.md,
-never from the RTL.
+asked for. Expected values come from stepramp.board.regmap (registers), stepramp.models.engine (every STEP edge, stops),
+stepramp.models.stepping (windings, through the motion monitors of tb/monitors.py) and the rules of
+docs/stepramp_plb.md, never from the RTL.
 
 Tests (one simulation, one after the other):
 
@@ -17,16 +17,16 @@ Tests (one simulation, one after the other):
   before (byte enables, word addresses); then through the master: ID, every register's reset value, err on every
   unmapped offset;
 * motion_profiles: a trapezoid, a triangle, negative moves with a DIR change and DIR_TIMING set, PRESCALE 3 and 5,
-  programmed with the driver: every STEP rising edge equal to stepramp.model.edges, STATUS during the move,
+  programmed with the driver: every STEP rising edge equal to stepramp.models.engine.edges, STATUS during the move,
   POSITION and STEP_COUNT after it, DONE and irq (irq two clocks after the engine's busy falls, low one clock after
   the W1C clear, never without its enable);
 * soft_and_hard_stop: SOFT_STOP and HARD_STOP through CTRL in ACCEL, RUN and DECEL against
-  stepramp.model.edges_with_stop;
+  stepramp.models.engine.edges_with_stop;
 * windings: wave, full and half step follow every POSITION written, ENABLE off switches them off, and half-step and
   PWM moves with the electrical-position monitor on.
 
-The motion monitors (STEP width, DIR setup / hold, shoot-through, windings against stepramp.stepper) run in every
-motion test. About 4 ms of simulated time at a 10 ns clock.
+The motion monitors (STEP width, DIR setup / hold, shoot-through, windings against stepramp.models.stepping) run in
+every motion test. About 4 ms of simulated time at a 10 ns clock.
 """
 
 from __future__ import annotations
@@ -40,15 +40,23 @@ from cocotb.utils import get_sim_time
 
 from monitors import MotionMonitors, StepWidthMonitor
 from peripheral_tb import reconfigure
-from stepramp import stepper as sm
-from stepramp.driver import MODES, Outputs, StepRamp
-from stepramp.hdl import run_cocotb
-from stepramp.model import edges as model_edges
-from stepramp.model import edges_with_stop as model_edges_with_stop
-from stepramp.plan import Plan
-from stepramp.profiles import PROFILES_BY_NAME
-from stepramp.regmap import ADDR_BITS, ID_VALUE, REGISTERS, REGISTERS_BY_NAME, VERSION_MAJOR, VERSION_MINOR, offset
-from stepramp.stepwatch import StepWatch
+from stepramp.board.driver import MODES, Outputs, StepRamp
+from stepramp.board.plan import Plan
+from stepramp.board.regmap import (
+    ADDR_BITS,
+    ID_VALUE,
+    REGISTERS,
+    REGISTERS_BY_NAME,
+    VERSION_MAJOR,
+    VERSION_MINOR,
+    offset,
+)
+from stepramp.models import stepping as sm
+from stepramp.models.engine import edges as model_edges
+from stepramp.models.engine import edges_with_stop as model_edges_with_stop
+from stepramp.sim.profiles import PROFILES_BY_NAME
+from stepramp.sim.runner import run_cocotb
+from stepramp.sim.stepwatch import StepWatch
 from tbutil import CLK_PERIOD_NS, build_dir, cocotb
 
 PERIOD_PS = CLK_PERIOD_NS * 1000
@@ -85,7 +93,7 @@ class CoreMaster:
         self.dut = dut
         self.clk = dut.clk
         self.t0_ps = t0_ps
-        self.e0 = round(t0_ps / PERIOD_PS)  # edges numbered as stepramp.stepwatch.StepWatch numbers them
+        self.e0 = round(t0_ps / PERIOD_PS)  # edges numbered as stepramp.sim.stepwatch.StepWatch numbers them
         self.lock = Lock()
         self.strobe_edges: set[int] = set()
         self.last_edge = -1  # strobe edge of the last access
@@ -456,8 +464,9 @@ STOP_CASES = [
 
 @cocotb.test(timeout_time=5, timeout_unit="ms")
 async def soft_and_hard_stop(dut) -> None:
-    """SOFT_STOP and HARD_STOP written to CTRL in ACCEL, RUN and DECEL: every edge as stepramp.model.edges_with_stop
-    predicts for the edge the engine samples the request, POSITION and STEP_COUNT equal to the pulses seen."""
+    """SOFT_STOP and HARD_STOP written to CTRL in ACCEL, RUN and DECEL: every edge as
+    stepramp.models.engine.edges_with_stop predicts for the edge the engine samples the request, POSITION and
+    STEP_COUNT equal to the pulses seen."""
     tb = CoreTb(dut)
     await tb.reset()
     await tb.configure(Outputs(mode="half", step_width=4, dir_setup=12, dir_hold=6), enable=True)
@@ -508,7 +517,7 @@ async def soft_and_hard_stop(dut) -> None:
 
 @cocotb.test(timeout_time=3, timeout_unit="ms")
 async def windings(dut) -> None:
-    """The winding outputs follow POSITION (stepramp.stepper): every value written in wave, full and half step,
+    """The winding outputs follow POSITION (stepramp.models.stepping): every value written in wave, full and half step,
     off with ENABLE off; half-step and PWM moves with the electrical-position monitor on."""
     tb = CoreTb(dut)
     await tb.reset()

@@ -1,8 +1,9 @@
 # SPDX-License-Identifier: MIT
-"""`make demo`'s job (python -m stepramp.demo): the artefacts exist, and the report's numbers are those of the JSON.
+"""`make demo`'s job (python -m stepramp.tools.demo): the artefacts exist, and the report's numbers are those of
+the JSON.
 
-The figures are recomputed here from move.json's edges and the ideal trapezoid's closed form (stepramp.ideal), not
-taken from the demo's own summary; the PNG is checked by its header, the GTKWave layout by its dump file and the
+The figures are recomputed here from move.json's edges and the ideal trapezoid's closed form (stepramp.models.ideal),
+not taken from the demo's own summary; the PNG is checked by its header, the GTKWave layout by its dump file and the
 demo's own check of every layout signal against the simulator (report.json's missing_waveform_signals).
 """
 
@@ -17,10 +18,10 @@ import subprocess
 import sys
 from pathlib import Path
 
-from stepramp.ideal import ideal_move
-from stepramp.model import FIRST_PULSE_LATENCY
-from stepramp.model import edges as model_edges
-from stepramp.plan import plan_move
+from stepramp.board.plan import plan_move
+from stepramp.models.engine import FIRST_PULSE_LATENCY
+from stepramp.models.engine import edges as model_edges
+from stepramp.models.ideal import ideal_move
 
 
 def number(report: str, label: str) -> list[float]:
@@ -31,7 +32,7 @@ def number(report: str, label: str) -> list[float]:
 def test_demo_artefacts_and_report(tmp_path: Path) -> None:
     out = tmp_path / "demo"
     run = subprocess.run(
-        [sys.executable, "-m", "stepramp.demo", "--out", str(out)], capture_output=True, text=True, timeout=900
+        [sys.executable, "-m", "stepramp.tools.demo", "--out", str(out)], capture_output=True, text=True, timeout=900
     )
     assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
     for name in ("stepramp_demo.ghw", "stepramp_demo.gtkw", "profile.png", "report.txt", "move.json"):

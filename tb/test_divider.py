@@ -14,8 +14,8 @@ import pytest
 from cocotb.triggers import FallingEdge, RisingEdge, SimTimeoutError, with_timeout
 from cocotb.utils import get_sim_time
 
-from stepramp.blocks import divide, iter_msb_pairs
-from stepramp.hdl import run_cocotb
+from stepramp.models.blocks import divide, iter_msb_pairs
+from stepramp.sim.runner import run_cocotb
 from tbutil import CLK_PERIOD_NS, build_dir, cocotb, env_int, now_cycles, start_clock_and_reset
 
 

@@ -1,8 +1,8 @@
 # SPDX-License-Identifier: MIT
 """stepramp_engine against the bit-exact model: every step edge, the step count, the position, done.
 
-Each pytest test runs one GHDL simulation that plays a list of moves back to back (stepramp.enginetb drives and
-records, the checks are here). The expected edges come from stepramp.model, which sw/tests holds to the ideal
+Each pytest test runs one GHDL simulation that plays a list of moves back to back (stepramp.sim.engine_bench drives and
+records, the checks are here). The expected edges come from stepramp.models.engine, which sw/tests holds to the ideal
 trapezoid; nothing is taken from the RTL's own output.
 """
 
@@ -15,9 +15,10 @@ from typing import Any
 
 import pytest
 
-from stepramp.blocks import recurrence_iterations
-from stepramp.enginesim import SimResult, Stop, simulate
-from stepramp.model import (
+from stepramp.board.plan import Plan, plan_move
+from stepramp.board.regmap import ERROR_CODES
+from stepramp.models.blocks import recurrence_iterations
+from stepramp.models.engine import (
     FIRST_PULSE_LATENCY,
     edges_with_stop,
     first_space_fault,
@@ -28,11 +29,10 @@ from stepramp.model import (
     soft_stop_values,
     tick_times,
 )
-from stepramp.model import edges as model_edges
-from stepramp.model import phases as model_phases
-from stepramp.plan import Plan, plan_move
-from stepramp.profiles import PROFILES, PROFILES_BY_NAME, Profile, exact_plan
-from stepramp.regmap import ERROR_CODES
+from stepramp.models.engine import edges as model_edges
+from stepramp.models.engine import phases as model_phases
+from stepramp.sim.engine_sim import SimResult, Stop, simulate
+from stepramp.sim.profiles import PROFILES, PROFILES_BY_NAME, Profile, exact_plan
 from tbutil import build_dir
 
 CHUNKS = 4
@@ -433,7 +433,7 @@ def test_engine_step_spacing() -> None:
 
 # --------------------------------------------------------------------------------------------------------------
 # Error codes, the control inputs (pos_load, start, rst) and the latency budget (docs/stepramp_engine.md). The
-# expectations are the docs' tables written out in plain Python below, and stepramp.model.
+# expectations are the docs' tables written out in plain Python below, and stepramp.models.engine.
 # --------------------------------------------------------------------------------------------------------------
 Q16 = 1 << 16  # one tick in Q32.16
 Q32 = 1 << 32  # one tick in Q32.32
@@ -828,7 +828,7 @@ def test_engine_counters_per_pulse() -> None:
 
 
 def event(port: str, at_cycle: int, pos_value: int | None = None) -> dict[str, int | str]:
-    """An "events" entry of stepramp.enginetb: port '1' for the clock sampled by edge at_cycle of the move."""
+    """An "events" entry of stepramp.sim.engine_bench: port '1' for the clock sampled by edge at_cycle of the move."""
     out: dict[str, int | str] = {"port": port, "at_cycle": at_cycle}
     if pos_value is not None:
         out["pos_value"] = pos_value

@@ -2,10 +2,10 @@
 """The faults that adversarial tests found (issue 11), through both tops, each against an independent expectation:
 
 * a START held by the stepping logic (DIR hold / setup) runs the move of the moment START was written, whatever is
-  written during the hold, and the STEPS = -2^31 and PRESCALE = 0 checks judge those values (stepramp.model);
+  written during the hold, and the STEPS = -2^31 and PRESCALE = 0 checks judge those values (stepramp.models.engine);
 * pulses never merge on the STEP pin: a pulse closer than STEP_WIDTH + STEP_SPACE to the previous one stops the move
-  with error STEP_SPACE (stepramp.model.first_space_fault names it), and a start is held until its first pulse keeps
-  that distance from the previous move's last one;
+  with error STEP_SPACE (stepramp.models.engine.first_space_fault names it), and a start is held until its first pulse
+  keeps that distance from the previous move's last one;
 * a reset during a move never cuts a STEP pulse short, and what it does to DIR, ENABLE, the windings and POSITION is
   what docs/stepramp_plb.md says;
 * the core decodes word addresses: the low two address bits pick nothing (docs/registers.md).
@@ -22,13 +22,13 @@ from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge
 from cocotb.utils import get_sim_time
 
 from peripheral_tb import PeripheralTb
-from stepramp.driver import Outputs, StepRamp, StepRampError, plan_writes
-from stepramp.hdl import run_cocotb
-from stepramp.model import edges as model_edges
-from stepramp.model import first_space_fault, min_gap
-from stepramp.plan import Plan, plan_move
-from stepramp.profiles import PROFILES_BY_NAME, exact_plan
-from stepramp.regmap import REGISTERS, offset
+from stepramp.board.driver import Outputs, StepRamp, StepRampError, plan_writes
+from stepramp.board.plan import Plan, plan_move
+from stepramp.board.regmap import REGISTERS, offset
+from stepramp.models.engine import edges as model_edges
+from stepramp.models.engine import first_space_fault, min_gap
+from stepramp.sim.profiles import PROFILES_BY_NAME, exact_plan
+from stepramp.sim.runner import run_cocotb
 from tbutil import CLK_PERIOD_NS, build_dir, cocotb
 
 TOPS = ("stepramp_plb", "stepramp_axil")
@@ -177,7 +177,7 @@ async def pulses_never_merge(dut) -> None:
 @cocotb.test(timeout_time=TIMEOUT_MS, timeout_unit="ms")
 async def start_keeps_the_spacing_after_a_move(dut) -> None:
     """A START written right after a move's last pulse is held until the new pulse 0 is STEP_WIDTH + STEP_SPACE
-    after it (stepramp.stepper.gate_timing: exactly that distance here), so two moves' pulses never merge."""
+    after it (stepramp.models.stepping.gate_timing: exactly that distance here), so two moves' pulses never merge."""
     tb = make_tb(dut)
     await tb.reset()
     width, space = 200, 100

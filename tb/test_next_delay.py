@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: MIT
 """stepramp_next_delay alone: every answer's value, remainder, overflow flag and latency against plain Python
-integers (stepramp.blocks.next_delay: one step of the recurrence of docs/algorithm.md, or a seed load, with the
+integers (stepramp.models.blocks.next_delay: one step of the recurrence of docs/algorithm.md, or a seed load, with the
 latency docs/stepramp_engine.md gives: a seed is registered at the edge that samples req, a step 2 + k edges later,
 k = floor(msb(num) / 2) + 1, 0 when num = 0).
 
@@ -24,8 +24,8 @@ from typing import Any
 
 from cocotb.triggers import ClockCycles, FallingEdge, First, RisingEdge, Timer
 
-from stepramp.blocks import RAMP_VALUE_LIMIT, NextDelayAnswer, next_delay
-from stepramp.hdl import run_cocotb
+from stepramp.models.blocks import RAMP_VALUE_LIMIT, NextDelayAnswer, next_delay
+from stepramp.sim.runner import run_cocotb
 from tbutil import CLK_PERIOD_NS, build_dir, cocotb, env_int, now_cycles, start_clock_and_reset
 
 SEED_ENV = "NEXT_DELAY_SEED"

@@ -3,8 +3,8 @@
 
 stepramp_plb (PLB-like IPIF, stepramp/ipif.py master) and stepramp_axil (AXI4-Lite, cocotbext-axi master with idle
 cycles and backpressure on every channel) run the same tests: register behaviour (reset values, read/write, byte
-enables, bus errors, W1C, interrupt, shadowing, bad values) against the register map (stepramp.regmap), and motion
-(every profile, programmed through the bus by stepramp.driver.StepRamp) against the bit-exact model.
+enables, bus errors, W1C, interrupt, shadowing, bad values) against the register map (stepramp.board.regmap), and motion
+(every profile, programmed through the bus by stepramp.board.driver.StepRamp) against the bit-exact model.
 """
 
 from __future__ import annotations
@@ -20,13 +20,13 @@ import pytest
 from cocotb.triggers import ClockCycles, RisingEdge
 
 from peripheral_tb import BusError, PeripheralTb, profiles_limit_us
-from stepramp.driver import Outputs, StepRampError, plan_writes
-from stepramp.hdl import run_cocotb
-from stepramp.model import edges as model_edges
-from stepramp.model import edges_with_stop as model_edges_with_stop
-from stepramp.plan import Plan, plan_move
-from stepramp.profiles import PROFILES, PROFILES_BY_NAME
-from stepramp.regmap import ERROR_CODES, ID_VALUE, REGISTERS, REGISTERS_BY_NAME, RW, offset
+from stepramp.board.driver import Outputs, StepRampError, plan_writes
+from stepramp.board.plan import Plan, plan_move
+from stepramp.board.regmap import ERROR_CODES, ID_VALUE, REGISTERS, REGISTERS_BY_NAME, RW, offset
+from stepramp.models.engine import edges as model_edges
+from stepramp.models.engine import edges_with_stop as model_edges_with_stop
+from stepramp.sim.profiles import PROFILES, PROFILES_BY_NAME
+from stepramp.sim.runner import run_cocotb
 from tbutil import build_dir, cocotb
 
 ERR = {name: code for name, (code, _) in ERROR_CODES.items()}

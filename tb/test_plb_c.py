@@ -2,8 +2,8 @@
 """The peripheral programmed with register values computed by the C driver library (sw/c), loaded with ctypes.
 
 For a few profiles, stepramp_plan_move of build/libstepramp.so plans the move; its stepramp_plan_t becomes a
-stepramp.plan.Plan, which the Python driver writes over the bus (StepRamp.program / start / wait_done through
-peripheral_tb.PeripheralTb): the PLB-like top stepramp_plb with stepramp.ipif's master, and the AXI4-Lite top too.
+stepramp.board.plan.Plan, which the Python driver writes over the bus (StepRamp.program / start / wait_done through
+peripheral_tb.PeripheralTb): the PLB-like top stepramp_plb with stepramp.sim.ipif's master, and the AXI4-Lite top too.
 The STEP edges must be those of the bit-exact model for that plan, and the position must follow. Then the C driver
 itself: the bus writes stepramp_move makes into the fake register bank (sw/c/stepramp_fakebus.c) are replayed on the
 bus, byte enables included. The C library is built by the pytest function below (``make -C sw/c lib``).
@@ -21,12 +21,12 @@ from typing import Any
 import pytest
 
 from peripheral_tb import PeripheralTb, profiles_limit_us
-from stepramp import clib
-from stepramp.hdl import run_cocotb
-from stepramp.model import edges as model_edges
-from stepramp.plan import Plan, plan_move
-from stepramp.profiles import PROFILES_BY_NAME, Profile
-from stepramp.regmap import offset
+from stepramp.board.plan import Plan, plan_move
+from stepramp.board.regmap import offset
+from stepramp.models.engine import edges as model_edges
+from stepramp.sim.profiles import PROFILES_BY_NAME, Profile
+from stepramp.sim.runner import run_cocotb
+from stepramp.tools import clib
 from tbutil import REPO, build_dir, cocotb
 
 C_DIR = REPO / "sw" / "c"

@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: MIT
 """stepramp_precompute alone (issue 12): the bench plays the sequencer (stepramp_engine) in Python and checks, at
-every pulse edge, the next interval and the soft-stop alternative the precompute offers against stepramp.model.
+every pulse edge, the next interval and the soft-stop alternative the precompute offers against stepramp.models.engine.
 
 The sequencer's side, with the timing of docs/stepramp_engine.md ("Timing", "Theory of operation"): the move inputs
 (l = N - 1, sa, ... stop_ratio from a Plan) are held from before edge 0; begin_move at edge 0, setup at edge 1, pulse
@@ -15,12 +15,12 @@ budget" needs for the plans used here (a recurrence step 8 + k <= 56, the altern
 Checked just before each pulse edge p (the interval now counting is p; pulse 0 ends none), from the model only:
 
 * nxt_ok = '1', nxt_d = the ticks of interval p + 1 (the fractional-carry accumulator over
-  stepramp.model.interval_values, equal to the differences of tick_times), nxt_state = its phase
-  (stepramp.model.phases), nxt_last = '1' exactly for interval L, nxt_code = 0 (ZERO_TICKS for an interval of 0
+  stepramp.models.engine.interval_values, equal to the differences of tick_times), nxt_state = its phase
+  (stepramp.models.engine.phases), nxt_last = '1' exactly for interval L, nxt_code = 0 (ZERO_TICKS for an interval of 0
   ticks, from a hand-made plan);
-* the soft-stop alternative "decided at pulse p" for p >= 1 (stepramp.model.soft_stop_length): None -> alt_kind
+* the soft-stop alternative "decided at pulse p" for p >= 1 (stepramp.models.engine.soft_stop_length): None -> alt_kind
   "00"; 0 -> "01"; m >= 1 -> "10" with alt_ok = '1', alt_d = the ticks of the stop's first interval (accumulator
-  over stepramp.model.soft_stop_values), alt_one = (m = 1), alt_code = 0. At pulse 0 (no interval counts: the
+  over stepramp.models.engine.soft_stop_values), alt_one = (m = 1), alt_code = 0. At pulse 0 (no interval counts: the
   sequencer itself ends a move whose stop came before pulse 0), at the last pulse and once a stop is in effect:
   "00";
 * stop_mode = '1' exactly after a take_alt of the current move;
@@ -36,7 +36,7 @@ Moves marked early (the cocotb test early_pulses) pulse as soon as the precomput
 nxt_ok rises (after alt_ok too where the soft stop is taken). There nxt_ok and alt_ok must rise exactly at the edge
 "Latency budget" gives (a register ready for a pulse at E + 4, the decel seed E + 6, a recurrence step E + 8 + k,
 the alternative 3 + 2 + k after the normal value, c_last as the alternative 1 after it; k from
-stepramp.blocks.next_delay on the model's values), and an alternative still in the making at a pulse edge is
+stepramp.models.blocks.next_delay on the model's values), and an alternative still in the making at a pulse edge is
 dropped without delaying or disturbing the next interval.
 
 The cocotb tests: plan_intervals (trapezoids with m0 = 0 and 1, a cruise of one and two intervals, sd = L,
@@ -66,13 +66,22 @@ from typing import Any
 from cocotb.triggers import ClockCycles, FallingEdge, First, RisingEdge
 from cocotb.utils import get_sim_time
 
-from stepramp.blocks import next_delay
-from stepramp.hdl import run_cocotb
-from stepramp.model import ACCEL, DECEL, RUN, interval_values, phase_of, soft_stop_length, soft_stop_values, tick_times
-from stepramp.model import phases as model_phases
-from stepramp.plan import FRAC_CRUISE, FRAC_RAMP, MIN_INTERVAL_CLKS, Plan, plan_move
-from stepramp.profiles import PROFILES_BY_NAME, Profile
-from stepramp.regmap import ERROR_CODES
+from stepramp.board.plan import FRAC_CRUISE, FRAC_RAMP, MIN_INTERVAL_CLKS, Plan, plan_move
+from stepramp.board.regmap import ERROR_CODES
+from stepramp.models.blocks import next_delay
+from stepramp.models.engine import (
+    ACCEL,
+    DECEL,
+    RUN,
+    interval_values,
+    phase_of,
+    soft_stop_length,
+    soft_stop_values,
+    tick_times,
+)
+from stepramp.models.engine import phases as model_phases
+from stepramp.sim.profiles import PROFILES_BY_NAME, Profile
+from stepramp.sim.runner import run_cocotb
 from tbutil import CLK_PERIOD_NS, build_dir, cocotb, start_clock_and_reset
 
 SEED_ENV = "PRECOMPUTE_SEED"
@@ -96,7 +105,7 @@ UNIT_READY = 6
 
 
 # ---------------------------------------------------------------------------------------------------------------
-# Expected values (stepramp.model only)
+# Expected values (stepramp.models.engine only)
 # ---------------------------------------------------------------------------------------------------------------
 
 
@@ -151,11 +160,11 @@ def intervals_of(values: list[int], states: list[str], ready: list[int | None]) 
 class Expect:
     """What a plan makes the precompute offer: the intervals 1 .. L, and per pulse the alternative.
 
-    The values and ticks come from stepramp.model. The latencies are the formulas of "Latency budget": a register
-    is ready for a pulse at E + 4, a value from the next-delay unit at E + 6 + its latency (a seed: 0, a step:
-    2 + k, stepramp.blocks.next_delay), the alternative 3 + its latency after the normal value of the same interval
-    (m = 1, c_last: 1 after). The recurrence requests are run here on stepramp.blocks.next_delay and each answer is
-    held equal to the model's value, so the latencies belong to the model's values."""
+    The values and ticks come from stepramp.models.engine. The latencies are the formulas of "Latency budget": a
+    register is ready for a pulse at E + 4, a value from the next-delay unit at E + 6 + its latency (a seed: 0, a step:
+    2 + k, stepramp.models.blocks.next_delay), the alternative 3 + its latency after the normal value of the same
+    interval (m = 1, c_last: 1 after). The recurrence requests are run here on stepramp.models.blocks.next_delay and
+    each answer is held equal to the model's value, so the latencies belong to the model's values."""
 
     def __init__(self, plan: Plan) -> None:
         self.plan = plan
@@ -251,7 +260,7 @@ class Move:
 
 
 def designed(name: str, steps: int, period: float, n_a: float, n_d: float, prescale: int = 1) -> Profile:
-    """A profile from tick-domain values (as stepramp.profiles designs its named ones): cruise period in ticks and
+    """A profile from tick-domain values (as stepramp.sim.profiles designs its named ones): cruise period in ticks and
     the steps needed to reach and to leave the cruise speed."""
     spr, fclk = 200.0, 1e6
     alpha = 2.0 * math.pi / spr

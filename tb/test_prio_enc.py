@@ -6,8 +6,8 @@ from __future__ import annotations
 import pytest
 from cocotb.triggers import Timer
 
-from stepramp.blocks import prio_enc
-from stepramp.hdl import run_cocotb
+from stepramp.models.blocks import prio_enc
+from stepramp.sim.runner import run_cocotb
 from tbutil import build_dir, cocotb
 
 

@@ -7,19 +7,19 @@ then backwards after a DIR change; the second programmed during the first). At a
 at pulse 0 and every phase change) a burst of reads of STATUS, POSITION, CUR_DELAY and STEP_COUNT is aimed so that
 one of them samples at the pulse's own edge (still the old values) or at the edge after it (the new ones); around
 the last pulse, reads at its edge and the two after it (END_READS); once per phase, and before, between and after
-the moves, a sweep reads every register of stepramp.regmap. Each read is compared with:
+the moves, a sweep reads every register of stepramp.board.regmap. Each read is compared with:
 
-* the bit-exact model (stepramp.model.edges / phases, the plan's PRESCALE) for STATUS.STATE / BUSY / DIR,
+* the bit-exact model (stepramp.models.engine.edges / phases, the plan's PRESCALE) for STATUS.STATE / BUSY / DIR,
   POSITION, CUR_DELAY and STEP_COUNT, at the exact clock edge at which the register file sampled the read;
 * the sticky-flag rules of docs/stepramp_plb.md for DONE, ERROR and ERR_CODE (a POSITION write during the second
   move sets ERROR with POS_BUSY);
-* the last value written, masked to the register's RW fields (stepramp.regmap), for every storage register and
+* the last value written, masked to the register's RW fields (stepramp.board.regmap), for every storage register and
   CTRL (its WS bits read 0); the reset value for constant read-only registers (ID).
 
 The sample edge of a read: the register file samples rd at rising edge S (rd is high in the cycle before S; its
 ack rises at S, which is checked) and then returns the engine's registered outputs as set by edges before S. The
 engine's edge 0 is the rising edge of its busy (E0; docs/stepramp_engine.md), pulse k is at E0 + e_k with e_k =
-stepramp.model.edges(plan)[k], so with s = S - E0:
+stepramp.models.engine.edges(plan)[k], so with s = S - E0:
 
 * STEP_COUNT = #{k : e_k < s}; POSITION = start position +- STEP_COUNT (mod 2^32); BUSY = s <= e_L;
 * after pulse k (e_k < s <= e_(k+1), k < L): STATE = phases[k], CUR_DELAY = (e_(k+1) - e_k) / PRESCALE (the ticks
@@ -48,15 +48,15 @@ from cocotb.triggers import Event, RisingEdge, Timer
 from cocotb.utils import get_sim_time
 
 from peripheral_tb import PeripheralTb
-from stepramp.driver import Outputs, StepRamp
-from stepramp.hdl import run_cocotb
-from stepramp.model import ACCEL, DECEL, RUN
-from stepramp.model import edges as model_edges
-from stepramp.model import phases as model_phases
-from stepramp.plan import Plan
-from stepramp.profiles import PROFILES_BY_NAME
-from stepramp.regmap import ERROR_CODES, REGISTERS, REGISTERS_BY_NAME, RO, RW, WS, Register, offset
-from stepramp.stepper import STEP_LATENCY
+from stepramp.board.driver import Outputs, StepRamp
+from stepramp.board.plan import Plan
+from stepramp.board.regmap import ERROR_CODES, REGISTERS, REGISTERS_BY_NAME, RO, RW, WS, Register, offset
+from stepramp.models.engine import ACCEL, DECEL, RUN
+from stepramp.models.engine import edges as model_edges
+from stepramp.models.engine import phases as model_phases
+from stepramp.models.stepping import STEP_LATENCY
+from stepramp.sim.profiles import PROFILES_BY_NAME
+from stepramp.sim.runner import run_cocotb
 from tbutil import CLK_PERIOD_NS, build_dir, cocotb
 
 TOPS = ("stepramp_plb", "stepramp_axil")

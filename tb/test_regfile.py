@@ -1,8 +1,8 @@
 # SPDX-License-Identifier: MIT
 """stepramp_regfile alone, clock by clock against a Python model of the register file (issue 12, point 2).
 
-The model (RegfileModel below) is written from stepramp.regmap, the one source of the register layout: the offsets,
-fields, access kinds (RO, RW, W1C, WS), reset values and masks come from there, and the behaviour from
+The model (RegfileModel below) is written from stepramp.board.regmap, the one source of the register layout: the
+offsets, fields, access kinds (RO, RW, W1C, WS), reset values and masks come from there, and the behaviour from
 docs/registers.md and docs/stepramp_plb.md ("Register behaviour"), not from the VHDL. The bench drives the register
 file's bus port (one-cycle wr / rd strobes with addr, wdata and be; ack, err and rdata one clock later) and plays
 the engine's side (eng_busy, eng_done, eng_error, eng_err_code, eng_state, eng_dir, eng_position, eng_step_count,
@@ -47,12 +47,12 @@ from typing import Any
 from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge
 
-from stepramp.hdl import run_cocotb
-from stepramp.regmap import ADDR_BITS, ERROR_CODES, REGISTERS, REGISTERS_BY_NAME, RO, RW, W1C, WS, Register
+from stepramp.board.regmap import ADDR_BITS, ERROR_CODES, REGISTERS, REGISTERS_BY_NAME, RO, RW, W1C, WS, Register
+from stepramp.sim.runner import run_cocotb
 from tbutil import CLK_PERIOD_NS, build_dir, cocotb, env_int
 
 # ---------------------------------------------------------------------------------------------------------------
-# The register map as the model sees it (all from stepramp.regmap).
+# The register map as the model sees it (all from stepramp.board.regmap).
 
 WORD = 0xFFFF_FFFF
 WINDOW = 1 << ADDR_BITS

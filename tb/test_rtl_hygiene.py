@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from stepramp.hdl import HDL_DIR, HDL_FILES, SYNTH_TOPS
-from stepramp.rtlcheck import analyse, synth
+from stepramp.sim.runner import HDL_DIR, HDL_FILES, SYNTH_TOPS
+from stepramp.tools.rtlcheck import analyse, synth
 
 
 def test_every_rtl_file_exists() -> None:

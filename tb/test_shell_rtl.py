@@ -11,10 +11,10 @@ import subprocess
 import sys
 from pathlib import Path
 
-from stepramp.model import edges as model_edges
-from stepramp.plan import plan_move
-from stepramp.session import RtlSession
-from stepramp.shell import SHELL_CONFIG, RtlBackend, Shell
+from stepramp.board.plan import plan_move
+from stepramp.models.engine import edges as model_edges
+from stepramp.sim.session import RtlSession
+from stepramp.tools.shell import SHELL_CONFIG, RtlBackend, Shell
 from tbutil import build_dir
 
 BIN = Path(sys.executable).parent / "stepramp"
@@ -70,7 +70,7 @@ def test_session_moves_equal_the_model() -> None:
 FAULT_SCRIPT = """
 import sys
 from pathlib import Path
-from stepramp.session import RtlSession, SessionError
+from stepramp.sim.session import RtlSession, SessionError
 session = RtlSession(Path(sys.argv[1]))
 session.start()
 try:

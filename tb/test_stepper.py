@@ -5,7 +5,7 @@ setup/hold timing, enable, mode changes while stopped, and monitors that fail wh
 A fake engine in Python plays the ramp engine's side with its documented timing (docs/stepramp_engine.md): it
 takes start_out at the next edge (edge 0), raises busy, emits pulse 0 two clocks later and then one pulse every
 `interval` clocks (>= 64), updating `position` in the cycle of each pulse and dropping busy in the cycle of the last.
-Expected values come from stepramp.stepper; the pins are also watched by tb/monitors.py.
+Expected values come from stepramp.models.stepping; the pins are also watched by tb/monitors.py.
 
 Edge numbers: edge e is the rising edge at e * CLK_PERIOD_NS; inputs are driven at the falling edge after edge
 e - 1 (so edge e samples them); "high after edge e" is the cycle after it.
@@ -29,8 +29,8 @@ from monitors import (
     ShootThroughMonitor,
     StepWidthMonitor,
 )
-from stepramp import stepper as sm
-from stepramp.hdl import run_cocotb
+from stepramp.models import stepping as sm
+from stepramp.sim.runner import run_cocotb
 from tbutil import CLK_PERIOD_NS, build_dir, cocotb, env_int, start_clock_and_reset
 
 MICROSTEPS = env_int("STEPPER_G_MICROSTEPS", sm.DEFAULT_MICROSTEPS)
@@ -577,7 +577,7 @@ async def start_gate_timing(dut) -> None:
     """start_out 1 clock after start_req when DIR stays; on a change DIR waits for dir_hold after the last STEP
     rising edge, start_out for max(dir_setup, 5) clocks to the first STEP rising edge; either way the first STEP
     rising edge keeps STEP_WIDTH + STEP_SPACE from the last one: measured edge for edge against
-    stepramp.stepper.gate_timing, with the DIR monitor on."""
+    stepramp.models.stepping.gate_timing, with the DIR monitor on."""
     cfg = Config(mode=sm.MODE_HALF, step_width=4)
     eng = await setup(dut, cfg)
     cases = [

@@ -2,8 +2,8 @@
 """Every entity of the PLB-like top synthesises for iCE40 with no latch, and none is more than 10 % larger than its
 recorded figure.
 
-The figures are scripts/synth_baseline.json (written by `python -m stepramp.synth --record`, i.e. after a deliberate
-change in size): iCE40 LUT4 and FF of each entity as the top instantiates it, with the entities below it
+The figures are scripts/synth_baseline.json (written by `python -m stepramp.tools.synth --record`, i.e. after a
+deliberate change in size): iCE40 LUT4 and FF of each entity as the top instantiates it, with the entities below it
 (synth_ice40 -noflatten), so that a growth fails where it starts. `make synth` reports the full table with fmax.
 """
 
@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from stepramp.synth import BASELINE, entity_cells, ice40_summary, netlist
+from stepramp.tools.synth import BASELINE, entity_cells, ice40_summary, netlist
 
 TOP = "stepramp_plb"
 
@@ -35,7 +35,9 @@ def test_no_latch_cells(entities: dict[str, dict[str, int]]) -> None:
 
 def test_every_entity_is_recorded(entities: dict[str, dict[str, int]]) -> None:
     recorded = json.loads(BASELINE.read_text())[TOP]
-    assert sorted(recorded) == sorted(entities), "record the new entity list with `python -m stepramp.synth --record`"
+    assert sorted(recorded) == sorted(entities), (
+        "record the new entity list with `python -m stepramp.tools.synth --record`"
+    )
 
 
 def test_size_within_ten_percent_of_the_record(entities: dict[str, dict[str, int]]) -> None:
@@ -48,5 +50,5 @@ def test_size_within_ten_percent_of_the_record(entities: dict[str, dict[str, int
                 problems.append(f"{name}: {now[key]} iCE40 {key} against {recorded[name][key]} recorded")
     assert not problems, (
         "\n".join(problems) + "\n(+10 % allowed; if the growth is intended, record it with "
-        "`python -m stepramp.synth --record`)"
+        "`python -m stepramp.tools.synth --record`)"
     )

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from cocotb.triggers import FallingEdge, RisingEdge
 
-from stepramp.blocks import timer_ticks
-from stepramp.hdl import run_cocotb
+from stepramp.models.blocks import timer_ticks
+from stepramp.sim.runner import run_cocotb
 from tbutil import build_dir, cocotb, now_cycles, start_clock_and_reset
 
 

@@ -221,7 +221,7 @@ int stepramp_wait_done(const stepramp_t *dev, uint32_t max_polls)
     return STEPRAMP_ETIMEOUT;
 }
 
-/* The error table of docs/registers.md (stepramp.regmap.ERROR_CODES): X(name, cause). */
+/* The error table of docs/registers.md (stepramp.board.regmap.ERROR_CODES): X(name, cause). */
 #define STEPRAMP_CORE_ERRORS(X)                                                                                        \
     X(NONE, "no error")                                                                                                \
     X(PRESCALE, "PRESCALE is 0")                                                                                       \

@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 /*
- * stepramp driver: the C counterpart of sw/stepramp/driver.py (class StepRamp), for MicroBlaze standalone.
+ * stepramp driver: the C counterpart of sw/stepramp/board/driver.py (class StepRamp), for MicroBlaze standalone.
  *
  * The same operations with the same register semantics as the Python driver: stepramp_program writes every
  * motion register (STEPS .. STOP_RATIO) in address order, like driver.plan_writes(); START, SOFT_STOP and

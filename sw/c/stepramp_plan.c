@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 /*
- * stepramp driver: plan a move. A line-by-line port of sw/stepramp/plan.py (the reference): every double
+ * stepramp driver: plan a move. A line-by-line port of sw/stepramp/board/plan.py (the reference): every double
  * expression keeps Python's operand order, Python's round() (half to even) is rint() in the default
  * rounding mode, math.floor is floor(), and Python's min()/max() are mirrored including their choice of
  * operand, so the register values are identical bit for bit. Compile with -ffp-contract=off.

@@ -2,7 +2,7 @@
 /*
  * stepramp driver: plan a move (physical units -> the engine's register values).
  *
- * C99 port of sw/stepramp/plan.py, bit for bit: the same double-precision expressions in the same
+ * C99 port of sw/stepramp/board/plan.py, bit for bit: the same double-precision expressions in the same
  * order, the same rounding (round half to even, like Python's round()), the same checks in the same
  * order. See docs/algorithm.md for the meaning of every field.
  *
@@ -105,7 +105,7 @@ typedef enum {
 } stepramp_err_t;
 
 /**
- * Plan a move, exactly like Python's stepramp.plan.plan_move.
+ * Plan a move, exactly like Python's stepramp.board.plan.plan_move.
  *
  * @param plan     output; written only on success (left untouched on error)
  * @param steps    signed step count; its sign gives the direction; |steps| <= 2^31 - 1

@@ -7,7 +7,7 @@ import random
 
 import pytest
 
-from stepramp.blocks import divide, divider_latency, iter_msb_pairs, msb, prio_enc, timer_ticks
+from stepramp.models.blocks import divide, divider_latency, iter_msb_pairs, msb, prio_enc, timer_ticks
 
 
 def test_msb_matches_powers_of_two() -> None:

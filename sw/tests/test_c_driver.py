@@ -4,7 +4,7 @@
 ``make -C sw/c`` builds and runs the host tests (a missing gcc or make is a failure, not a skip). The shared
 library holds the driver with its register access routed to the fake register bank of stepramp_fakebus.c, whose
 write log ctypes reads: for random plans (stepramp_program) and random valid moves (stepramp_move) the C driver
-must write exactly the (offset, value) pairs of stepramp.driver.plan_writes, in the same order, with all byte
+must write exactly the (offset, value) pairs of stepramp.board.driver.plan_writes, in the same order, with all byte
 enables, and START to byte 0 of CTRL; an invalid move returns the plan's error and writes nothing.
 """
 
@@ -21,11 +21,11 @@ from typing import Any
 
 import pytest
 
-from stepramp import clib
-from stepramp.driver import plan_writes
-from stepramp.plan import MAX_PRESCALE, MAX_STEPS, REG_WIDTHS, Plan, plan_move
-from stepramp.profiles import INVALID_INPUTS, PROFILES
-from stepramp.regmap import ERROR_CODES, offset
+from stepramp.board.driver import plan_writes
+from stepramp.board.plan import MAX_PRESCALE, MAX_STEPS, REG_WIDTHS, Plan, plan_move
+from stepramp.board.regmap import ERROR_CODES, offset
+from stepramp.sim.profiles import INVALID_INPUTS, PROFILES
+from stepramp.tools import clib
 
 C_DIR = Path(__file__).resolve().parents[1] / "c"
 BUILD_DIR = C_DIR / "build"

@@ -1,9 +1,9 @@
 # SPDX-License-Identifier: MIT
-"""The C driver library (sw/c): its host unit tests, and bit-for-bit parity with stepramp.plan.
+"""The C driver library (sw/c): its host unit tests, and bit-for-bit parity with stepramp.board.plan.
 
 The library is built with ``make -C sw/c`` (a missing gcc or make is a failure, not a skip), loaded with
 ctypes, and compared with the Python driver field by field on many random moves, on every named profile
-and on the invalid inputs of stepramp.profiles: the same registers, or the same first error.
+and on the invalid inputs of stepramp.sim.profiles: the same registers, or the same first error.
 """
 
 from __future__ import annotations
@@ -21,10 +21,10 @@ from typing import Any
 
 import pytest
 
-from stepramp import clib
-from stepramp import plan as pyplan
-from stepramp.plan import MAX_PRESCALE, MAX_STEPS, MoveInfo, Plan, decel_product, plan_move, plan_move_info
-from stepramp.profiles import INVALID_INPUTS, PROFILES
+from stepramp.board import plan as pyplan
+from stepramp.board.plan import MAX_PRESCALE, MAX_STEPS, MoveInfo, Plan, decel_product, plan_move, plan_move_info
+from stepramp.sim.profiles import INVALID_INPUTS, PROFILES
+from stepramp.tools import clib
 
 C_DIR = Path(__file__).resolve().parents[1] / "c"
 BUILD_DIR = C_DIR / "build"

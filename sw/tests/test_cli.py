@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from stepramp.cli import main
-from stepramp.model import edges
-from stepramp.plan import plan_move
+from stepramp.board.plan import plan_move
+from stepramp.models.engine import edges
+from stepramp.tools.cli import main
 
 MOVE = ["--steps", "-150", "--accel", "900", "--decel", "700", "--speed", "40", "--spr", "200", "--fclk", "1e6"]
 

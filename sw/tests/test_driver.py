@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
-from stepramp.driver import MmapAccess, Outputs, Status, StepRamp, StepRampError, plan_writes
-from stepramp.plan import plan_move
-from stepramp.regmap import ERROR_CODES, ID_VALUE, offset
+from stepramp.board.driver import MmapAccess, Outputs, Status, StepRamp, StepRampError, plan_writes
+from stepramp.board.plan import plan_move
+from stepramp.board.regmap import ERROR_CODES, ID_VALUE, offset
 
 
 class FakeBank:

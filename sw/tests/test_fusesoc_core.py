@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""stepramp.core (FuseSoC) lists the RTL in stepramp.hdl.HDL_FILES order, and the VHDL testbench it simulates
+"""stepramp.core (FuseSoC) lists the RTL in stepramp.sim.runner.HDL_FILES order, and the VHDL testbench it simulates
 carries the register values and edges of the model for its move. No simulator, no FuseSoC: plain file checks."""
 
 from __future__ import annotations
@@ -10,11 +10,11 @@ from typing import Any
 
 import yaml  # PyYAML: a dependency of vsg (pinned in the dev extra)
 
-from stepramp.driver import plan_writes
-from stepramp.hdl import HDL_DIR, HDL_FILES
-from stepramp.model import edges
-from stepramp.plan import plan_move
-from stepramp.regmap import ID_VALUE, offset
+from stepramp.board.driver import plan_writes
+from stepramp.board.plan import plan_move
+from stepramp.board.regmap import ID_VALUE, offset
+from stepramp.models.engine import edges
+from stepramp.sim.runner import HDL_DIR, HDL_FILES
 
 ROOT = Path(__file__).resolve().parents[2]
 CORE = ROOT / "stepramp.core"

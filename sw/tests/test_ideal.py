@@ -8,7 +8,7 @@ import math
 
 import pytest
 
-from stepramp import ideal
+from stepramp.models import ideal
 
 SPR = 200.0
 ALPHA = 2.0 * math.pi / SPR

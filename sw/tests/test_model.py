@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: MIT
 """The bit-exact engine model against the ideal trajectory (THE BOUND) and the AVR446 defects.
 
-Expected values come from the physics (stepramp.ideal and closed forms), never from the model.
+Expected values come from the physics (stepramp.models.ideal and closed forms), never from the model.
 """
 
 from __future__ import annotations
@@ -14,8 +14,9 @@ from typing import Any
 
 import pytest
 
-from stepramp import ideal
-from stepramp.model import (
+from stepramp.board.plan import MAX_STEPS, Plan, plan_move, plan_move_info
+from stepramp.models import ideal
+from stepramp.models.engine import (
     ACCEL,
     DECEL,
     FIRST_PULSE_LATENCY,
@@ -25,8 +26,7 @@ from stepramp.model import (
     phases,
     tick_times,
 )
-from stepramp.plan import MAX_STEPS, Plan, plan_move, plan_move_info
-from stepramp.profiles import (
+from stepramp.sim.profiles import (
     NAMED_PROFILES,
     PROFILES,
     PROFILES_BY_NAME,

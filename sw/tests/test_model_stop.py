@@ -1,11 +1,11 @@
 # SPDX-License-Identifier: MIT
-"""The stop model (stepramp.model.edges_with_stop) against physics: soft stop and hard stop.
+"""The stop model (stepramp.models.engine.edges_with_stop) against physics: soft stop and hard stop.
 
-Expected values come from the move's physical inputs (stepramp.ideal: the speed at a position, the ideal last
+Expected values come from the move's physical inputs (stepramp.models.ideal: the speed at a position, the ideal last
 interval; the decel in steps/s^2), never from the model's own arithmetic. The stop rules themselves are in
 docs/algorithm.md ("Soft stop") and docs/stepramp_engine.md.
 
-Speed at pulse p: the ideal trajectory's speed at position p (stepramp.ideal.IdealMove.speed_at). The reciprocal
+Speed at pulse p: the ideal trajectory's speed at position p (stepramp.models.ideal.IdealMove.speed_at). The reciprocal
 of interval p is the *mean* speed over that interval; in an acceleration from rest it is half the speed at pulse 1
 (and (sqrt(p) + sqrt(p - 1)) / (2 sqrt(p)) of it in general), which would make the stopping distance of a correct
 stop look 0.5 * accel / decel steps too long.
@@ -29,8 +29,9 @@ from dataclasses import dataclass
 
 import pytest
 
-from stepramp import ideal
-from stepramp.model import (
+from stepramp.board.plan import Plan, plan_move, plan_move_info
+from stepramp.models import ideal
+from stepramp.models.engine import (
     ACCEL,
     DECEL,
     FIRST_PULSE_LATENCY,
@@ -42,8 +43,7 @@ from stepramp.model import (
     soft_stop_pulse,
     soft_stop_values,
 )
-from stepramp.plan import Plan, plan_move, plan_move_info
-from stepramp.profiles import PROFILES, PROFILES_BY_NAME, Profile
+from stepramp.sim.profiles import PROFILES, PROFILES_BY_NAME, Profile
 
 #: Tolerances of the brief: stopping distance 2 steps + 3 %, last interval 2 % + 2 ticks, transition 2 %.
 DIST_STEPS = 2.0

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""Tests of the driver's setup math (stepramp.plan)."""
+"""Tests of the driver's setup math (stepramp.board.plan)."""
 
 from __future__ import annotations
 
@@ -10,9 +10,7 @@ from fractions import Fraction
 
 import pytest
 
-from stepramp import ideal
-from stepramp.model import tick_times
-from stepramp.plan import (
+from stepramp.board.plan import (
     FRAC_CRUISE,
     FRAC_RAMP,
     MAX_STEPS,
@@ -24,7 +22,9 @@ from stepramp.plan import (
     plan_move,
     plan_move_info,
 )
-from stepramp.profiles import INVALID_INPUTS, PROFILES
+from stepramp.models import ideal
+from stepramp.models.engine import tick_times
+from stepramp.sim.profiles import INVALID_INPUTS, PROFILES
 
 SPR = 200.0
 ALPHA = 2.0 * math.pi / SPR

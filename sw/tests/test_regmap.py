@@ -3,7 +3,8 @@
 
 from __future__ import annotations
 
-from stepramp import regmap, regmap_gen
+from stepramp.board import regmap
+from stepramp.tools import regmap_gen
 
 
 def test_offsets_are_unique_aligned_and_inside_the_window() -> None:
@@ -40,5 +41,5 @@ def test_split_wide() -> None:
 
 def test_generated_files_are_up_to_date() -> None:
     for path, make in regmap_gen.OUTPUTS.items():
-        assert path.exists(), f"{path} missing: run python -m stepramp.regmap_gen"
-        assert path.read_text() == make(), f"{path} is out of date: run python -m stepramp.regmap_gen"
+        assert path.exists(), f"{path} missing: run python -m stepramp.tools.regmap_gen"
+        assert path.read_text() == make(), f"{path} is out of date: run python -m stepramp.tools.regmap_gen"

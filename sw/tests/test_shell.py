@@ -13,12 +13,12 @@ from pathlib import Path
 
 import pytest
 
-from stepramp.driver import StepRampError
-from stepramp.gtkw import LAYOUT, LAYOUTS, missing_in, signal_paths, write_gtkw, zoom_for
-from stepramp.hdl import _sim_stop_s
-from stepramp.model import edges as model_edges
-from stepramp.plan import MIN_INTERVAL_CLKS, plan_move
-from stepramp.shell import SHELL_CONFIG, ModelBackend, Shell, speed_limit
+from stepramp.board.driver import StepRampError
+from stepramp.board.plan import MIN_INTERVAL_CLKS, plan_move
+from stepramp.models.engine import edges as model_edges
+from stepramp.sim.runner import _sim_stop_s
+from stepramp.sim.waves import LAYOUT, LAYOUTS, missing_in, signal_paths, write_gtkw, zoom_for
+from stepramp.tools.shell import SHELL_CONFIG, ModelBackend, Shell, speed_limit
 
 BIN = Path(sys.executable).parent / "stepramp"
 INFO = re.compile(r"^Motor pos: (-?\d+)   a:(\d+) d:(\d+) s:(\d+) m:(-?\d+)$")

@@ -8,7 +8,7 @@ from itertools import pairwise, product
 
 import pytest
 
-from stepramp import stepper as sm
+from stepramp.models import stepping as sm
 
 MICROSTEPS = [1, 2, 4, 8, 16, 32, 64, 128]
 

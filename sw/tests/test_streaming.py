@@ -24,12 +24,12 @@ from typing import Any
 import numpy as np
 import pytest
 
-from stepramp import model
-from stepramp.cli import MEMORY_BUDGET_MB, PLOT_MAX_PULSES, SIM_MAX_PULSES, main
-from stepramp.ideal import c0, ideal_move, pulse_times
-from stepramp.plan import Plan, plan_move
-from stepramp.profiles import PROFILES, Profile
-from stepramp.summary import MoveSummary, edge_checksum, summarise_edges, summarise_model
+from stepramp.board.plan import Plan, plan_move
+from stepramp.models import engine as model
+from stepramp.models.ideal import c0, ideal_move, pulse_times
+from stepramp.sim.profiles import PROFILES, Profile
+from stepramp.tools.cli import MEMORY_BUDGET_MB, PLOT_MAX_PULSES, SIM_MAX_PULSES, main
+from stepramp.tools.summary import MoveSummary, edge_checksum, summarise_edges, summarise_model
 
 DEMO = {"accel": 40.0, "decel": 40.0, "speed": 20.0, "spr": 400.0, "fclk": 1e6, "prescale": 1}
 """The AVR446 demo's settings at 1 MHz (the issue's long moves)."""
@@ -287,7 +287,7 @@ def test_long_stops_without_lists() -> None:
 
 def test_bench_budgets_without_lists() -> None:
     """enginesim.timeout_cycles from the closed form is the list-based budget it was, stops included."""
-    from stepramp.enginesim import Stop, timeout_cycles
+    from stepramp.sim.engine_sim import Stop, timeout_cycles
 
     for _, plan, _ in PLANS[::3]:
         normal = spec_edges(plan)
@@ -448,7 +448,7 @@ def _env() -> dict[str, str]:
 def test_a_closed_pipe_is_no_traceback() -> None:
     """`stepramp model ... | head`: the reader goes away; the command stops quietly."""
     argv = ["--steps", "3000000", *[f"--{k}={v}" for k, v in DEMO.items()]]
-    cmd = [sys.executable, "-c", "import sys; from stepramp.cli import main; sys.exit(main())", "model", *argv]
+    cmd = [sys.executable, "-c", "import sys; from stepramp.tools.cli import main; sys.exit(main())", "model", *argv]
     with subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=_env()) as proc:
         assert proc.stdout is not None and proc.stderr is not None
         head = proc.stdout.read(100)
@@ -466,8 +466,11 @@ def test_a_closed_pipe_is_no_traceback() -> None:
 LIMIT = MEMORY_BUDGET_MB << 20
 """RLIMIT_AS of the child: the whole address space (Python, numpy, the chunks) within the memory budget."""
 
-_RUN = "import sys; from stepramp.cli import main; sys.exit(main())"
-_LIST = "import sys, json; from stepramp import model, plan; model.edges(plan.plan_move(**json.loads(sys.argv[1])))"
+_RUN = "import sys; from stepramp.tools.cli import main; sys.exit(main())"
+_LIST = (
+    "import sys, json; from stepramp.models import engine as model; from stepramp.board import plan;"
+    " model.edges(plan.plan_move(**json.loads(sys.argv[1])))"
+)
 
 
 def _limited() -> None:

@@ -45,7 +45,7 @@ architecture sim of stepramp_plb_tb is
 
   -- The move, produced by
   --   .venv/bin/stepramp model --steps 20 --accel 1000 --decel 1000 --speed 50 --spr 200 --fclk 1e6
-  -- ("registers", split into bus words as stepramp.driver.plan_writes does: 48-bit values into _LO = bits 31:0 and
+  -- ("registers", split into bus words as stepramp.board.driver.plan_writes does: 48-bit values into _LO = bits 31:0 and
   -- _HI = bits 47:32, CRUISE into bits 31:0 and 63:32; STOP_RATIO 0x10000 = accel / decel = 1.0).
   constant C_MOVE : t_reg_writes :=
   (

@@ -7,7 +7,7 @@ steps signed), read line by line from stdin, so a session can be typed or piped:
     printf 'a 4000\\nm 400\\n\\n' | stepramp shell
 
 Each move runs on stepramp_plb, programmed over its bus by the Python driver, and the whole session is one
-simulation (`stepramp.session.RtlSession`); POSITION is read back from the core after each move. `--model` runs the
+simulation (`stepramp.sim.session.RtlSession`); POSITION is read back from the core after each move. `--model` runs the
 bit-exact model instead (no simulator, instant). Bad commands print the reason and the help text; the session goes
 on. `q` (or end of input) ends it.
 """
@@ -25,14 +25,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol, TextIO
 
-from stepramp.driver import StepRampError
-from stepramp.model import edges as model_edges
-from stepramp.plan import MIN_INTERVAL_CLKS, Plan, plan_move
+from stepramp.board.driver import StepRampError
+from stepramp.board.plan import MIN_INTERVAL_CLKS, Plan, plan_move
+from stepramp.models.engine import edges as model_edges
 
 if TYPE_CHECKING:
-    from stepramp.session import RtlSession
+    from stepramp.sim.session import RtlSession
 
-#: The shell's motor and clock (stepramp.session's defaults): a 200-step motor half-stepped (400 steps/rev), the
+#: The shell's motor and clock (stepramp.sim.session's defaults): a 200-step motor half-stepped (400 steps/rev), the
 #: core at 250 kHz with PRESCALE 1 (4 us ticks). An FPGA clocked at f with PRESCALE f / 250 kHz emits the same pulses;
 #: the low simulated clock keeps each move to a few seconds of simulation.
 SHELL_CONFIG: dict[str, Any] = {"fclk": 250e3, "spr": 400.0, "prescale": 1}
@@ -77,7 +77,7 @@ class ModelBackend:
 
 
 class RtlBackend:
-    """Moves on the RTL, all in one simulation (a stepramp.session.RtlSession, started by the caller)."""
+    """Moves on the RTL, all in one simulation (a stepramp.sim.session.RtlSession, started by the caller)."""
 
     def __init__(self, session: RtlSession) -> None:
         self.session = session
@@ -245,7 +245,7 @@ def main(model: bool = False, waves: Path | None = None, build: Path | None = No
         Shell(ModelBackend(**cfg), sys.stdout, **cfg).run(stdin, prompt=interactive)
         return 0
 
-    from stepramp.session import RtlSession, SessionError
+    from stepramp.sim.session import RtlSession, SessionError
 
     build_dir = build if build is not None else Path(tempfile.mkdtemp(prefix="stepramp-shell-"))
     log = build_dir.resolve() / "sim.log"
@@ -260,7 +260,7 @@ def main(model: bool = False, waves: Path | None = None, build: Path | None = No
     if build is None:
         shutil.rmtree(build_dir, ignore_errors=True)
     if waves is not None and waves.suffix == ".ghw":  # the layout is written for GHW's facility names
-        from stepramp.gtkw import write_gtkw
+        from stepramp.sim.waves import write_gtkw
 
         gtkw = write_gtkw(waves.with_suffix(".gtkw"), waves, duration_s=session.end_s * 1.02 or None)
         print(f"stepramp shell: the session's waveform is {waves}; open it with  gtkwave {gtkw}", file=sys.stderr)

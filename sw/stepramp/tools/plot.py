@@ -8,8 +8,8 @@ import itertools
 from pathlib import Path
 from typing import Any
 
-from stepramp.ideal import ideal_move
-from stepramp.model import FIRST_PULSE_LATENCY
+from stepramp.models.engine import FIRST_PULSE_LATENCY
+from stepramp.models.ideal import ideal_move
 
 
 def _rates(times_s: list[float]) -> tuple[list[float], list[float]]:

@@ -10,9 +10,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from stepramp.hdl import run_cocotb
-from stepramp.model import last_edge
-from stepramp.plan import Plan
+from stepramp.board.plan import Plan
+from stepramp.models.engine import last_edge
+from stepramp.sim.runner import run_cocotb
 
 #: Engine states as the RTL encodes them on its `state` port.
 STATE_NAMES = ("STOP", "ACCEL", "RUN", "DECEL")
@@ -35,7 +35,7 @@ class SimResult:
     #: the absolute index of the edge the timestamps count from (the start edge; for a held start, the edge after
     #: the previous move's done cycle)
     origin: int | None = None
-    #: the outputs (stepramp.enginetb.SNAPSHOT_PORTS and position, state by name) in the cycle before the start
+    #: the outputs (stepramp.sim.engine_bench.SNAPSHOT_PORTS and position, state by name) in the cycle before the start
     #: edge (None for a held start) and in the cycle after it
     before: dict[str, Any] | None = None
     after_start: dict[str, Any] | None = None
@@ -66,7 +66,7 @@ def timeout_cycles(plan: Plan, stop: Stop | Sequence[Stop] | None = None) -> int
 
     With stops, the longest of the model's stopped moves (a soft stop can make a move last longer) and the edge of
     the last request (a hard stop ends the move there, after its last pulse). The last edges come from the model in
-    closed form (stepramp.model.last_edge): no edge list, whatever the move's length.
+    closed form (stepramp.models.engine.last_edge): no edge list, whatever the move's length.
     """
     stops = [] if stop is None else [stop] if isinstance(stop, Stop) else list(stop)
     last = last_edge(plan) or 0
@@ -87,9 +87,9 @@ def simulate(
     """Play the moves back to back in one simulation; one SimResult per move (fewer if the engine hung).
 
     stops: an optional stop (or list of stops) per move (None: no stop). Under pytest a hang (or any failure inside
-    the simulation) raises SystemExit from the runner. extras: per move, more keys of the request (stepramp.enginetb:
-    "min_gap", "load_lead" with "after_load", "gap_cycles", "events", "reset_watch_cycles", "inputs_after_start",
-    "start_held", "record_counters").
+    the simulation) raises SystemExit from the runner. extras: per move, more keys of the request
+    (stepramp.sim.engine_bench: "min_gap", "load_lead" with "after_load", "gap_cycles", "events", "reset_watch_cycles",
+    "inputs_after_start", "start_held", "record_counters").
     """
     if stops is not None and len(stops) != len(plans):
         raise ValueError(f"{len(stops)} stops for {len(plans)} plans")
@@ -115,7 +115,7 @@ def simulate(
     request.write_text(json.dumps({"moves": moves}))
     run_cocotb(
         "stepramp_engine",
-        "stepramp.enginetb",
+        "stepramp.sim.engine_bench",
         build_dir,
         waves=waves,
         extra_env={"STEPRAMP_SIM_REQUEST": str(request), "STEPRAMP_SIM_RESULT": str(result_file)},

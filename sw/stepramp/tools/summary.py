@@ -3,7 +3,7 @@
 
 Fed chunk by chunk (docs/algorithm.md, "Long moves"), so a move of 2^31 - 1 pulses is summarised in bounded
 memory: pulse count, last edge, move time, peak speed, the largest deviation from the ideal trajectory (its pulse
-times computed chunk by chunk too, bit-identical to stepramp.ideal) and a SHA-256 checksum of the edges.
+times computed chunk by chunk too, bit-identical to stepramp.models.ideal) and a SHA-256 checksum of the edges.
 """
 
 from __future__ import annotations
@@ -13,9 +13,9 @@ import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
-from stepramp.ideal import c0, ideal_move
-from stepramp.model import FIRST_PULSE_LATENCY, tick_chunks
-from stepramp.plan import Plan
+from stepramp.board.plan import Plan
+from stepramp.models.engine import FIRST_PULSE_LATENCY, tick_chunks
+from stepramp.models.ideal import c0, ideal_move
 
 if TYPE_CHECKING:
     import numpy as np
@@ -50,7 +50,7 @@ class MoveSummary:
         self._hash = hashlib.sha256()
 
     def add_ticks(self, ticks: NDArray[np.uint64]) -> None:
-        """The next pulses, as tick times T_k (edges 2 + PRESCALE * T_k), exact: stepramp.model.tick_chunks."""
+        """The next pulses, as tick times T_k (edges 2 + PRESCALE * T_k), exact: stepramp.models.engine.tick_chunks."""
         import numpy as np
 
         if len(ticks) == 0:

@@ -4,7 +4,7 @@
 The RTL simulator runs ~0.4 M clock cycles/s, so every profile is kept short: each move lasts well
 under 300,000 clock cycles (most under 100,000) and all of them together under ~4 M cycles. Most
 profiles are designed in the tick domain with :func:`_design` (cruise period in ticks and the length of
-each ramp in steps) and converted to the physical units that :func:`stepramp.plan.plan_move` takes.
+each ramp in steps) and converted to the physical units that :func:`stepramp.board.plan.plan_move` takes.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import random
 from dataclasses import dataclass
 from typing import Any
 
-from .plan import MIN_INTERVAL_CLKS, Plan
+from stepramp.board.plan import MIN_INTERVAL_CLKS, Plan
 
 
 @dataclass(frozen=True)

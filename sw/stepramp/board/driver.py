@@ -18,8 +18,8 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import Protocol
 
-from stepramp.plan import Plan, plan_move_info
-from stepramp.regmap import ERROR_CODES, ID_MAGIC, REGISTERS_BY_NAME, offset, split_wide
+from stepramp.board.plan import Plan, plan_move_info
+from stepramp.board.regmap import ERROR_CODES, ID_MAGIC, REGISTERS_BY_NAME, offset, split_wide
 
 STATE_NAMES = ("STOP", "ACCEL", "RUN", "DECEL")
 ERROR_NAMES = {code: name for name, (code, _) in ERROR_CODES.items()}

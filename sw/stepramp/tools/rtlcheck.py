@@ -5,7 +5,7 @@
 yosys is installed, the Verilog netlist GHDL writes is also read by yosys and checked for latch cells, which
 catches the case-without-default trap of GHDL 2.0's Verilog writer.
 
-Usage: python -m stepramp.rtlcheck [--out DIR] [TOP ...]   (default: every top in stepramp.hdl.SYNTH_TOPS)
+Usage: python -m stepramp.tools.rtlcheck [--out DIR] [TOP ...]   (default: every top in stepramp.sim.runner.SYNTH_TOPS)
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from stepramp.hdl import HDL_DIR, HDL_FILES, SYNTH_TOPS, hdl_sources
+from stepramp.sim.runner import HDL_DIR, HDL_FILES, SYNTH_TOPS, hdl_sources
 
 
 def run(cmd: list[str], cwd: Path) -> subprocess.CompletedProcess[str]:

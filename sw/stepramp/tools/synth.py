@@ -11,7 +11,7 @@ build/synth/report.json as
                "entities": {"<entity>": {"lut4", "ff", "carry", "fmax_mhz"}}}}
 and build/synth/report.md.
 
-    python -m stepramp.synth [--out DIR] [--no-pnr] [--record] [TOP ...]
+    python -m stepramp.tools.synth [--out DIR] [--no-pnr] [--record] [TOP ...]
 
 --record writes the iCE40 LUT4 / FF counts per entity (synth_ice40 -noflatten, with the entities below it) to
 scripts/synth_baseline.json, the figures the regression's size test (tb/test_synth_size.py) holds every entity of
@@ -30,11 +30,11 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from stepramp.hdl import HDL_FILES, SYNTH_TOPS
-from stepramp.rtlcheck import analyse, synth
+from stepramp.sim.runner import HDL_FILES, SYNTH_TOPS
+from stepramp.tools.rtlcheck import analyse, synth
 
 #: The recorded size the regression holds the tops to.
-BASELINE = Path(__file__).resolve().parents[2] / "scripts" / "synth_baseline.json"
+BASELINE = Path(__file__).resolve().parents[3] / "scripts" / "synth_baseline.json"
 
 #: The tops of the report (the peripheral as users instantiate it).
 REPORT_TOPS = ("stepramp_plb", "stepramp_axil")

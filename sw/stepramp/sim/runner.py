@@ -8,7 +8,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 #: The repository's hdl/ folder (override with STEPRAMP_HDL_DIR).
-HDL_DIR = Path(os.environ.get("STEPRAMP_HDL_DIR", Path(__file__).resolve().parents[2] / "hdl"))
+HDL_DIR = Path(os.environ.get("STEPRAMP_HDL_DIR", Path(__file__).resolve().parents[3] / "hdl"))
 
 #: Every RTL file, in dependency order.
 HDL_FILES: tuple[str, ...] = (
@@ -81,7 +81,7 @@ def run_cocotb(
     """Build the RTL up to toplevel and run a cocotb test module against it with GHDL.
 
     One build directory per call, so that tests can run in parallel. waves: a .ghw or .fst path to write; for a
-    .ghw of a top with a layout in stepramp.gtkw, a GTKWave save file (.gtkw) is written beside it. With WAVES=1 in
+    .ghw of a top with a layout in stepramp.sim.waves, a GTKWave save file (.gtkw) is written beside it. With WAVES=1 in
     the environment every call writes build_dir/<toplevel>.ghw.
     log_file: send the build and simulation output there instead of stdout.
     Returns the results file; under pytest a failing test raises SystemExit.
@@ -117,7 +117,7 @@ def run_cocotb(
         log_file=log_file,
     )
     if waves is not None and waves.suffix == ".ghw":
-        from stepramp.gtkw import LAYOUTS, write_gtkw
+        from stepramp.sim.waves import LAYOUTS, write_gtkw
 
         if toplevel in LAYOUTS:  # a GTKWave layout beside the waveform (gtkwave FILE.gtkw), zoomed to the whole run
             stop = _sim_stop_s(Path(results))

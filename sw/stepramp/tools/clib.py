@@ -8,7 +8,7 @@ import shutil
 import subprocess
 from pathlib import Path
 
-C_DIR = Path(__file__).resolve().parents[2] / "sw" / "c"
+C_DIR = Path(__file__).resolve().parents[3] / "sw" / "c"
 BUILD_DIR = C_DIR / "build"
 SHARED_LIB = BUILD_DIR / "libstepramp.so"
 

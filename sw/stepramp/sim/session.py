@@ -4,7 +4,7 @@
 `RtlSession` (front end, any Python process) builds stepramp_plb with GHDL, starts one simulation through cocotb's
 runner in a thread, and talks to the cocotb test in this module (`session`, running inside the simulator) over a
 Unix socket: one JSON request per line, one JSON answer per line. The test plays the soft CPU: it programs the core
-through the PLB-like IPIF with the Python driver (`stepramp.driver.StepRamp`), starts each move, waits for DONE on
+through the PLB-like IPIF with the Python driver (`stepramp.board.driver.StepRamp`), starts each move, waits for DONE on
 the interrupt and reads POSITION back, while coroutines timestamp every STEP edge. `make demo` and
 `stepramp shell` both use it, so a whole shell session is one simulation (and one waveform).
 
@@ -25,11 +25,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from stepramp.driver import Outputs, StepRamp, StepRampError
-from stepramp.gtkw import missing_in
-from stepramp.hdl import run_cocotb
-from stepramp.model import last_edge
-from stepramp.plan import Plan
+from stepramp.board.driver import Outputs, StepRamp, StepRampError
+from stepramp.board.plan import Plan
+from stepramp.models.engine import last_edge
+from stepramp.sim.runner import run_cocotb
+from stepramp.sim.waves import missing_in
 
 #: Default setting: the AVR446 demo's motor (200 steps/rev, half-stepped: 400 steps/rev) with the windings driven in
 #: half steps, on a 250 kHz core clock (the clock's period sets the waveform's time axis).
@@ -124,7 +124,7 @@ class RtlSession:
         try:
             results = run_cocotb(
                 "stepramp_plb",
-                "stepramp.session",
+                "stepramp.sim.session",
                 self.build_dir,
                 waves=self.waves,
                 extra_env=env,
@@ -219,8 +219,8 @@ if cocotb is not None:
     @cocotb.test(timeout_time=3_600_000, timeout_unit="ms")
     async def session(dut: Any) -> None:
         """Serve the front end's requests until it quits or goes away."""
-        from stepramp.ipif import IpifMaster  # needs cocotb-bus
-        from stepramp.stepwatch import StepWatch
+        from stepramp.sim.ipif import IpifMaster  # needs cocotb-bus
+        from stepramp.sim.stepwatch import StepWatch
 
         cfg: dict[str, Any] = json.loads(os.environ["STEPRAMP_SESSION_CONFIG"])
         period_ps = round(1e12 / cfg["fclk"])

@@ -12,7 +12,7 @@ import itertools
 from collections.abc import Iterable, Iterator
 from typing import TYPE_CHECKING
 
-from .plan import FRAC_CRUISE, FRAC_RAMP, Plan
+from stepramp.board.plan import FRAC_CRUISE, FRAC_RAMP, Plan
 
 if TYPE_CHECKING:  # numpy is imported where the lazy functions need it (the list functions do not)
     import numpy as np

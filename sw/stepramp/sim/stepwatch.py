@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: MIT
 """Inside a simulation (cocotb): every STEP rising edge and every engine start, stamped with its clock edge, so that
-a move seen on the pins compares with the bit-exact model (`stepramp.model.edges`) whatever the bus timing and
-however long the stepping logic holds a start for DIR setup/hold. Used by `stepramp.session` and the bus testbenches.
+a move seen on the pins compares with the bit-exact model (`stepramp.models.engine.edges`) whatever the bus timing and
+however long the stepping logic holds a start for DIR setup/hold. Used by `stepramp.sim.session` and the bus
+testbenches.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import cocotb
 from cocotb.triggers import RisingEdge
 from cocotb.utils import get_sim_time
 
-from stepramp.stepper import STEP_LATENCY
+from stepramp.models.stepping import STEP_LATENCY
 
 
 class StepWatch:

@@ -31,10 +31,10 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any, TextIO
 
-from stepramp.model import edge_chunks
-from stepramp.model import edges as model_edges
-from stepramp.plan import plan_move
-from stepramp.summary import summarise_edges, summarise_model
+from stepramp.board.plan import plan_move
+from stepramp.models.engine import edge_chunks
+from stepramp.models.engine import edges as model_edges
+from stepramp.tools.summary import summarise_edges, summarise_model
 
 MEMORY_BUDGET_MB = 300
 """Peak memory every command keeps to; what would need more is refused (exit status 2)."""
@@ -46,7 +46,7 @@ PLOT_MAX_BYTES = 64 << 20
 """`stepramp plot` reads the whole file."""
 
 EdgeChunks = Iterable[list[int]]
-"""A move's edges, in order, in lists (stepramp.model.edge_chunks, or the RTL's one list)."""
+"""A move's edges, in order, in lists (stepramp.models.engine.edge_chunks, or the RTL's one list)."""
 
 
 def _move_args(parser: argparse.ArgumentParser) -> None:
@@ -84,7 +84,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def plot_file(path: Path, png: Path | None) -> int:
     """`stepramp plot`: step rate against time (with the bit-exact model and the ideal) and the deviation."""
-    from stepramp.plot import plot_move  # needs matplotlib
+    from stepramp.tools.plot import plot_move  # needs matplotlib
 
     size = path.stat().st_size
     if size > PLOT_MAX_BYTES:
@@ -147,7 +147,7 @@ def run_move(tool: str, args: argparse.Namespace) -> tuple[dict[str, Any], int, 
         )
         return out, 2, []
 
-    from stepramp.enginesim import simulate  # needs cocotb and GHDL, the model does not
+    from stepramp.sim.engine_sim import simulate  # needs cocotb and GHDL, the model does not
 
     with tempfile.TemporaryDirectory(prefix="stepramp-sim-") as tmp:
         build = args.build or Path(tmp)
@@ -214,7 +214,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "plot":
         return plot_file(args.file, args.out)
     if args.command == "shell":
-        from stepramp.shell import main as shell_main
+        from stepramp.tools.shell import main as shell_main
 
         return shell_main(model=args.model, waves=args.waves, build=args.build)
     if args.command in ("sim", "model"):

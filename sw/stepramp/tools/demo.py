@@ -3,9 +3,9 @@
 
 The move of the AVR446 demo application (its info line `Motor pos: 0   a:4000 d:4000 s:2000 m:400`: a 200-step
 motor half-stepped, so 400 steps/rev; accel and decel 40 rad/s^2, speed 20 rad/s, 400 steps) on stepramp_plb
-clocked at 250 kHz with PRESCALE 1 (4 us ticks), programmed over the PLB-like IPIF by stepramp.driver.StepRamp, as
-`stepramp shell` does (stepramp.session). Writes to build/demo/: the GHW waveform and a GTKWave save file that lays
-it out (stepramp.gtkw), move.json (the `stepramp sim` JSON contract), profile.png (step rate against time: RTL,
+clocked at 250 kHz with PRESCALE 1 (4 us ticks), programmed over the PLB-like IPIF by stepramp.board.driver.StepRamp, as
+`stepramp shell` does (stepramp.sim.session). Writes to build/demo/: the GHW waveform and a GTKWave save file that lays
+it out (stepramp.sim.waves), move.json (the `stepramp sim` JSON contract), profile.png (step rate against time: RTL,
 bit-exact model, ideal trapezoid; and each pulse's deviation from the ideal), report.txt and report.json; prints a
 short table and the paths.
 """
@@ -19,19 +19,19 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from stepramp.driver import StepRampError
-from stepramp.gtkw import signal_paths, write_gtkw
-from stepramp.model import edges as model_edges
-from stepramp.plan import plan_move
-from stepramp.shell import SHELL_CONFIG
-from stepramp.summary import summarise_edges
+from stepramp.board.driver import StepRampError
+from stepramp.board.plan import plan_move
+from stepramp.models.engine import edges as model_edges
+from stepramp.sim.waves import signal_paths, write_gtkw
+from stepramp.tools.shell import SHELL_CONFIG
+from stepramp.tools.summary import summarise_edges
 
 DEMO_MOVE: dict[str, Any] = {"steps": 400, "accel": 40.0, "decel": 40.0, "speed": 20.0, **SHELL_CONFIG}
 
 
 def summarise(move: dict[str, Any], edges: list[int]) -> dict[str, Any]:
     """Figures of merit of a simulated move against the ideal trapezoid (times in ticks and seconds): the summary of
-    `stepramp sim --summary` (stepramp.summary), with the pulse count as "steps"."""
+    `stepramp sim --summary` (stepramp.tools.summary), with the pulse count as "steps"."""
     figures = summarise_edges(move, edges)
     return {"steps": figures.pop("pulses"), **figures}
 
@@ -43,7 +43,7 @@ def main(argv: list[str] | None = None) -> int:
     out: Path = args.out.resolve()
     out.mkdir(parents=True, exist_ok=True)
 
-    from stepramp.session import RtlSession, SessionError  # needs cocotb and GHDL
+    from stepramp.sim.session import RtlSession, SessionError  # needs cocotb and GHDL
 
     plan = plan_move(**DEMO_MOVE)
     waves = out / "stepramp_demo.ghw"
@@ -103,7 +103,7 @@ def main(argv: list[str] | None = None) -> int:
     (out / "report.txt").write_text("\n".join(lines) + "\n")
     (out / "report.json").write_text(json.dumps(figures, indent=2) + "\n")
     try:
-        from stepramp.plot import plot_move
+        from stepramp.tools.plot import plot_move
 
         plot_move(move_json, out / "profile.png", model_edges=model)
         png = str(out / "profile.png")

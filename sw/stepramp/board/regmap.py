@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: MIT
 """The register map: the one source of truth for the bus registers of the stepramp core.
 
-From this description `python -m stepramp.regmap_gen` writes the VHDL constants package
+From this description `python -m stepramp.tools.regmap_gen` writes the VHDL constants package
 (hdl/stepramp_regs_pkg.vhd), the C header (sw/c/stepramp_regs.h) and the Markdown table (docs/registers.md);
 the Python driver uses it directly. A test checks that the generated files are up to date.
 

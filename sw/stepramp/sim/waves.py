@@ -205,7 +205,7 @@ def write_gtkw(
     lines = [
         "[*]",
         f"[*] {title}",
-        "[*] written by stepramp.gtkw: open with  gtkwave " + path.name,
+        "[*] written by stepramp.sim.waves: open with  gtkwave " + path.name,
         "[*]",
         f'[dumpfile] "{dumpfile.resolve()}"',
         f'[savefile] "{path.resolve()}"',

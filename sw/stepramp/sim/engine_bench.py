@@ -47,8 +47,8 @@ from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, First, ReadOnly, RisingEdge, SimTimeoutError, Timer, with_timeout
 from cocotb.utils import get_sim_time
 
-from stepramp.gtkw import LAYOUTS, missing_in, signal_paths
-from stepramp.plan import Plan
+from stepramp.board.plan import Plan
+from stepramp.sim.waves import LAYOUTS, missing_in, signal_paths
 
 CLK_PERIOD_NS = 10
 
@@ -345,7 +345,7 @@ async def play_moves(dut: Any) -> None:
     await FallingEdge(dut.clk)
     dut.rst.value = 0
     await ClockCycles(dut.clk, 2)
-    # The waveform layout (stepramp.gtkw) names signals of this design: they must exist.
+    # The waveform layout (stepramp.sim.waves) names signals of this design: they must exist.
     missing = missing_in(dut, signal_paths(LAYOUTS["stepramp_engine"]))
     assert not missing, f"the GTKWave layout names signals stepramp_engine does not have: {missing}"
 

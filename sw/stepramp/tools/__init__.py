@@ -1,0 +1,2 @@
+# SPDX-License-Identifier: MIT
+"""Tools: the stepramp command, the shell, the demo, plots, synthesis, RTL checks, generators."""
