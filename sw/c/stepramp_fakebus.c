@@ -7,7 +7,7 @@
 
 #include <string.h>
 
-#include "stepramp.h"
+#include "stepramp_hostbus.h"
 #include "stepramp_regs.h"
 
 stepramp_fakebus_t stepramp_fakebus;
@@ -16,6 +16,7 @@ stepramp_fakebus_t stepramp_fakebus;
 #define CTRL_CMD_MASK (STEPRAMP_CTRL_START_MASK | STEPRAMP_CTRL_SOFT_STOP_MASK | STEPRAMP_CTRL_HARD_STOP_MASK)
 #define CTRL_EN_MASK (STEPRAMP_CTRL_IRQ_DONE_EN_MASK | STEPRAMP_CTRL_IRQ_ERROR_EN_MASK)
 #define FLAGS_MASK (STEPRAMP_STATUS_DONE_MASK | STEPRAMP_STATUS_ERROR_MASK)
+#define STATE_STOP 0u /* STATUS.STATE of an idle core (docs/registers.md) */
 
 void stepramp_fakebus_clear_log(void)
 {
@@ -137,7 +138,7 @@ static void write_word(uint32_t off, uint32_t data, uint32_t be)
     } /* ID, CUR_DELAY, STEP_COUNT: read only */
 }
 
-uint32_t stepramp_fakebus_read32(uintptr_t addr)
+uint32_t stepramp_hostbus_read32(uintptr_t addr)
 {
     stepramp_fakebus_t *f = &stepramp_fakebus;
     long off = window_offset(addr);
@@ -159,14 +160,14 @@ uint32_t stepramp_fakebus_read32(uintptr_t addr)
             uint32_t code = err ? err : (st & STEPRAMP_STATUS_ERR_CODE_MASK) >> STEPRAMP_STATUS_ERR_CODE_SHIFT;
 
             /* a normal end keeps ERR_CODE (the cause of an earlier error, as in the core) */
-            stepramp_fakebus_set_status(STEPRAMP_STATE_STOP, 0u, dir, code,
+            stepramp_fakebus_set_status(STATE_STOP, 0u, dir, code,
                                         STEPRAMP_STATUS_DONE_MASK | (err ? STEPRAMP_STATUS_ERROR_MASK : 0u));
         }
     }
     return f->regs[(uint32_t)off / 4u];
 }
 
-void stepramp_fakebus_write32(uintptr_t addr, uint32_t value)
+void stepramp_hostbus_write32(uintptr_t addr, uint32_t value)
 {
     long off = window_offset(addr);
 
@@ -180,7 +181,7 @@ void stepramp_fakebus_write32(uintptr_t addr, uint32_t value)
     write_word((uint32_t)off, value, 0xFu);
 }
 
-void stepramp_fakebus_write8(uintptr_t addr, uint8_t value)
+void stepramp_hostbus_write8(uintptr_t addr, uint8_t value)
 {
     long off = window_offset(addr);
     uint32_t lane;
@@ -192,38 +193,9 @@ void stepramp_fakebus_write8(uintptr_t addr, uint8_t value)
     write_word((uint32_t)off & ~3u, (uint32_t)value << (8u * lane), 1u << lane);
 }
 
-void stepramp_fakebus_idle(void)
+void stepramp_hostbus_idle(void)
 {
     stepramp_fakebus.idles++;
-}
-
-int stepramp_fakebus_move(int64_t steps, double accel, double decel, double speed, double spr, double fclk,
-                          uint32_t prescale)
-{
-    stepramp_t dev;
-    int rc;
-
-    stepramp_fakebus_reset(STEPRAMP_FAKEBUS_BASE, STEPRAMP_ID_VALUE);
-    rc = stepramp_init(&dev, STEPRAMP_FAKEBUS_BASE, fclk, spr, prescale);
-    if (rc != STEPRAMP_OK) {
-        return rc;
-    }
-    stepramp_fakebus_clear_log();
-    return stepramp_move(&dev, steps, accel, decel, speed);
-}
-
-int stepramp_fakebus_program(const stepramp_plan_t *plan)
-{
-    stepramp_t dev;
-    int rc;
-
-    stepramp_fakebus_reset(STEPRAMP_FAKEBUS_BASE, STEPRAMP_ID_VALUE);
-    rc = stepramp_init(&dev, STEPRAMP_FAKEBUS_BASE, 1e6, 200.0, 1u);
-    if (rc != STEPRAMP_OK) {
-        return rc;
-    }
-    stepramp_fakebus_clear_log();
-    return stepramp_program(&dev, plan);
 }
 
 uint32_t stepramp_fakebus_log_count(void)
@@ -256,11 +228,6 @@ int stepramp_fakebus_log_entry(uint32_t i, uint32_t *offset, uint32_t *value, ui
 stepramp_fakebus_t *stepramp_fakebus_state(void)
 {
     return &stepramp_fakebus;
-}
-
-size_t stepramp_fakebus_sizeof_plan(void)
-{
-    return sizeof(stepramp_plan_t);
 }
 
 size_t stepramp_fakebus_sizeof_state(void)

@@ -8,17 +8,15 @@
  * a log of every write and a count of the driver's STEPRAMP_IDLE() calls. The "core" side is driven by the test:
  * stepramp_fakebus_set_status() and stepramp_fakebus_finish_after().
  *
- * The host build compiles stepramp.c with -DSTEPRAMP_CONFIG_HEADER='"stepramp_fakebus.h"', which routes the
- * driver's register access here. The stepramp_fakebus_*move/program* functions are a ctypes entry point
- * for sw/tests/test_c_driver.py.
+ * The bank implements the host build's register access (stepramp_hostbus.h): the driver reaches it through that
+ * header alone, and the bank does not know the driver. The ctypes entry points that run the driver on the bank
+ * are in stepramp_ctypes.c.
  */
 #ifndef STEPRAMP_FAKEBUS_H
 #define STEPRAMP_FAKEBUS_H
 
 #include <stddef.h>
 #include <stdint.h>
-
-#include "stepramp_plan.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -69,26 +67,9 @@ void stepramp_fakebus_set_status(uint32_t state, uint32_t busy, uint32_t dir, ui
  */
 void stepramp_fakebus_finish_after(uint32_t n, uint32_t err_code);
 
-/** Bus side, used by the driver through the macros below. */
-uint32_t stepramp_fakebus_read32(uintptr_t addr);
-void stepramp_fakebus_write32(uintptr_t addr, uint32_t value);
-void stepramp_fakebus_write8(uintptr_t addr, uint8_t value);
-void stepramp_fakebus_idle(void);
+/* Bus side: the bank defines the functions of stepramp_hostbus.h. */
 
-/* ---- ctypes entry points (sw/tests/test_c_driver.py) ---- */
-
-/** Base address the entry points below put the fake core at. */
-#define STEPRAMP_FAKEBUS_BASE ((uintptr_t)0x44A00000u)
-
-/**
- * Reset the fake core, stepramp_init a device at STEPRAMP_FAKEBUS_BASE with fclk, spr, prescale, clear the log,
- * then stepramp_move. Returns stepramp_move's result (or stepramp_init's if it fails).
- */
-int stepramp_fakebus_move(int64_t steps, double accel, double decel, double speed, double spr, double fclk,
-                          uint32_t prescale);
-
-/** Reset the fake core, clear the log, stepramp_program(plan). Returns its result. */
-int stepramp_fakebus_program(const stepramp_plan_t *plan);
+/* ---- ctypes access to the bank (sw/tests/test_c_driver.py, tb/test_plb_c.py) ---- */
 
 /** Writes logged since the last clear (at most STEPRAMP_FAKEBUS_LOG_MAX). */
 uint32_t stepramp_fakebus_log_count(void);
@@ -102,15 +83,8 @@ int stepramp_fakebus_log_entry(uint32_t i, uint32_t *offset, uint32_t *value, ui
 /** Pointer to the fake core's state (for ctypes). */
 stepramp_fakebus_t *stepramp_fakebus_state(void);
 
-/** sizeof(stepramp_plan_t) and sizeof(stepramp_fakebus_t): lets ctypes check its structure layouts. */
-size_t stepramp_fakebus_sizeof_plan(void);
+/** sizeof(stepramp_fakebus_t): lets ctypes check its structure layout. */
 size_t stepramp_fakebus_sizeof_state(void);
-
-/* The driver's register access, when this file is its STEPRAMP_CONFIG_HEADER. */
-#define STEPRAMP_READ32(addr) stepramp_fakebus_read32(addr)
-#define STEPRAMP_WRITE32(addr, value) stepramp_fakebus_write32((addr), (value))
-#define STEPRAMP_WRITE8(addr, value) stepramp_fakebus_write8((addr), (value))
-#define STEPRAMP_IDLE() stepramp_fakebus_idle()
 
 #ifdef __cplusplus
 }
