@@ -1,11 +1,6 @@
 -- SPDX-License-Identifier: MIT
 -- stepramp_axil: the stepramp core with an AXI4-Lite slave (ports s_axil_*, for Vivado / MicroBlaze on AXI).
---
--- The write address and write data channels are accepted independently (each is held until both are there);
--- reads and writes are independent too and may arrive together: the core's register port takes one access per
--- clock, and when a read and a write are both ready the one that did not go last goes first (no starvation).
--- A response is given one clock after its access and held until the master takes it (backpressure on B and R).
--- Unmapped offsets answer SLVERR. aresetn is synchronous, active low (the core sees rst = not aresetn).
+-- Ports and channel behaviour: docs/stepramp_plb.md; registers: docs/registers.md.
 
 library ieee;
   use ieee.std_logic_1164.all;

@@ -1,8 +1,7 @@
 -- SPDX-License-Identifier: MIT
--- stepramp_core: the stepramp core behind a bus-agnostic register port (one-cycle read/write strobes, answer one
--- clock later). It only wires the blocks: register file, stepping logic (start gate for DIR timing, STEP/DIR/ENABLE,
--- windings) and ramp engine. The bus tops (stepramp_plb for the PLB-like IPIF, stepramp_axil for AXI4-Lite) turn
--- their bus into the strobes.
+-- stepramp_core: the stepramp core behind a bus-agnostic register port (one-cycle read / write strobes, the answer
+-- one clock later). It only wires the register file, the stepping logic and the ramp engine; the bus tops
+-- stepramp_plb and stepramp_axil turn their bus into the strobes. docs/stepramp_plb.md.
 
 library ieee;
   use ieee.std_logic_1164.all;
@@ -44,13 +43,13 @@ architecture rtl of stepramp_core is
   signal load          : std_logic;
   signal step_space    : std_logic_vector(15 downto 0);
   signal min_gap       : std_logic_vector(16 downto 0);
-  signal start         : std_logic;
-  signal start_dir     : std_logic;
+  signal eng_start     : std_logic;
+  signal eng_direction : std_logic;
   signal gate_busy     : std_logic;
   signal busy_any      : std_logic;
   signal dir_fault     : std_logic;
   signal eng_step      : std_logic;
-  signal enable_cfg    : std_logic;
+  signal ctrl_enable   : std_logic;
   signal mode          : std_logic_vector(2 downto 0);
   signal ustep_log2    : std_logic_vector(2 downto 0);
   signal step_width    : std_logic_vector(15 downto 0);
@@ -81,7 +80,7 @@ architecture rtl of stepramp_core is
   signal error         : std_logic;
   signal err_code      : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
   signal state         : std_logic_vector(1 downto 0);
-  signal dir_i         : std_logic;
+  signal eng_dir       : std_logic;
   signal position      : std_logic_vector(31 downto 0);
   signal step_count    : std_logic_vector(30 downto 0);
   signal cur_delay     : std_logic_vector(31 downto 0);
@@ -119,7 +118,7 @@ begin
       stop_ratio     => stop_ratio,
       pos_load       => pos_load,
       pos_value      => pos_value,
-      enable         => enable_cfg,
+      enable         => ctrl_enable,
       mode           => mode,
       ustep_log2     => ustep_log2,
       step_width     => step_width,
@@ -132,7 +131,7 @@ begin
       eng_error      => error,
       eng_err_code   => err_code,
       eng_state      => state,
-      eng_dir        => dir_i,
+      eng_dir        => eng_dir,
       eng_position   => position,
       eng_step_count => step_count,
       eng_cur_delay  => cur_delay,
@@ -155,37 +154,37 @@ begin
       G_MICROSTEPS => G_MICROSTEPS
     )
     port map (
-      clk        => clk,
-      rst        => rst,
-      mode       => mode,
-      ustep_log2 => ustep_log2,
-      step_width => step_width,
-      dir_setup  => dir_setup,
-      dir_hold   => dir_hold,
-      enable_in  => enable_cfg,
-      pwm_period => pwm_period,
-      step_space => step_space,
-      min_gap    => min_gap,
-      start_req  => start_req,
-      new_dir    => direction,
-      hard_stop  => hard_stop,
-      soft_stop  => soft_stop,
-      start_out  => start,
-      stop_out   => gate_stop,
-      start_dir  => start_dir,
-      gate_busy  => gate_busy,
-      eng_step   => eng_step,
-      eng_busy   => busy,
-      eng_dir    => dir_i,
-      position   => position,
-      dir_fault  => dir_fault,
-      step_o     => step,
-      dir_o      => dir,
-      enable_o   => enable,
-      a1         => a1,
-      a2         => a2,
-      b1         => b1,
-      b2         => b2
+      clk           => clk,
+      rst           => rst,
+      mode          => mode,
+      ustep_log2    => ustep_log2,
+      step_width    => step_width,
+      dir_setup     => dir_setup,
+      dir_hold      => dir_hold,
+      pwm_period    => pwm_period,
+      step_space    => step_space,
+      ctrl_enable   => ctrl_enable,
+      start_req     => start_req,
+      new_dir       => direction,
+      hard_stop     => hard_stop,
+      soft_stop     => soft_stop,
+      gate_busy     => gate_busy,
+      dir_fault     => dir_fault,
+      eng_step      => eng_step,
+      eng_busy      => busy,
+      eng_dir       => eng_dir,
+      eng_position  => position,
+      eng_start     => eng_start,
+      eng_hard_stop => gate_stop,
+      eng_direction => eng_direction,
+      eng_min_gap   => min_gap,
+      step          => step,
+      dir           => dir,
+      enable        => enable,
+      a1            => a1,
+      a2            => a2,
+      b1            => b1,
+      b2            => b2
     );
 
   engine_inst : entity work.stepramp_engine
@@ -193,11 +192,11 @@ begin
       clk        => clk,
       rst        => rst,
       load       => load,
-      start      => start,
+      start      => eng_start,
       soft_stop  => soft_stop,
       hard_stop  => eng_hard_stop,
       steps      => steps,
-      direction  => start_dir,
+      direction  => eng_direction,
       prescale   => prescale,
       c_first    => c_first,
       c_last     => c_last,
@@ -213,7 +212,7 @@ begin
       pos_load   => pos_load,
       pos_value  => pos_value,
       step       => eng_step,
-      dir        => dir_i,
+      dir        => eng_dir,
       busy       => busy,
       done       => done,
       error      => error,

@@ -1,18 +1,6 @@
 -- SPDX-License-Identifier: MIT
--- stepramp_divider: iterative unsigned radix-4 divider that starts at the numerator's most significant '1'.
---
--- A restoring divider normally runs one iteration per numerator bit. This one takes two numerator bits per clock
--- (radix 4: the partial remainder times 4 plus the next bit pair is compared with D, 2 D and 3 D at once, and the
--- largest multiple that fits is subtracted). The quotient has no '1' above the numerator's most significant '1',
--- so a priority encoder on the numerator gives the first bit pair worth an iteration: floor(msb(N) / 2) + 1
--- iterations. The partial remainder starts at 0 and takes the bit pairs in turn (picked by a one-hot select that
--- shifts down: no barrel shifter), and it stays below D, so the subtractors are only G_DEN_WIDTH + 3 bits wide.
---
--- Latency, from the rising edge that samples start to the rising edge that raises done:
---   1                            when D = 0 (div_zero = '1') or N = 0 (quotient 0, remainder 0)
---   1 + floor(msb(N) / 2) + 1    otherwise (at most 1 + ceil(G_WIDTH / 2))
--- start is sampled only when busy = '0'. done is a one-cycle strobe; quotient, remainder and div_zero are valid
--- from done on and held until the next start. On D = 0: quotient all ones, remainder = N mod 2^G_DEN_WIDTH.
+-- stepramp_divider: iterative unsigned radix-4 divider that starts at the numerator's most significant bit pair
+-- (floor(msb(N) / 2) + 1 iterations, no barrel shifter). Ports, latency and timing: docs/stepramp_divider.md.
 
 library ieee;
   use ieee.std_logic_1164.all;
@@ -79,7 +67,7 @@ begin
       G_WIDTH => G_WIDTH
     )
     port map (
-      din   => std_logic_vector(num_r(G_WIDTH - 1 downto 0)),
+      data  => std_logic_vector(num_r(G_WIDTH - 1 downto 0)),
       index => num_msb,
       zero  => num_zero
     );

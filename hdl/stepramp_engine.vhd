@@ -1,42 +1,7 @@
 -- SPDX-License-Identifier: MIT
--- stepramp_engine: the ramp engine. Emits the step pulses of one move with the exact timing of docs/algorithm.md.
---
--- Structure (docs/stepramp_engine.md has the timing diagrams and the latency budget): this entity is the
--- sequencer; stepramp_precompute prepares the intervals.
---   * base timer (stepramp_timer), restarted by every accepted start, so that every pulse lies on a tick;
---   * decide_proc: what this clock edge does (pulse, load the next interval or the soft-stop alternative, end the
---     move, and why), from registered state only; the sequencer and the precompute both act on it;
---   * seq_proc, the move sequencer: IDLE / SETUP / FIRST / RUN, the countdown (the only logic that runs every
---     clock is "tick and cnt = 1 ?"; at the pulse edge the registers of the next interval are merely copied),
---     the outputs, stops and step spacing;
---   * stepramp_precompute: while an interval counts down, the value of the following interval (rule order of the
---     spec, a recurrence step on the next-delay unit, the fractional accumulator) waits in nxt_* until the pulse
---     edge, and in ACCEL / RUN the soft-stop alternative in alt_*. The countdown never waits for it: if it is not
---     there in time the move stops with error C_ERR_LATE.
---   * check_proc: the parameter check of the latched move.
---
--- Parameters: latched at any edge that samples load = '1' while idle (the core drives load at the edge that accepts
--- START, so a start held back by the stepping logic keeps them); a bench may give load with start.
--- Timing (edge 0 samples start = '1' while busy = '0'):
---   edge 0: busy <= '1', dir <= direction, timer restart and next-delay flush requested;
---   edge 1: parameters checked, interval 1 prepared (no arithmetic needed: the accumulator is 0), accel seed load
---           requested from the next-delay unit;
---   edge 2: pulse 0 (step '1' in the following cycle), or done + error when a parameter is bad, or done for N = 0;
---   edge 2 + prescale * T_k: pulse k. done comes with the last pulse; a late value stops the move with done + error
---   at the edge of the pulse that had no successor ready (that pulse is emitted and counted).
---   A pulse k >= 1 less than min_gap clocks after pulse k - 1 is not emitted: the move ends at its edge with done +
---   error C_ERR_STEP_SPACE (docs/algorithm.md, "Step spacing").
--- Every output is registered.
---
--- Stops (docs/stepramp_engine.md "Stops", docs/algorithm.md "Soft stop"), strobes sampled at edge e while busy:
---   hard_stop: no pulse after edge e (a pulse due at e is not emitted); done (no error) after edge e. Also taken
---              together with an accepted start (the move ends at edge 0 without a pulse).
---   soft_stop: decided at pulse p, the first pulse whose edge is strictly after e. In ACCEL / RUN the move then
---              decelerates over m more steps, m = floor(p * stop_ratio / 2^16) in ACCEL, m = L - sd + 1 in RUN
---              (ignored in DECEL or when p + m >= L; m = 0 ends the move with pulse p), from D = the plan's value
---              of interval p + 1. To meet "strictly after e" with no latency, the value of interval p + 1 for
---              such a stop (the alternative) is prepared in every ACCEL / RUN interval, after the normal next value
---              (which is D), and only chosen at the pulse edge.
+-- stepramp_engine: the ramp engine, the sequencer of one move: it emits the move's step pulses with the exact timing
+-- of docs/algorithm.md, keeps the position and step counters, and takes soft and hard stops; stepramp_precompute
+-- prepares the intervals. Ports, timing, stops, error codes and latency budget: docs/stepramp_engine.md.
 
 library ieee;
   use ieee.std_logic_1164.all;

@@ -1,21 +1,7 @@
 -- SPDX-License-Identifier: MIT
--- stepramp_next_delay: the next-delay unit. Answers one question for the ramp engine: "what is the ramp value at
--- this index?", given the value (and remainder) at the neighbouring index, or a seed to load.
---
--- This implementation runs one step of the AVR446 recurrence with remainder (docs/algorithm.md):
---   accel (req_decel = '0'), answer index n:  num = 2 * A_{n-1} + r, den = 4n + 1, A_n     = A_{n-1} - q
---   decel (req_decel = '1'), answer index m:  num = 2 * D_{m+1} + r, den = 4m + 3, D_m     = D_{m+1} + q
---   (4m + 3 is the spec's 4m' - 1 written with the answer's index m = m' - 1.)
---   seed  (req_seed = '1'):                   the answer is req_value itself with remainder 0, at once.
--- The index is always the index of the value asked for, so that a later mode that computes a value from its index
--- alone (c0 * (sqrt(n + 1) - sqrt(n)), isqrt) can replace the recurrence behind the same ports.
---
--- Timing: req is sampled at an edge e when busy = '0' (and flush = '0'). A seed is registered at e itself
--- (ans_valid is '1' in the cycle after edge e). A recurrence step starts the divider at e; the divider raises done
--- at e + 1 + k (k = floor(msb(num) / 2) + 1 radix-4 iterations, or 0 when num = 0) and the answer is registered at
--- e + 2 + k (ans_valid '1' in the cycle after that edge). With a 48-bit value, num < 2^50, so k <= 25. ans_* hold
--- until the next answer.
--- flush abandons a request in flight (it also resets the divider), so a new move never waits for an old division.
+-- stepramp_next_delay: the ramp engine's next-delay unit. It answers "what is the ramp value at this index?" from
+-- the value (and remainder) at the neighbouring index by one step of the AVR446 recurrence on stepramp_divider, or
+-- loads a seed. Ports, recurrence and timing: docs/stepramp_engine.md, "stepramp_next_delay".
 
 library ieee;
   use ieee.std_logic_1164.all;

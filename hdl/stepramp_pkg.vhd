@@ -1,5 +1,6 @@
 -- SPDX-License-Identifier: MIT
--- stepramp_pkg: small helpers shared by the stepramp entities.
+-- stepramp_pkg: helpers shared by the stepramp entities (clog2); compiled first (docs/integration.md, "Compile
+-- order").
 
 library ieee;
   use ieee.std_logic_1164.all;

@@ -1,10 +1,6 @@
 -- SPDX-License-Identifier: MIT
--- stepramp_plb: the stepramp core with a native PLB-like slave interface (Xilinx IPIF signal names).
---
--- IPIF handshake: the master holds Bus2IP_CS (with Bus2IP_RNW, Bus2IP_Addr, Bus2IP_Data, Bus2IP_BE) until it
--- sees IP2Bus_RdAck or IP2Bus_WrAck, one cycle long, and drops Bus2IP_CS in the cycle after the ack. This slave
--- answers every access in exactly two cycles (the ack is registered), with IP2Bus_Error set together with the ack
--- for an unmapped offset. Registers: docs/registers.md.
+-- stepramp_plb: the stepramp core with a native PLB-like slave interface (Xilinx IPIF signal names) that answers
+-- every access in two clocks. Ports, bus timing and registers: docs/stepramp_plb.md, docs/registers.md.
 
 library ieee;
   use ieee.std_logic_1164.all;

@@ -1,14 +1,7 @@
 -- SPDX-License-Identifier: MIT
 -- stepramp_precompute: the ramp engine's precompute. While an interval counts down in the sequencer
--- (stepramp_engine), it prepares the following one: the value the spec's rule order gives it (a register, or a
--- recurrence step on stepramp_next_delay), through the fractional-carry accumulator into whole ticks (nxt_*), and
--- in ACCEL and RUN also the soft-stop alternative of the same interval (alt_*). docs/stepramp_engine.md, "Theory
--- of operation", "Latency budget" and "The soft-stop alternative", has the timing; the sequencer only copies the
--- results at a pulse edge, and a result not ready by then is its LATE error.
---
--- Control strobes from the sequencer, all combinational decisions of the same clock edge (so the precompute starts
--- at the very pulse edge, as the latency budget counts): begin_move (edge 0 of an accepted start), setup (edge 1),
--- advance (a pulse loads nxt_*), take_alt (a pulse loads the alternative), finish (the move ends).
+-- (stepramp_engine), it prepares the next one (nxt_*) and, in ACCEL and RUN, the soft-stop alternative (alt_*).
+-- Ports, timing and latency budget: docs/stepramp_engine.md, "stepramp_precompute" and "Latency budget".
 
 library ieee;
   use ieee.std_logic_1164.all;

@@ -1,6 +1,6 @@
 -- SPDX-License-Identifier: MIT
--- stepramp_prio_enc: index of the most significant '1' of din, and a zero flag.
--- Purely combinational, a binary tree of log2(G_WIDTH) levels. index is 0 when din is all zeros (zero = '1' then).
+-- stepramp_prio_enc: the index of the most significant '1' of data, and a zero flag; combinational.
+-- Ports and timing: docs/stepramp_prio_enc.md.
 
 library ieee;
   use ieee.std_logic_1164.all;
@@ -14,7 +14,7 @@ entity stepramp_prio_enc is
     G_WIDTH : positive := 32
   );
   port (
-    din   : in    std_logic_vector(G_WIDTH - 1 downto 0);
+    data  : in    std_logic_vector(G_WIDTH - 1 downto 0);
     index : out   std_logic_vector(clog2(G_WIDTH) - 1 downto 0);
     zero  : out   std_logic
   );
@@ -36,7 +36,7 @@ begin
   -- each node of level l covers 2^(l+1) bits and holds whether any is '1' and, below its top bit l, the index of the
   -- highest '1' within it. Node n of level l combines nodes 2n (low half) and 2n + 1 (high half) of level l - 1:
   -- the high half wins when it has a '1', and contributes index bit l.
-  encode_proc : process (din) is
+  encode_proc : process (data) is
 
     type t_any is array (0 to C_PAD - 1) of std_logic;
 
@@ -53,7 +53,7 @@ begin
       idx_v(i) := (others => '0');
 
       if (i < G_WIDTH) then
-        any_v(i) := din(i);
+        any_v(i) := data(i);
       else
         any_v(i) := '0';
       end if;

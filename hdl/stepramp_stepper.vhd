@@ -1,34 +1,7 @@
 -- SPDX-License-Identifier: MIT
--- stepramp_stepper: the stepping logic. Between the register file / ramp engine and the motor pins: STEP/DIR/ENABLE
--- timing, the start gate that keeps DIR setup and hold, and the winding outputs of two H-bridges (wave, full step
--- two-phase-on, half step, sine/cosine PWM microstepping). docs/stepramp_stepper.md has the tables and diagrams.
---
--- Timing (edge numbers are rising edges of clk; "after edge e" is the clock cycle that follows it):
---   * STEP: eng_step sampled '1' at edge E -> step_o rises at edge E (high after E) and stays high for exactly
---     W = max(step_width, 1) clocks (falls at edge E + W). An eng_step while step_o is high restarts the width
---     (the pulse then ends W clocks after the later eng_step; the two engine pulses merge into one STEP pulse: the
---     engine never does this, it refuses a pulse closer than min_gap to the previous one). A pulse in progress
---     when rst rises keeps its full width (reset never cuts a STEP pulse short).
---   * min_gap = W + max(step_space, 1): the shortest distance between two STEP rising edges (registered, for the
---     engine and the start gate below).
---   * Start gate, start_req sampled at edge Q while the gate is idle and eng_busy = '0':
---       same direction (new_dir = dir_o):   start_out high after edge S = Q (1 clock latency);
---       direction change: DIR changes at edge D = max(Q + 1, R + max(dir_hold, 1)), R = the last edge at which
---       eng_step was sampled '1' (no constraint when none since reset), and start_out is high after edge
---       S = D + 1 + max(dir_setup - 5, 0). The engine samples start_out at S + 1, its pulse 0 is high after
---       S + 3 and step_o rises at S + 4, so the first STEP rising edge comes exactly max(dir_setup, 5) clocks
---       after the DIR change.
---     In both cases S is also held until S + 4 >= R + min_gap (STEP spacing across moves).
---     A start_req while the gate is busy (gate_busy = '1') or while eng_busy = '1' is dropped.
---   * Stops: hard_stop or soft_stop sampled at edge H while the gate holds a start (waiting for DIR hold or setup;
---     the motor is at rest, so a soft stop has nothing to decelerate), or hard_stop together with the start_req it
---     accepts: no DIR change from H on, and start_out and stop_out are both high after edge H, so that the engine
---     accepts the move and ends it at once (done, no pulse). The core ORs stop_out into the engine's hard_stop. (A
---     stop in the cycle start_out is high reaches the engine directly.)
---   * Windings: modes 1 .. 3 follow position at the edge where step_o rises (position is already updated in the
---     cycle eng_step is high). Mode 4 (PWM): the duty is recomputed continuously by a serial multiplier (rounds of
---     G_DUTY_BITS + 3 clocks); the pins show the duty of a new position from edge E + G_DUTY_BITS + 4 to
---     E + 2 * G_DUTY_BITS + 6 at the latest (E: the edge at which step_o rises; 16 .. 30 clocks at the default).
+-- stepramp_stepper: the stepping logic between the register file / ramp engine and the motor pins: STEP / DIR /
+-- ENABLE timing, the start gate that keeps DIR setup and hold, and the winding outputs of two H-bridges (wave, full
+-- step two-phase-on, half step, sine/cosine PWM microstepping). Ports, timing and tables: docs/stepramp_stepper.md.
 
 library ieee;
   use ieee.std_logic_1164.all;
@@ -48,30 +21,36 @@ entity stepramp_stepper is
     step_width : in    std_logic_vector(15 downto 0);
     dir_setup  : in    std_logic_vector(15 downto 0);
     dir_hold   : in    std_logic_vector(15 downto 0);
-    enable_in  : in    std_logic;
     pwm_period : in    std_logic_vector(15 downto 0);
     step_space : in    std_logic_vector(15 downto 0);
-    min_gap    : out   std_logic_vector(16 downto 0);
-    start_req  : in    std_logic;
-    new_dir    : in    std_logic;
-    hard_stop  : in    std_logic;
-    soft_stop  : in    std_logic;
-    start_out  : out   std_logic;
-    stop_out   : out   std_logic;
-    start_dir  : out   std_logic;
-    gate_busy  : out   std_logic;
-    eng_step   : in    std_logic;
-    eng_busy   : in    std_logic;
-    eng_dir    : in    std_logic;
-    position   : in    std_logic_vector(31 downto 0);
-    dir_fault  : out   std_logic;
-    step_o     : out   std_logic;
-    dir_o      : out   std_logic;
-    enable_o   : out   std_logic;
-    a1         : out   std_logic;
-    a2         : out   std_logic;
-    b1         : out   std_logic;
-    b2         : out   std_logic
+    -- CTRL.ENABLE (the pin is enable).
+    ctrl_enable : in    std_logic;
+    -- Start gate: the register file's start and stop strobes and the direction of the move being started; a start
+    -- being held and the direction check, for STATUS.
+    start_req : in    std_logic;
+    new_dir   : in    std_logic;
+    hard_stop : in    std_logic;
+    soft_stop : in    std_logic;
+    gate_busy : out   std_logic;
+    dir_fault : out   std_logic;
+    -- From the ramp engine (eng_X is the engine's port X).
+    eng_step     : in    std_logic;
+    eng_busy     : in    std_logic;
+    eng_dir      : in    std_logic;
+    eng_position : in    std_logic_vector(31 downto 0);
+    -- To the ramp engine (eng_hard_stop is ORed with the register file's hard_stop).
+    eng_start     : out   std_logic;
+    eng_hard_stop : out   std_logic;
+    eng_direction : out   std_logic;
+    eng_min_gap   : out   std_logic_vector(16 downto 0);
+    -- Pins: STEP / DIR / ENABLE for a driver chip, A1 A2 B1 B2 for two H-bridges.
+    step   : out   std_logic;
+    dir    : out   std_logic;
+    enable : out   std_logic;
+    a1     : out   std_logic;
+    a2     : out   std_logic;
+    b1     : out   std_logic;
+    b2     : out   std_logic
   );
 end entity stepramp_stepper;
 
@@ -141,10 +120,10 @@ architecture rtl of stepramp_stepper is
   constant C_GS_SETUP : std_logic_vector(1 downto 0) := "10";
   constant C_GS_FIRED : std_logic_vector(1 downto 0) := "11";
 
-  -- Clocks from the edge that registers start_out to the edge at which step_o rises for the engine's pulse 0:
-  -- 1 (engine samples start) + 2 (engine first-pulse latency) + 1 (step_o register).
+  -- Clocks from the edge that registers eng_start to the edge at which step rises for the engine's pulse 0:
+  -- 1 (engine samples start) + 2 (engine first-pulse latency) + 1 (STEP register).
   constant C_START_TO_STEP : natural := 4;
-  -- Shortest DIR change -> first STEP rising edge: the gate registers start_out one edge after the DIR change.
+  -- Shortest DIR change -> first STEP rising edge: the gate registers eng_start one edge after the DIR change.
   constant C_SETUP_MIN : natural := C_START_TO_STEP + 1;
 
   -- since_step saturates above the largest min_gap - C_START_TO_STEP - 1 (min_gap <= 2 * 65535).
@@ -156,7 +135,7 @@ architecture rtl of stepramp_stepper is
   signal width_m1   : unsigned(15 downto 0);
   signal since_step : unsigned(16 downto 0); -- edges since eng_step was last sampled '1' (saturating)
   signal min_gap_r  : unsigned(16 downto 0);
-  signal space_ok   : std_logic;             -- a start_out registered at this edge keeps min_gap
+  signal space_ok   : std_logic;             -- an eng_start registered at this edge keeps min_gap
 
   -- Start gate.
   signal gstate      : std_logic_vector(1 downto 0);
@@ -279,9 +258,9 @@ begin
 
   end process gap_proc;
 
-  min_gap <= std_logic_vector(min_gap_r);
+  eng_min_gap <= std_logic_vector(min_gap_r);
 
-  -- A start_out registered at edge S gives a STEP rising edge at S + C_START_TO_STEP; the previous one was at the
+  -- An eng_start registered at edge S gives a STEP rising edge at S + C_START_TO_STEP; the previous one was at the
   -- last edge R that sampled eng_step = '1' (R = S when eng_step is '1' now, else since_step = S - 1 - R).
   space_ok <= '1' when eng_step = '1' and min_gap_r <= C_START_TO_STEP else
               '1' when eng_step = '0' and resize(since_step, 18) + C_START_TO_STEP + 1 >= resize(min_gap_r, 18) else
@@ -289,7 +268,7 @@ begin
 
   ---------------------------------------------------------------------------------------------------------------------
   -- Start gate: DIR changes only between moves, dir_hold after the last STEP rising edge at the earliest, and
-  -- start_out follows so that the engine's first STEP rising edge comes max(dir_setup, 5) clocks after it.
+  -- eng_start follows so that the engine's first STEP rising edge comes max(dir_setup, 5) clocks after it.
   ---------------------------------------------------------------------------------------------------------------------
   -- DIR may change at edge D when D - R >= max(dir_hold, 1), i.e. since_step (value after edge D - 1) >= hold - 1.
   hold_m1 <= (others => '0') when unsigned(dir_hold) = 0 else
@@ -354,7 +333,7 @@ begin
 
           when C_GS_FIRED =>
 
-            -- The engine samples start_out at this edge and shows busy from the next cycle on: a start_req seen
+            -- The engine samples eng_start at this edge and shows busy from the next cycle on: a start_req seen
             -- now would pass the engine's idle check, so it is dropped here.
             v_next := C_GS_IDLE;
 
@@ -388,7 +367,7 @@ begin
         end if;
 
         -- A pulse while the engine's direction differs from DIR: the engine was started around the gate (or
-        -- its direction input is not wired to start_dir). Sticky until the next accepted start_req.
+        -- its direction input is not wired to eng_direction). Sticky until the next accepted start_req.
         if (eng_step = '1' and eng_dir /= dir_r) then
           fault_r <= '1';
         elsif (gstate = C_GS_IDLE and start_req = '1' and eng_busy = '0') then
@@ -403,9 +382,9 @@ begin
   -- On/off modes: half-step index h, then AVR446 Table 2-1 (h = 0: A+, 1: A+B+, 2: B+, 3: A-B+, 4: A-, 5: A-B-,
   -- 6: B-, 7: A+B-). Wave drive uses the even h, full step two-phase-on the odd h.
   ---------------------------------------------------------------------------------------------------------------------
-  half_idx <= unsigned(position(1 downto 0)) & '0' when mode = C_MODE_WAVE else
-              unsigned(position(1 downto 0)) & '1' when mode = C_MODE_FULL else
-              unsigned(position(2 downto 0));
+  half_idx <= unsigned(eng_position(1 downto 0)) & '0' when mode = C_MODE_WAVE else
+              unsigned(eng_position(1 downto 0)) & '1' when mode = C_MODE_FULL else
+              unsigned(eng_position(2 downto 0));
 
   lvl_a1 <= '1' when half_idx = 7 or half_idx = 0 or half_idx = 1 else
             '0';
@@ -425,7 +404,7 @@ begin
   u_shift <= C_LG - to_integer(unsigned(ustep_log2)) when to_integer(unsigned(ustep_log2)) < C_LG else
              0;
 
-  e_idx    <= shift_left(unsigned(position(C_EW - 1 downto 0)), u_shift);
+  e_idx    <= shift_left(unsigned(eng_position(C_EW - 1 downto 0)), u_shift);
   quad     <= std_logic_vector(e_idx(C_EW - 1 downto C_EW - 2));
   frac_idx <= to_integer(e_idx and to_unsigned(G_MICROSTEPS - 1, C_EW));
 
@@ -548,7 +527,7 @@ begin
         b1_r     <= '0';
         b2_r     <= '0';
       else
-        enable_r <= enable_in;
+        enable_r <= ctrl_enable;
         a1_r     <= '0';
         a2_r     <= '0';
         b1_r     <= '0';
@@ -563,7 +542,7 @@ begin
           v_on_b := '1';
         end if;
 
-        if (enable_in = '1') then
+        if (ctrl_enable = '1') then
           if (mode = C_MODE_WAVE or mode = C_MODE_FULL or mode = C_MODE_HALF) then
             a1_r <= lvl_a1;
             a2_r <= lvl_a2;
@@ -581,17 +560,17 @@ begin
 
   end process out_proc;
 
-  step_o    <= step_r;
-  dir_o     <= dir_r;
-  start_out <= start_r;
-  stop_out  <= stop_r;
-  start_dir <= dir_r;
-  gate_busy <= gate_busy_r;
-  dir_fault <= fault_r;
-  enable_o  <= enable_r;
-  a1        <= a1_r;
-  a2        <= a2_r;
-  b1        <= b1_r;
-  b2        <= b2_r;
+  step          <= step_r;
+  dir           <= dir_r;
+  eng_start     <= start_r;
+  eng_hard_stop <= stop_r;
+  eng_direction <= dir_r;
+  gate_busy     <= gate_busy_r;
+  dir_fault     <= fault_r;
+  enable        <= enable_r;
+  a1            <= a1_r;
+  a2            <= a2_r;
+  b1            <= b1_r;
+  b2            <= b2_r;
 
 end architecture rtl;

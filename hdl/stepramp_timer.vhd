@@ -1,10 +1,6 @@
 -- SPDX-License-Identifier: MIT
--- stepramp_timer: the base timer. A modulo counter that emits one tick every prescale clocks.
---
--- tick is registered. When restart is sampled at rising edge r, tick is '1' in the cycles that follow edges
--- r + P, r + 2P, ... (P = prescale; P = 1 gives a tick in every cycle from edge r + 1 on). prescale = 0 behaves as
--- 1. A new prescale value takes effect at the next tick (the running period completes with the old value), or
--- at once with restart.
+-- stepramp_timer: the base timer, a modulo counter that emits one registered tick every prescale clocks.
+-- Ports and timing: docs/stepramp_timer.md.
 
 library ieee;
   use ieee.std_logic_1164.all;

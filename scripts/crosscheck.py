@@ -20,6 +20,7 @@ from pathlib import Path
 from stepramp.board.plan import plan_move
 from stepramp.models.engine import tick_times
 from stepramp.models.ideal import pulse_times
+from stepramp.sim.profiles import design_args
 
 BIN = Path(sys.executable).parent / "stepramp"
 
@@ -30,20 +31,10 @@ def random_move(rng: random.Random, max_cycles: float) -> dict[str, float | int]
         prescale = rng.choice((1, 1, 2, 3, 7))
         fclk = rng.choice((1e6, 2e6, 4e6))
         spr = rng.choice((200.0, 400.0, 1600.0))
-        alpha = 2 * math.pi / spr
         period = math.ceil(64 / prescale) + rng.uniform(0.5, 200.0)
-        v = fclk / prescale / period
         n_a = math.exp(rng.uniform(math.log(0.3), math.log(300)))
         n_d = n_a * math.exp(rng.uniform(-math.log(50), math.log(50)))
-        move = {
-            "steps": rng.randint(1, 800) * rng.choice((1, -1)),
-            "accel": alpha * v * v / (2 * n_a),
-            "decel": alpha * v * v / (2 * n_d),
-            "speed": alpha * v,
-            "spr": spr,
-            "fclk": fclk,
-            "prescale": prescale,
-        }
+        move = design_args(rng.randint(1, 800) * rng.choice((1, -1)), period, n_a, n_d, spr, fclk, prescale)
         try:
             plan = plan_move(**move)
         except ValueError:

@@ -14,20 +14,23 @@ PWM duty measurement samples the pins clock by clock, for one carrier period now
   the polarity at every step and the duty measured over a carrier period now and then.
 
 The rules come from stepramp.models.stepping (the model), never from the RTL. Times are converted to clock periods
-(tbutil.CLK_PERIOD_NS unless told otherwise).
+(stepramp.sim.clocking.CLK_PERIOD_NS unless told otherwise).
 """
 
 from __future__ import annotations
 
 from collections.abc import Coroutine, Iterable, Sequence
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar, TypedDict
 
 import cocotb
 from cocotb.triggers import ClockCycles, ReadOnly, RisingEdge
 from cocotb.utils import get_sim_time
 
 from stepramp.models import stepping as sm
-from tbutil import CLK_PERIOD_NS
+from stepramp.sim.clocking import CLK_PERIOD_NS, now_periods
+
+if TYPE_CHECKING:  # (typing.Unpack from Python 3.11 on)
+    from typing_extensions import Unpack
 
 
 def _bit(signal: Any) -> int:
@@ -40,11 +43,21 @@ def _name(signal: Any) -> str:
     return str(getattr(signal, "_name", signal))
 
 
+class MonitorOptions(TypedDict, total=False):
+    """The keyword options every monitor takes: its clock period (times are counted in clock periods) and the name
+    its violations are reported under (default: the class's `title`)."""
+
+    clk_period_ns: float
+    name: str
+
+
 class Monitor:
     """Base: a list of violations, start / stop of the watching coroutines, check()."""
 
-    def __init__(self, name: str, clk_period_ns: float = CLK_PERIOD_NS) -> None:
-        self.name = name
+    title = "monitor"
+
+    def __init__(self, *, clk_period_ns: float = CLK_PERIOD_NS, name: str | None = None) -> None:
+        self.name = self.title if name is None else name
         self.clk_period_ns = clk_period_ns
         self.violations: list[tuple[float, str]] = []
         self._tasks: list[Any] = []
@@ -67,7 +80,7 @@ class Monitor:
     def now(self) -> float:
         """Simulation time in clock periods, to a thousandth: a test that starts a time step late (cocotb starts each
         test of a simulation one step after the previous one ends) must not make a 4-clock pulse 3.9999999 long."""
-        return round(get_sim_time("ns") / self.clk_period_ns, 3)
+        return round(now_periods(self.clk_period_ns * 1000), 3)
 
     def violation(self, message: str) -> None:
         self.violations.append((get_sim_time("ns"), message))
@@ -85,16 +98,10 @@ class Monitor:
 class StepWidthMonitor(Monitor):
     """STEP high for at least max(step_width, 1) clocks per pulse (exactly that with exact=True)."""
 
-    def __init__(
-        self,
-        step: Any,
-        step_width: int,
-        *,
-        exact: bool = False,
-        clk_period_ns: float = CLK_PERIOD_NS,
-        name: str = "STEP width",
-    ) -> None:
-        super().__init__(name, clk_period_ns)
+    title = "STEP width"
+
+    def __init__(self, step: Any, step_width: int, *, exact: bool = False, **options: Unpack[MonitorOptions]) -> None:
+        super().__init__(**options)
         self.step = step
         self.step_width = step_width
         self.exact = exact
@@ -122,17 +129,12 @@ class DirTimingMonitor(Monitor):
     Each STEP rising edge is checked against the latest DIR change, each DIR change against the latest rising edge.
     """
 
+    title = "DIR setup/hold"
+
     def __init__(
-        self,
-        step: Any,
-        direction: Any,
-        dir_setup: int,
-        dir_hold: int,
-        *,
-        clk_period_ns: float = CLK_PERIOD_NS,
-        name: str = "DIR setup/hold",
+        self, step: Any, direction: Any, dir_setup: int, dir_hold: int, **options: Unpack[MonitorOptions]
     ) -> None:
-        super().__init__(name, clk_period_ns)
+        super().__init__(**options)
         self.step = step
         self.direction = direction
         self.dir_setup = dir_setup
@@ -171,14 +173,10 @@ class DirTimingMonitor(Monitor):
 class ShootThroughMonitor(Monitor):
     """IN1 and IN2 of each bridge never '1' together. bridges: pairs (in1, in2), e.g. [(a1, a2), (b1, b2)]."""
 
-    def __init__(
-        self,
-        bridges: Sequence[tuple[Any, Any]],
-        *,
-        clk_period_ns: float = CLK_PERIOD_NS,
-        name: str = "shoot-through",
-    ) -> None:
-        super().__init__(name, clk_period_ns)
+    title = "shoot-through"
+
+    def __init__(self, bridges: Sequence[tuple[Any, Any]], **options: Unpack[MonitorOptions]) -> None:
+        super().__init__(**options)
         self.bridges = list(bridges)
         self.edges = 0
 
@@ -213,6 +211,8 @@ class ElectricalMonitor(Monitor):
     moves) is left to the newer one and counted in `superseded`. pins: (a1, a2, b1, b2).
     """
 
+    title = "electrical position"
+
     def __init__(
         self,
         clk: Any,
@@ -230,10 +230,9 @@ class ElectricalMonitor(Monitor):
         settle: int | None = None,
         pwm_every: int = 16,
         duty_tolerance: int = 1,
-        clk_period_ns: float = CLK_PERIOD_NS,
-        name: str = "electrical position",
+        **options: Unpack[MonitorOptions],
     ) -> None:
-        super().__init__(name, clk_period_ns)
+        super().__init__(**options)
         if len(pins) != 4:
             raise ValueError("pins must be (a1, a2, b1, b2)")
         self.clk = clk
@@ -350,12 +349,13 @@ class ElectricalMonitor(Monitor):
 
 class MotionMonitors:
     """All four monitors on one set of pins, with one check(). names maps step, dir, a1, a2, b1, b2 to the
-    pins' names on the dut (default: the stepramp_stepper port names step_o, dir_o, a1, a2, b1, b2)."""
+    pins' names on the dut (default: the pin names step, dir, a1, a2, b1, b2 that stepramp_stepper, stepramp_core and
+    both tops share)."""
 
     DEFAULT_NAMES: ClassVar[dict[str, str]] = {
         "clk": "clk",
-        "step": "step_o",
-        "dir": "dir_o",
+        "step": "step",
+        "dir": "dir",
         "a1": "a1",
         "a2": "a2",
         "b1": "b1",
@@ -366,20 +366,15 @@ class MotionMonitors:
         self,
         dut: Any,
         *,
-        mode: int,
         step_width: int,
         dir_setup: int,
         dir_hold: int,
-        position: int = 0,
-        ustep_log2: int = 0,
-        pwm_period: int = 0,
-        microsteps: int = sm.DEFAULT_MICROSTEPS,
-        duty_bits: int = sm.DEFAULT_DUTY_BITS,
-        enable: bool = True,
-        pwm_every: int = 16,
         names: dict[str, str] | None = None,
         clk_period_ns: float = CLK_PERIOD_NS,
+        **electrical: Any,
     ) -> None:
+        """electrical: ElectricalMonitor's settings by keyword (mode, required; position, ustep_log2, pwm_period,
+        microsteps, duty_bits, enable, pwm_every ...)."""
         n = {**self.DEFAULT_NAMES, **(names or {})}
         sig = {k: getattr(dut, v) for k, v in n.items()}
         pins = (sig["a1"], sig["a2"], sig["b1"], sig["b2"])
@@ -387,19 +382,7 @@ class MotionMonitors:
         self.dir = DirTimingMonitor(sig["step"], sig["dir"], dir_setup, dir_hold, clk_period_ns=clk_period_ns)
         self.shoot = ShootThroughMonitor([pins[:2], pins[2:]], clk_period_ns=clk_period_ns)
         self.electrical = ElectricalMonitor(
-            sig["clk"],
-            sig["step"],
-            sig["dir"],
-            pins,
-            mode,
-            position=position,
-            ustep_log2=ustep_log2,
-            pwm_period=pwm_period,
-            microsteps=microsteps,
-            duty_bits=duty_bits,
-            enable=enable,
-            pwm_every=pwm_every,
-            clk_period_ns=clk_period_ns,
+            sig["clk"], sig["step"], sig["dir"], pins, clk_period_ns=clk_period_ns, **electrical
         )
         self.all: list[Monitor] = [self.width, self.dir, self.shoot, self.electrical]
 
@@ -449,6 +432,7 @@ __all__ = [
     "DirTimingMonitor",
     "ElectricalMonitor",
     "Monitor",
+    "MonitorOptions",
     "MotionMonitors",
     "ShootThroughMonitor",
     "StepWidthMonitor",

@@ -1,8 +1,9 @@
 # SPDX-License-Identifier: MIT
 """Testbench for the peripheral tops (stepramp_plb, stepramp_axil): clock, reset, a bus master, monitors.
 
-The bus master is stepramp/ipif.py's IpifMaster for the PLB-like top, or cocotbext-axi's AxiLiteMaster (wrapped to the
-driver's read/write interface) for the AXI4-Lite top; with `idle` the masters insert idle cycles and, on AXI,
+What differs between the tops is in one small BusPort class per top (PORTS): IpifPort (clk, rst, stepramp.sim.ipif's
+IpifMaster) for the PLB-like top, AxilPort (aclk, aresetn, cocotbext-axi's AxiLiteMaster wrapped to the driver's
+read/write interface by AxilAccess) for the AXI4-Lite top; with `idle` the masters insert idle cycles and, on AXI,
 backpressure on every channel. The engine's own start edge (edge 0 of the model) is taken from the rising edge of
 the core's (engine's) busy, so step edges are compared with stepramp.models.engine whatever the bus timing and whatever
 time the stepping logic holds a start back for DIR setup/hold.
@@ -16,18 +17,19 @@ import random
 from collections.abc import Iterator
 from typing import Any
 
-from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, First, RisingEdge, Timer
 
 from monitors import MotionMonitors
 from stepramp.board.driver import Outputs, Status, StepRamp
 from stepramp.board.plan import Plan, plan_move
-from stepramp.models.engine import last_edge
+from stepramp.models.engine import edges as edges_of
+from stepramp.models.engine import edges_with_stop, last_edge
+from stepramp.sim.clocking import CLK_PERIOD_NS, CLK_PERIOD_PS, apply_reset, reset_held, start_clock
 from stepramp.sim.ipif import IpifError, IpifMaster
 from stepramp.sim.profiles import PROFILES_BY_NAME
 from stepramp.sim.stepwatch import StepWatch
 from stepramp.sim.waves import LAYOUTS, missing_in, signal_paths
-from tbutil import CLK_PERIOD_NS
+from tbutil import edges_differ, env_int
 
 
 class AxilError(Exception):
@@ -103,64 +105,77 @@ def pauses(seed: int) -> Iterator[int]:
     return itertools.cycle([int(rng.random() < 0.35) for _ in range(97)])
 
 
-class PeripheralTb:
-    """One of the two tops, with its bus master, a STEP monitor and the engine-start monitor."""
+class BusPort:
+    """A top's side of the bench: its clock, its reset and the bus master the driver talks through."""
 
-    def __init__(self, dut: Any, top: str, idle: bool = False, seed: int = 1) -> None:
+    clk_name = "clk"
+    rst_name = "rst"
+    rst_active = 1
+
+    def __init__(self, dut: Any, idle_seed: int | None) -> None:
         self.dut = dut
-        self.top = top
-        self.idle = idle
-        self.seed = seed
-        self.clk = dut.aclk if top == "stepramp_axil" else dut.clk
-        Clock(self.clk, CLK_PERIOD_NS, unit="ns").start()
-        self.bus: Any = None
-        self.pins: StepWatch | None = None
-        self.step_edges: list[int] = []  # the pins' records once reset
-        self.start_edges: list[int] = []
-        self.outputs = Outputs()
-        self.enabled = False
-        self.monitors: MotionMonitors | None = None
+        self.clk = getattr(dut, self.clk_name)
+        self.rst = getattr(dut, self.rst_name)
+        self.idle_seed = idle_seed  # None: no idle cycles, no backpressure
 
-    async def reset(self) -> None:
-        if self.top == "stepramp_axil":
-            self.dut.aresetn.value = 0
-            await ClockCycles(self.clk, 3)
-            from cocotbext.axi import AxiLiteBus, AxiLiteMaster
+    async def reset(self) -> Any:
+        """Reset the top (the clock runs) and return its bus master, ready once the reset is released."""
+        raise NotImplementedError
 
-            master = AxiLiteMaster(AxiLiteBus.from_prefix(self.dut, "s_axil"), self.clk, self.dut.aresetn, False)
-            self.bus = AxilAccess(master, seed=self.seed if self.idle else None)
-            await FallingEdge(self.clk)
-            self.dut.aresetn.value = 1
-        else:
-            self.bus = IpifMaster(self.dut, self.clk, CLK_PERIOD_NS, idle=pauses(self.seed) if self.idle else None)
-            self.dut.rst.value = 1
-            await ClockCycles(self.clk, 3)
-            await FallingEdge(self.clk)
-            self.dut.rst.value = 0
-        await ClockCycles(self.clk, 2)
-        missing = missing_in(self.dut, signal_paths(LAYOUTS[self.top]))
-        assert not missing, f"the GTKWave layout names signals {self.top} does not have: {missing}"
-        self.pins = StepWatch(self.dut.step, self.dut.core_inst.busy, CLK_PERIOD_NS * 1000)
-        self.step_edges, self.start_edges = self.pins.step_edges, self.pins.start_edges
-        self._start_monitors(position=0)
+
+class IpifPort(BusPort):
+    """stepramp_plb: clk, rst (active high) and stepramp.sim.ipif's IpifMaster, idle cycles between accesses from
+    `pauses` when given a seed."""
+
+    async def reset(self) -> IpifMaster:
+        """The master (driving an idle bus from now on), then the reset."""
+        idle = None if self.idle_seed is None else pauses(self.idle_seed)
+        master = IpifMaster(self.dut, self.clk, CLK_PERIOD_NS, idle=idle)
+        await apply_reset(self.clk, self.rst)
+        return master
+
+
+class AxilPort(BusPort):
+    """stepramp_axil: aclk, aresetn (active low) and cocotbext-axi's AxiLiteMaster behind AxilAccess, idle cycles and
+    backpressure on every channel when given a seed."""
+
+    clk_name = "aclk"
+    rst_name = "aresetn"
+    rst_active = 0
+
+    async def reset(self) -> AxilAccess:
+        """The reset, with the master created while it is held (so it starts out of reset)."""
+        from cocotbext.axi import AxiLiteBus, AxiLiteMaster
+
+        async with reset_held(self.clk, self.rst, active=self.rst_active):
+            master = AxiLiteMaster(AxiLiteBus.from_prefix(self.dut, "s_axil"), self.clk, self.rst, False)
+        return AxilAccess(master, seed=self.idle_seed)
+
+
+#: The bench's side of each top, by the top's name.
+PORTS: dict[str, type[BusPort]] = {"stepramp_plb": IpifPort, "stepramp_axil": AxilPort}
+TOPS = tuple(PORTS)
+
+
+class MotionBench:
+    """What the benches that program a core with the driver share (PeripheralTb; tb/test_core.py's CoreTb): a driver
+    over the bench's register access `bus`, the wait for irq, and the stepping configuration with the motion monitors
+    (which each bench starts in its _start_monitors and stops and checks in its finish)."""
+
+    dut: Any
+    clk: Any
+    bus: Any
+    outputs: Outputs
+    enabled: bool
 
     def _start_monitors(self, position: int) -> None:
-        """STEP width, DIR setup/hold, shoot-through and electrical position monitors for the current settings."""
-        clk = "aclk" if self.top == "stepramp_axil" else "clk"
-        self.monitors = MotionMonitors.for_outputs(self.dut, self.outputs, self.enabled, position, names={"clk": clk})
-
-    async def configure(self, outputs: Outputs, enable: bool = True) -> None:
-        """Program the stepping outputs (while stopped) and restart the monitors with the new settings."""
-        await reconfigure(self, outputs, enable)
+        raise NotImplementedError
 
     def finish(self) -> None:
-        """Stop the monitors and raise if any of them saw a violation (call at the end of every motion test)."""
-        if self.monitors is not None:
-            self.monitors.stop()
-            self.monitors.check()
-            self.monitors = None
+        raise NotImplementedError
 
     def driver(self, plan_args: dict[str, Any] | None = None) -> StepRamp:
+        """The driver for a clock and motor (plan_args: fclk, spr, prescale; default 1 MHz, 200 steps/rev, 1)."""
         args = plan_args or {"fclk": 1e6, "spr": 200.0, "prescale": 1}
         drv = StepRamp(self.bus, fclk=args["fclk"], spr=args["spr"], prescale=args["prescale"])
         drv.outputs = self.outputs
@@ -169,6 +184,71 @@ class PeripheralTb:
     async def irq_or(self, cycles: int) -> None:
         """Idle between status polls: until irq rises, or at most `cycles` clocks."""
         await First(RisingEdge(self.dut.irq), Timer(cycles * CLK_PERIOD_NS, unit="ns"))
+
+    async def configure(self, outputs: Outputs, enable: bool = True) -> None:
+        """Stop and check the monitors, program the stepping outputs through the driver (while stopped), and restart
+        the monitors with the new settings."""
+        self.finish()
+        drv = self.driver()
+        await drv.configure_outputs(outputs)
+        await drv.set_enable(enable)
+        self.outputs, self.enabled = outputs, enable
+        # The PWM duty follows a new mode after the serial multipliers (stepramp.models.stepping.winding_latency, < 40
+        # clocks): let the outputs settle before the monitors look at them.
+        await ClockCycles(self.clk, 100)
+        self._start_monitors(position=await drv.position())
+
+
+class PeripheralTb(MotionBench):
+    """One of the two tops, with its bus master, a STEP monitor and the engine-start monitor."""
+
+    def __init__(self, dut: Any, top: str, idle: bool = False, seed: int = 1) -> None:
+        self.dut = dut
+        self.top = top
+        self.port = PORTS[top](dut, seed if idle else None)
+        self.clk = self.port.clk
+        start_clock(self.clk)
+        self.bus: Any = None
+        self.pins: StepWatch | None = None
+        self.step_edges: list[int] = []  # the pins' records once reset
+        self.start_edges: list[int] = []
+        self.outputs = Outputs()
+        self.enabled = False
+        self.monitors: MotionMonitors | None = None
+
+    @classmethod
+    async def started(cls, dut: Any, idle: bool = False) -> PeripheralTb:
+        """The bench of the top under test (dut._name), reset; idle cycles from the seed in BUS_SEED (1)."""
+        tb = cls(dut, dut._name, idle=idle, seed=env_int("BUS_SEED", 1))
+        await tb.reset()
+        return tb
+
+    async def reset(self) -> None:
+        self.bus = await self.port.reset()
+        await ClockCycles(self.clk, 2)
+        missing = missing_in(self.dut, signal_paths(LAYOUTS[self.top]))
+        assert not missing, f"the GTKWave layout names signals {self.top} does not have: {missing}"
+        self.pins = StepWatch(self.dut.step, self.dut.core_inst.busy, CLK_PERIOD_PS)
+        self.step_edges, self.start_edges = self.pins.step_edges, self.pins.start_edges
+        self._start_monitors(position=0)
+
+    async def reset_pulse(self) -> None:
+        """The top's reset again (rst, or aresetn low), as at the start, from the next falling edge."""
+        await FallingEdge(self.clk)
+        await apply_reset(self.clk, self.port.rst, active=self.port.rst_active)
+
+    def _start_monitors(self, position: int) -> None:
+        """STEP width, DIR setup/hold, shoot-through and electrical position monitors for the current settings."""
+        self.monitors = MotionMonitors.for_outputs(
+            self.dut, self.outputs, self.enabled, position, names={"clk": self.port.clk_name}
+        )
+
+    def finish(self) -> None:
+        """Stop the monitors and raise if any of them saw a violation (call at the end of every motion test)."""
+        if self.monitors is not None:
+            self.monitors.stop()
+            self.monitors.check()
+            self.monitors = None
 
     def edges_since(self, first_step: int, first_start: int) -> list[int]:
         """STEP pin edges of a move in the model's convention (stepramp.sim.stepwatch.StepWatch.since)."""
@@ -184,18 +264,35 @@ class PeripheralTb:
         return self.edges_since(n_steps, n_starts), status
 
 
-async def reconfigure(tb: Any, outputs: Outputs, enable: bool) -> None:
-    """A bench's configure (PeripheralTb, tb/test_core.py's CoreTb): stop and check its monitors, program the stepping
-    outputs through its driver (while stopped), and restart the monitors with the new settings."""
-    tb.finish()
-    drv = tb.driver()
-    await drv.configure_outputs(outputs)
-    await drv.set_enable(enable)
-    tb.outputs, tb.enabled = outputs, enable
-    # The PWM duty follows a new mode after the serial multipliers (stepramp.models.stepping.winding_latency, < 40
-    # clocks): let the outputs settle before the monitors look at them.
-    await ClockCycles(tb.clk, 100)
-    tb._start_monitors(position=await drv.position())
+def check_stopped(plan: Plan, kind: str, phase: str, request: int, edges: list[int], wait_pulses: int) -> None:
+    """A move stopped through CTRL, SOFT_STOP or HARD_STOP (`kind`) sampled by the engine at edge `request` of the
+    move, `wait_pulses` pulses into it, in `phase`: every edge as stepramp.models.engine.edges_with_stop says; no pulse
+    at or after a hard stop; a soft stop changes nothing in DECEL, and in ACCEL or RUN ends the move early on a decel
+    ramp (the speed never rises, the last interval is at the slow end: the plan's c_last)."""
+    what = f"{kind} stop in {phase}"
+    want = edges_with_stop(plan, kind, request)
+    assert edges == want, f"{what}: {edges_differ(edges, want)}"
+    normal = edges_of(plan)
+    if kind == "hard":
+        assert all(e < request for e in edges) and len(edges) < len(normal), f"{what}: a pulse at or after it"
+    elif phase == "DECEL":
+        assert edges == normal, f"{what}: changes the move"
+    else:
+        assert len(edges) < len(normal), f"{what}: does not end the move early"
+        tail = [b - a for a, b in itertools.pairwise(edges[wait_pulses:])]
+        slow_end = (plan.c_last >> 16) * plan.prescale
+        assert tail[-1] >= 0.95 * slow_end, f"{what}: last interval {tail[-1]}, not at the slow end {slow_end}"
+        assert all(b >= a - plan.prescale for a, b in itertools.pairwise(tail)), f"{what}: the speed rose"
+
+
+def stop_cases(pulses: tuple[int, int, int]) -> list[tuple[str, int, str]]:
+    """(kind, pulses to wait before the command, the phase it then lands in): a soft and a hard stop after each of
+    `pulses`, pulse counts that land in ACCEL, RUN and DECEL of the move."""
+    return [
+        (kind, wait, phase)
+        for kind in ("soft", "hard")
+        for wait, phase in zip(pulses, ("ACCEL", "RUN", "DECEL"), strict=True)
+    ]
 
 
 def profiles_limit_us(names: list[str]) -> int:
@@ -205,4 +302,19 @@ def profiles_limit_us(names: list[str]) -> int:
     return math.ceil(2 * cycles * CLK_PERIOD_NS / 1000) + 100
 
 
-__all__ = ["AxilAccess", "AxilError", "BusError", "PeripheralTb", "pauses", "profiles_limit_us", "reconfigure"]
+__all__ = [
+    "PORTS",
+    "TOPS",
+    "AxilAccess",
+    "AxilError",
+    "AxilPort",
+    "BusError",
+    "BusPort",
+    "IpifPort",
+    "MotionBench",
+    "PeripheralTb",
+    "check_stopped",
+    "pauses",
+    "profiles_limit_us",
+    "stop_cases",
+]

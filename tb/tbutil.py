@@ -1,20 +1,20 @@
 # SPDX-License-Identifier: MIT
-"""Shared helpers for the cocotb testbenches: build directories, clock and reset, edge timestamps."""
+"""Shared helpers for the cocotb testbenches: build directories, integers from the environment, and how two lists of
+step edges differ. The clock, the reset and clock-edge numbers are stepramp.sim.clocking's (imported here for the
+benches that take them from here)."""
 
 from __future__ import annotations
 
 import os
 import re
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 
 import cocotb
-from cocotb.clock import Clock
-from cocotb.triggers import ClockCycles, FallingEdge
-from cocotb.utils import get_sim_time
+
+from stepramp.sim.clocking import CLK_PERIOD_NS, now_cycles, start_clock_and_reset
 
 REPO = Path(__file__).resolve().parents[1]
-CLK_PERIOD_NS = 10
 
 
 def build_dir(name: str) -> Path:
@@ -30,18 +30,27 @@ def env_int(name: str, default: int) -> int:
     return int(os.environ.get(name, default))
 
 
-async def start_clock_and_reset(dut: Any, cycles: int = 3) -> None:
-    """Start clk (cocotb GPI clock) and hold rst high for a few cycles; the caller drives the inputs."""
-    Clock(dut.clk, CLK_PERIOD_NS, unit="ns").start()
-    dut.rst.value = 1
-    await ClockCycles(dut.clk, cycles)
-    await FallingEdge(dut.clk)
-    dut.rst.value = 0
+def first_mismatch(got: Sequence[int], want: Sequence[int]) -> int:
+    """Index of the first element where two lists differ (the shorter one's length if it starts the other)."""
+    return next((k for k, (a, b) in enumerate(zip(got, want, strict=False)) if a != b), min(len(got), len(want)))
 
 
-def now_cycles() -> int:
-    """Simulation time in clock periods, rounded: the index of the most recent rising edge."""
-    return round(get_sim_time("ns") / CLK_PERIOD_NS)
+def edges_differ(got: Sequence[int], want: Sequence[int]) -> str:
+    """How the step edges seen differ from the model's: both counts and the first difference."""
+    k = first_mismatch(got, want)
+    return (
+        f"{len(got)} edges vs {len(want)} expected; first difference at pulse {k}: "
+        f"rtl {list(got[k : k + 3])} model {list(want[k : k + 3])}"
+    )
 
 
-__all__ = ["CLK_PERIOD_NS", "build_dir", "cocotb", "env_int", "now_cycles", "start_clock_and_reset"]
+__all__ = [
+    "CLK_PERIOD_NS",
+    "build_dir",
+    "cocotb",
+    "edges_differ",
+    "env_int",
+    "first_mismatch",
+    "now_cycles",
+    "start_clock_and_reset",
+]

@@ -31,15 +31,13 @@ every motion test. About 4 ms of simulated time at a 10 ns clock.
 
 from __future__ import annotations
 
-import itertools
 from typing import Any
 
-from cocotb.clock import Clock
-from cocotb.triggers import ClockCycles, FallingEdge, First, Lock, ReadOnly, RisingEdge, Timer
+from cocotb.triggers import ClockCycles, FallingEdge, Lock, ReadOnly, RisingEdge, Timer
 from cocotb.utils import get_sim_time
 
 from monitors import MotionMonitors, StepWidthMonitor
-from peripheral_tb import reconfigure
+from peripheral_tb import MotionBench, check_stopped, stop_cases
 from stepramp.board.driver import MODES, Outputs, StepRamp
 from stepramp.board.plan import Plan
 from stepramp.board.regmap import (
@@ -53,13 +51,12 @@ from stepramp.board.regmap import (
 )
 from stepramp.models import stepping as sm
 from stepramp.models.engine import edges as model_edges
-from stepramp.models.engine import edges_with_stop as model_edges_with_stop
+from stepramp.sim.clocking import CLK_PERIOD_PS, apply_reset, start_clock
 from stepramp.sim.profiles import PROFILES_BY_NAME
 from stepramp.sim.runner import run_cocotb
 from stepramp.sim.stepwatch import StepWatch
-from tbutil import CLK_PERIOD_NS, build_dir, cocotb
+from tbutil import build_dir, cocotb, edges_differ
 
-PERIOD_PS = CLK_PERIOD_NS * 1000
 WINDOW = 1 << ADDR_BITS
 WORD = 0xFFFF_FFFF
 MAPPED = {r.offset for r in REGISTERS}
@@ -93,7 +90,7 @@ class CoreMaster:
         self.dut = dut
         self.clk = dut.clk
         self.t0_ps = t0_ps
-        self.e0 = round(t0_ps / PERIOD_PS)  # edges numbered as stepramp.sim.stepwatch.StepWatch numbers them
+        self.e0 = round(t0_ps / CLK_PERIOD_PS)  # edges numbered as stepramp.sim.stepwatch.StepWatch numbers them
         self.lock = Lock()
         self.strobe_edges: set[int] = set()
         self.last_edge = -1  # strobe edge of the last access
@@ -108,7 +105,7 @@ class CoreMaster:
     def cycles(self) -> float:
         """Now in clock periods: rising edge e at e.0, the falling edge after it at e.5 (the clock starts at t0_ps
         with a rising edge, numbered as StepWatch numbers it)."""
-        return (get_sim_time("ps") - self.t0_ps) / PERIOD_PS + self.e0
+        return (get_sim_time("ps") - self.t0_ps) / CLK_PERIOD_PS + self.e0
 
     def idle(self) -> None:
         self.dut.wr.value = 0
@@ -185,15 +182,16 @@ class CoreMaster:
             raise PortTimingError("register port: " + "; ".join(self.violations[:10]))
 
 
-class CoreTb:
+class CoreTb(MotionBench):
     """stepramp_core with its clock, the register-port master, the STEP / engine-start watch and the monitors."""
 
     def __init__(self, dut: Any) -> None:
         self.dut = dut
         self.clk = dut.clk
         self.t0_ps = get_sim_time("ps")
-        Clock(self.clk, CLK_PERIOD_NS, unit="ns").start()
+        start_clock(self.clk)
         self.master = CoreMaster(dut, self.t0_ps)
+        self.bus = self.master  # the driver's register access
         self.pins: StepWatch | None = None
         self.irq_rises: list[int] = []
         self.irq_falls: list[int] = []
@@ -204,13 +202,9 @@ class CoreTb:
         self.exact_width: StepWidthMonitor | None = None
 
     async def reset(self) -> None:
-        self.dut.rst.value = 1
-        await ClockCycles(self.clk, 3)
-        await FallingEdge(self.clk)
-        self.dut.rst.value = 0
-        await ClockCycles(self.clk, 2)
+        await apply_reset(self.clk, self.dut.rst, settle=2)
         # The engine's busy rises at the edge that samples its start: the model's edge 0 (as in tb/peripheral_tb.py).
-        self.pins = StepWatch(self.dut.step, self.dut.busy, PERIOD_PS)
+        self.pins = StepWatch(self.dut.step, self.dut.busy, CLK_PERIOD_PS)
         cocotb.start_soon(self._watch(RisingEdge, self.dut.irq, self.irq_rises))
         cocotb.start_soon(self._watch(FallingEdge, self.dut.irq, self.irq_falls))
         cocotb.start_soon(self._watch(FallingEdge, self.dut.busy, self.busy_falls))
@@ -241,19 +235,6 @@ class CoreTb:
             self.monitors = self.exact_width = None
         self.master.check()
 
-    def driver(self, plan_args: dict[str, Any] | None = None) -> StepRamp:
-        args = plan_args or {"fclk": 1e6, "spr": 200.0, "prescale": 1}
-        drv = StepRamp(self.master, fclk=args["fclk"], spr=args["spr"], prescale=args["prescale"])
-        drv.outputs = self.outputs
-        return drv
-
-    async def configure(self, outputs: Outputs, enable: bool = True) -> None:
-        """Program the stepping outputs (while stopped) and restart the monitors with the new settings."""
-        await reconfigure(self, outputs, enable)
-
-    async def irq_or(self, cycles: int) -> None:
-        await First(RisingEdge(self.dut.irq), Timer(cycles * CLK_PERIOD_NS, unit="ns"))
-
     def mark(self) -> tuple[int, int]:
         assert self.pins is not None, "reset() first"
         return self.pins.mark()
@@ -275,14 +256,6 @@ def plan_of(tb: CoreTb, name: str) -> tuple[StepRamp, Plan]:
 
 def signed_steps(plan: Plan) -> int:
     return -plan.steps if plan.direction else plan.steps
-
-
-def first_difference(got: list[int], want: list[int]) -> str:
-    k = next((i for i, (a, b) in enumerate(zip(got, want, strict=False)) if a != b), min(len(got), len(want)))
-    return (
-        f"{len(got)} edges vs {len(want)} expected; first difference at pulse {k}: "
-        f"rtl {got[k : k + 3]} model {want[k : k + 3]}"
-    )
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -403,7 +376,7 @@ async def motion_profiles(dut) -> None:
         want = model_edges(plan)
         position += signed_steps(plan)
         if edges != want:
-            problems.append(f"{name} ({what}): {first_difference(edges, want)}")
+            problems.append(f"{name} ({what}): {edges_differ(edges, want)}")
         if status.error or status.busy or status.state != "STOP" or status.direction != plan.direction:
             problems.append(f"{name}: STATUS at DONE {status}")
         if await drv.position() != position:
@@ -452,14 +425,7 @@ async def motion_profiles(dut) -> None:
 
 #: (kind, pulses to wait before the command, the phase it then lands in) on trap_negative (ACCEL 22, RUN 95,
 #: DECEL 32 intervals).
-STOP_CASES = [
-    ("soft", 10, "ACCEL"),
-    ("soft", 60, "RUN"),
-    ("soft", 135, "DECEL"),
-    ("hard", 10, "ACCEL"),
-    ("hard", 60, "RUN"),
-    ("hard", 135, "DECEL"),
-]
+STOP_CASES = stop_cases((10, 60, 135))
 
 
 @cocotb.test(timeout_time=5, timeout_unit="ms")
@@ -476,7 +442,6 @@ async def soft_and_hard_stop(dut) -> None:
     for kind in stop_edges:  # the register file's strobes inside the core
         cocotb.start_soon(tb.pins.watch(getattr(dut, f"{kind}_stop"), stop_edges[kind]))
     drv, plan = plan_of(tb, "trap_negative")
-    normal = model_edges(plan)
     position = 0
     for kind, wait_pulses, phase in STOP_CASES:
         what = f"{kind} stop in {phase}"
@@ -492,22 +457,10 @@ async def soft_and_hard_stop(dut) -> None:
         edges = tb.edges_since(mark)
         assert len(stop_edges[kind]) == k0 + 1, f"{what}: {len(stop_edges[kind]) - k0} stop strobes"
         # The register file's strobe is high after the edge that samples the write; the engine samples it one later.
-        request = stop_edges[kind][k0] + 1 - tb.pins.start_edges[mark[1]]
-        want = model_edges_with_stop(plan, kind, request)
-        assert edges == want, f"{what}: {first_difference(edges, want)}"
+        check_stopped(plan, kind, phase, stop_edges[kind][k0] + 1 - tb.pins.start_edges[mark[1]], edges, wait_pulses)
         position -= len(edges)
         assert await drv.position() == position, f"{what}: POSITION is not the pulses seen"
         assert await tb.master.read(offset("STEP_COUNT")) == len(edges), f"{what}: STEP_COUNT"
-        if kind == "hard":
-            assert all(e < request for e in edges) and len(edges) < len(normal), f"{what}: a pulse after it"
-        elif phase == "DECEL":
-            assert edges == normal, f"{what}: changes the move"
-        else:
-            assert len(edges) < len(normal), f"{what}: does not end the move early"
-            tail = [b - a for a, b in itertools.pairwise(edges[wait_pulses:])]
-            slow_end = (plan.c_last >> 16) * plan.prescale
-            assert tail[-1] >= 0.95 * slow_end, f"{what}: last interval {tail[-1]}, not at the slow end {slow_end}"
-            assert all(b >= a - plan.prescale for a, b in itertools.pairwise(tail)), f"{what}: speed rose"
     tb.finish()
 
 

@@ -46,7 +46,7 @@ async def divider_against_model(dut) -> None:
     dut.start.value = 0
     dut.numerator.value = 0
     dut.denominator.value = 0
-    await start_clock_and_reset(dut)
+    await start_clock_and_reset(dut.clk, dut.rst)
 
     failures: list[str] = []
     latencies: list[int] = []
@@ -94,7 +94,7 @@ async def divider_ignores_start_while_busy(dut) -> None:
     width = len(dut.numerator)
     top = (1 << width) - 1
     dut.start.value = 0
-    await start_clock_and_reset(dut)
+    await start_clock_and_reset(dut.clk, dut.rst)
     dut.numerator.value = top
     dut.denominator.value = 1
     dut.start.value = 1

@@ -33,7 +33,7 @@ from stepramp.models.engine import edges as model_edges
 from stepramp.models.engine import phases as model_phases
 from stepramp.sim.engine_sim import SimResult, Stop, simulate
 from stepramp.sim.profiles import PROFILES, PROFILES_BY_NAME, Profile, exact_plan
-from tbutil import build_dir
+from tbutil import build_dir, edges_differ, first_mismatch
 
 CHUNKS = 4
 ERR = {name: code for name, (code, _) in ERROR_CODES.items()}
@@ -43,38 +43,43 @@ def plans_of(profiles: Sequence[Profile]) -> list[Plan]:
     return [plan_move(**p.args()) for p in profiles]
 
 
+def move_problems(
+    res: SimResult, expected: list[int], *, code: int = 0, position: int | None = None, idle_after: bool = False
+) -> list[str]:
+    """What differs between a finished move and its expectation: the pulse edges (the first difference shown), done
+    with error code `code` (0: without error), step_count = the pulses expected; with `position`, the final position;
+    with idle_after, busy low and the FSM back in STOP in the cycle after done."""
+    problems = []
+    if res.edges != expected:
+        problems.append(edges_differ(res.edges, expected))
+    if not res.done or res.err_code != code or res.error != int(code != 0):
+        problems.append(f"done={res.done} error={res.error} code={res.err_code}, expected code {code}")
+    if res.step_count != len(expected):
+        problems.append(f"step_count {res.step_count}, expected {len(expected)}")
+    if position is not None and res.final_position != position:
+        problems.append(f"position {res.final_position}, expected {position}")
+    if idle_after and (res.busy_after != 0 or res.state_after != "STOP"):
+        problems.append(f"after done busy={res.busy_after} state={res.state_after}")
+    return problems
+
+
 def check_moves(names: Sequence[str], plans: Sequence[Plan], results: Sequence[SimResult]) -> None:
-    """Every move: edges equal to the model's, N pulses, done without error, position exact, back in STOP."""
+    """Every move: edges and FSM states equal to the model's, N pulses, done without error, position exact, back
+    in STOP."""
     assert len(results) == len(plans), f"only {len(results)} of {len(plans)} moves finished"
     position = 0
     problems: list[str] = []
     for name, plan, res in zip(names, plans, results, strict=True):
         expected = model_edges(plan)
-        position += -plan.steps if plan.direction else plan.steps
+        position += signed_steps(plan, plan.steps)
+        problems += [f"{name}: {p}" for p in move_problems(res, expected, position=position, idle_after=True)]
         if res.edges != expected:
-            first = next(
-                (k for k, (a, b) in enumerate(zip(res.edges, expected, strict=False)) if a != b),
-                min(len(res.edges), len(expected)),
-            )
-            problems.append(
-                f"{name}: {len(res.edges)} edges vs {len(expected)} expected; first difference at pulse {first}: "
-                f"rtl {res.edges[first : first + 3]} model {expected[first : first + 3]}"
-            )
             continue
         if any(b - a < plan.prescale for a, b in zip(res.edges, res.edges[1:], strict=False)):
             problems.append(f"{name}: an interval shorter than one tick")
         phases = model_phases(plan)
         if res.states[: len(phases)] != phases:
             problems.append(f"{name}: FSM states per interval {res.states[:12]}... vs model {phases[:12]}...")
-        if res.error or not res.done:
-            problems.append(f"{name}: done={res.done} error={res.error} code={res.err_code}")
-        if res.final_position != position or res.step_count != plan.steps:
-            problems.append(
-                f"{name}: position {res.final_position} (expected {position}), "
-                f"step_count {res.step_count} (expected {plan.steps})"
-            )
-        if res.busy_after != 0 or res.state_after != "STOP":
-            problems.append(f"{name}: after done busy={res.busy_after} state={res.state_after}")
     assert not problems, "\n".join(problems)
 
 
@@ -153,27 +158,8 @@ def play_stops(tag: str, cases: Sequence[tuple[str, Plan, Stop]]) -> list[SimRes
 def check_stopped_move(name: str, plan: Plan, stop: Stop, res: SimResult, position: int) -> list[str]:
     """Common checks: edges as the model says, done without error, counters exact, back in STOP."""
     expected = edges_with_stop(plan, stop.kind, stop.at_cycle)
-    what = f"{name} {stop.kind} stop at edge {stop.at_cycle}"
-    problems = []
-    if res.edges != expected:
-        first = next(
-            (k for k, (a, b) in enumerate(zip(res.edges, expected, strict=False)) if a != b),
-            min(len(res.edges), len(expected)),
-        )
-        problems.append(
-            f"{what}: {len(res.edges)} pulses vs {len(expected)} expected; first difference at pulse {first}: "
-            f"rtl {res.edges[first : first + 3]} model {expected[first : first + 3]}"
-        )
-    if not res.done or res.error or res.err_code:
-        problems.append(f"{what}: done={res.done} error={res.error} code={res.err_code}")
-    if res.step_count != len(res.edges) or res.final_position != position:
-        problems.append(
-            f"{what}: step_count {res.step_count}, position {res.final_position} (expected {position}) "
-            f"for {len(res.edges)} pulses seen"
-        )
-    if res.busy_after != 0 or res.state_after != "STOP":
-        problems.append(f"{what}: after done busy={res.busy_after} state={res.state_after}")
-    return problems
+    problems = move_problems(res, expected, position=position, idle_after=True)
+    return [f"{name} {stop.kind} stop at edge {stop.at_cycle}: {p}" for p in problems]
 
 
 def hard_stop_cases() -> list[tuple[str, Plan, Stop]]:
@@ -327,34 +313,13 @@ def test_engine_stop_combinations() -> None:
     for (name, plan, stops, expected), res in zip(cases, results, strict=True):
         position += signed_steps(plan, len(res.edges))
         what = f"{name} {[(s.kind, s.at_cycle) for s in stops]}"
-        if res.edges != expected:
-            problems.append(
-                f"{what}: {len(res.edges)} pulses, expected {len(expected)}: {res.edges[-3:]} vs {expected[-3:]}"
-            )
-        if not res.done or res.error or res.step_count != len(res.edges) or res.final_position != position:
-            problems.append(
-                f"{what}: done={res.done} error={res.error} count={res.step_count} pos={res.final_position}"
-            )
-        if res.busy_after != 0 or res.state_after != "STOP":
-            problems.append(f"{what}: after done busy={res.busy_after} state={res.state_after}")
+        problems += [f"{what}: {p}" for p in move_problems(res, expected, position=position, idle_after=True)]
     assert not problems, "\n".join(problems)
 
 
 # --------------------------------------------------------------------------------------------------------------
 # The move is latched by `load` (the core's START acceptance), not by the later start; step spacing.
 # --------------------------------------------------------------------------------------------------------------
-def _ends_as(plan: Plan, expected: list[int], code: int, res: SimResult) -> list[str]:
-    """What differs between a finished move and its expectation (edges, error code, step count)."""
-    problems = []
-    if res.edges != expected:
-        problems.append(f"edges {res.edges[:8]}... vs model {expected[:8]}...")
-    if not res.done or res.err_code != code or res.error != int(code != 0):
-        problems.append(f"done={res.done} error={res.error} code={res.err_code}, expected code {code}")
-    if res.step_count != len(expected):
-        problems.append(f"step_count {res.step_count}, expected {len(expected)}")
-    return problems
-
-
 def test_engine_runs_the_loaded_move() -> None:
     """load latches the move: whatever the inputs carry afterwards (another move, or bad values: PRESCALE 0, a
     zero C_FIRST), the start runs the loaded one, edge for edge as the model, with its checks. And a bad move that
@@ -373,7 +338,7 @@ def test_engine_runs_the_loaded_move() -> None:
         (bad_first, good, 5, ERR["C_FIRST"]),
     ]
     extras = [
-        # the direction comes with start (the stepping logic's start_dir), not with load
+        # the direction comes with start (the stepping logic's eng_direction), not with load
         {"load_lead": lead, "after_load": {**dataclasses.asdict(after), "direction": loaded.direction}}
         for loaded, after, lead, _ in cases
     ]
@@ -382,7 +347,7 @@ def test_engine_runs_the_loaded_move() -> None:
     problems = []
     for i, ((loaded, _, lead, code), res) in enumerate(zip(cases, results, strict=True)):
         expected = [] if code else model_edges(loaded)
-        problems += [f"case {i} (lead {lead}): {p}" for p in _ends_as(loaded, expected, code, res)]
+        problems += [f"case {i} (lead {lead}): {p}" for p in move_problems(res, expected, code=code)]
     assert not problems, "\n".join(problems)
 
 
@@ -423,7 +388,8 @@ def test_engine_step_spacing() -> None:
         faults += k is not None
         position += -len(expected) if plan.direction else len(expected)
         label = f"P={plan.prescale} N={plan.steps} W={width} S={space} model {normal}"
-        problems += [f"{label}: {p}" for p in _ends_as(plan, expected, 0 if k is None else ERR["STEP_SPACE"], res)]
+        code = 0 if k is None else ERR["STEP_SPACE"]
+        problems += [f"{label}: {p}" for p in move_problems(res, expected, code=code)]
         if res.final_position != position:
             problems.append(f"{label}: position {res.final_position}, expected {position}")
             position = res.final_position or 0
@@ -648,7 +614,7 @@ def test_engine_error_codes() -> None:
         after = res.after_start or {}
         if [after.get(key) for key in ("busy", "err_code", "step_count", "dir")] != [1, 0, 0, plan.direction]:
             problems.append(f"{what}: after edge 0 {after}")
-        problems += [f"{what}: {p}" for p in _ends_as(plan, expected, code, res)]
+        problems += [f"{what}: {p}" for p in move_problems(res, expected, code=code, idle_after=True)]
         done_edge = expected[-1] if expected else FIRST_PULSE_LATENCY
         if res.done_edge != done_edge:
             problems.append(f"{what}: done at edge {res.done_edge}, expected {done_edge}")
@@ -656,8 +622,6 @@ def test_engine_error_codes() -> None:
         if res.final_position != position:
             problems.append(f"{what}: position {res.final_position}, expected {position}")
             position = res.final_position or 0
-        if res.busy_after != 0 or res.state_after != "STOP":
-            problems.append(f"{what}: after done busy={res.busy_after} state={res.state_after}")
         previous_code = code
     assert not problems, "\n".join(problems)
 
@@ -778,7 +742,8 @@ def test_engine_latency_budget() -> None:
     for (label, plan, stop, late), res in zip(cases, results, strict=True):
         full = model_edges(plan) if stop is None else edges_with_stop(plan, stop.kind, stop.at_cycle)
         expected = full if late is None else full[: late + 1]
-        problems += [f"{label}: {p}" for p in _ends_as(plan, expected, 0 if late is None else ERR["LATE"], res)]
+        code = 0 if late is None else ERR["LATE"]
+        problems += [f"{label}: {p}" for p in move_problems(res, expected, code=code)]
         # done with the last pulse, or at the hard stop's edge after pulse 1 when in time
         done_edge = stop.at_cycle if stop is not None and stop.kind == "hard" and late is None else expected[-1]
         if res.done_edge != done_edge:
@@ -820,10 +785,9 @@ def test_engine_counters_per_pulse() -> None:
         if res.step_counts != list(range(1, plan.steps + 1)):
             problems.append(f"{name}: step_count per pulse {res.step_counts[:8]}...")
         if res.cur_delays != delays:
-            first = next(k for k, (a, b) in enumerate(zip(res.cur_delays or [], delays, strict=False)) if a != b)
-            problems.append(
-                f"{name}: cur_delay at pulse {first} {(res.cur_delays or [])[first]}, model {delays[first]}"
-            )
+            got = res.cur_delays or []
+            k = first_mismatch(got, delays)
+            problems.append(f"{name}: cur_delay from pulse {k} {got[k : k + 3]}, model {delays[k : k + 3]}")
     assert not problems, "\n".join(problems)
 
 
@@ -892,7 +856,7 @@ def test_engine_pos_load_and_start() -> None:
         what = f"move {i} ({label})"
         code = documented_check(plan)
         expected = [] if code else model_edges(plan)
-        problems += [f"{what}: {p}" for p in _ends_as(plan, expected, code, res)]
+        problems += [f"{what}: {p}" for p in move_problems(res, expected, code=code)]
         if res.done_edge != (expected[-1] if expected else FIRST_PULSE_LATENCY):
             problems.append(f"{what}: done at edge {res.done_edge}")
         # pos_load while idle: at move 0's edge -2, and at the edge after move 2's done; move 1's with its start
@@ -974,15 +938,13 @@ def test_engine_reset() -> None:
     position = 0
     for (label, plan, _, at, expected), res in zip(cases, results, strict=False):
         what = f"{label}" + (f" (rst at edge {at})" if at is not None else "")
+        if at is None:
+            position += signed_steps(plan, len(expected))
+            code = documented_check(plan)
+            problems += [f"{what}: {p}" for p in move_problems(res, expected, code=code, position=position)]
+            continue
         if res.edges != expected:
             problems.append(f"{what}: pulses at {res.edges[-4:]}, expected ... {expected[-4:]}")
-        if at is None:
-            code = documented_check(plan)
-            problems += [f"{what}: {p}" for p in _ends_as(plan, expected, code, res)]
-            position += signed_steps(plan, len(expected))
-            if res.final_position != position:
-                problems.append(f"{what}: position {res.final_position}, expected {position}")
-            continue
         state = dict(res.reset or {})
         stray = state.pop("stray", "no reset seen")
         state.pop("dir", None)  # not part of the documented reset state

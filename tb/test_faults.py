@@ -14,14 +14,11 @@
 from __future__ import annotations
 
 import itertools
-import os
-from typing import Any
 
 import pytest
 from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge
-from cocotb.utils import get_sim_time
 
-from peripheral_tb import PeripheralTb
+from peripheral_tb import TOPS, PeripheralTb
 from stepramp.board.driver import Outputs, StepRamp, StepRampError, plan_writes
 from stepramp.board.plan import Plan, plan_move
 from stepramp.board.regmap import REGISTERS, offset
@@ -29,23 +26,13 @@ from stepramp.models.engine import edges as model_edges
 from stepramp.models.engine import first_space_fault, min_gap
 from stepramp.sim.profiles import PROFILES_BY_NAME, exact_plan
 from stepramp.sim.runner import run_cocotb
-from tbutil import CLK_PERIOD_NS, build_dir, cocotb
+from tbutil import build_dir, cocotb, now_cycles
 
-TOPS = ("stepramp_plb", "stepramp_axil")
 TIMEOUT_MS = 40
-
-
-def make_tb(dut: Any) -> PeripheralTb:
-    return PeripheralTb(dut, dut._name, seed=int(os.environ.get("BUS_SEED", "1")))
 
 
 def trap(steps: int) -> Plan:
     return plan_move(**{**PROFILES_BY_NAME["trap_basic"].args(), "steps": steps})
-
-
-def clocks() -> int:
-    """Index of the most recent rising clock edge."""
-    return round(get_sim_time("ns") / CLK_PERIOD_NS)
 
 
 async def idle(tb: PeripheralTb) -> None:
@@ -68,8 +55,7 @@ async def held(tb: PeripheralTb, drv: StepRamp) -> None:
 async def held_start_keeps_its_move(dut) -> None:
     """DIR_TIMING setup 2000 / hold 10, a move of -75 steps, START; while the start is held for DIR setup, the
     next move (+80) is programmed. The held start runs -75 steps edge for edge; the next START runs +80."""
-    tb = make_tb(dut)
-    await tb.reset()
+    tb = await PeripheralTb.started(dut)
     await tb.configure(Outputs(mode="half", step_width=4, dir_setup=2000, dir_hold=10), enable=True)
     drv = tb.driver()
     backwards, forwards = trap(-75), trap(80)
@@ -95,8 +81,7 @@ async def held_start_keeps_its_move(dut) -> None:
 async def bad_values_written_during_a_held_start(dut) -> None:
     """STEPS = -2^31 or PRESCALE = 0 written while a start is held: the held move runs as it was written at START
     (edge for edge), and the next START, which takes the bad value, is rejected with STEPS or PRESCALE."""
-    tb = make_tb(dut)
-    await tb.reset()
+    tb = await PeripheralTb.started(dut)
     await tb.configure(Outputs(mode="half", step_width=4, dir_setup=2000, dir_hold=10), enable=True)
     drv = tb.driver()
     position = 0
@@ -142,8 +127,7 @@ async def pulses_never_merge(dut) -> None:
     """Every pulse the model keeps reaches the pin as its own STEP pulse, at least STEP_WIDTH + STEP_SPACE after
     the previous one; the first pulse that would come closer ends the move with error STEP_SPACE, POSITION and
     STEP_COUNT exact (it is neither emitted nor counted)."""
-    tb = make_tb(dut)
-    await tb.reset()
+    tb = await PeripheralTb.started(dut)
     drv = tb.driver()
     position = 0
     faults = 0
@@ -178,8 +162,7 @@ async def pulses_never_merge(dut) -> None:
 async def start_keeps_the_spacing_after_a_move(dut) -> None:
     """A START written right after a move's last pulse is held until the new pulse 0 is STEP_WIDTH + STEP_SPACE
     after it (stepramp.models.stepping.gate_timing: exactly that distance here), so two moves' pulses never merge."""
-    tb = make_tb(dut)
-    await tb.reset()
+    tb = await PeripheralTb.started(dut)
     width, space = 200, 100
     await tb.configure(Outputs(mode="half", step_width=width, step_space=space), enable=True)
     drv = tb.driver()
@@ -188,31 +171,16 @@ async def start_keeps_the_spacing_after_a_move(dut) -> None:
     rises: list[int] = []
     await drv.start()
     await RisingEdge(tb.dut.step)
-    rises.append(clocks())
+    rises.append(now_cycles())
     await drv.start()  # the first move is over (its only pulse was its last): accepted, and held
     await held(tb, drv)
     await RisingEdge(tb.dut.step)
-    rises.append(clocks())
+    rises.append(now_cycles())
     await ClockCycles(tb.clk, 50)
     await drv.wait_done(idle=lambda: idle(tb))
     assert rises[1] - rises[0] == min_gap(width, space), f"STEP rising edges at {rises}"
     assert await drv.position() == 2
     tb.finish()
-
-
-async def reset_pulse(tb: PeripheralTb, cycles: int = 3) -> None:
-    """The top's reset for a few clocks (rst, or aresetn low), from the next falling edge."""
-    await FallingEdge(tb.clk)
-    if tb.top == "stepramp_axil":
-        tb.dut.aresetn.value = 0
-        await ClockCycles(tb.clk, cycles)
-        await FallingEdge(tb.clk)
-        tb.dut.aresetn.value = 1
-    else:
-        tb.dut.rst.value = 1
-        await ClockCycles(tb.clk, cycles)
-        await FallingEdge(tb.clk)
-        tb.dut.rst.value = 0
 
 
 @cocotb.test(timeout_time=TIMEOUT_MS, timeout_unit="ms")
@@ -221,8 +189,7 @@ async def reset_during_a_move(dut) -> None:
     first reset edge on, ENABLE and the windings are off and DIR is 0 (even inside its hold time); after it no
     pulse comes, every register reads its reset value (POSITION 0: the machine must be homed again), and the core
     runs the next move as the model says."""
-    tb = make_tb(dut)
-    await tb.reset()
+    tb = await PeripheralTb.started(dut)
     width = 25
     for cut in (1, 2, 13):
         await tb.configure(Outputs(mode="half", step_width=width, dir_hold=40), enable=True)
@@ -231,12 +198,12 @@ async def reset_during_a_move(dut) -> None:
         await drv.start()
         for _ in range(5):
             await RisingEdge(tb.dut.step)
-        rise = clocks()
+        rise = now_cycles()
         assert int(tb.dut.dir.value) == 1
         tb.finish()  # the DIR hold monitor would see the documented DIR change inside its hold time
         await ClockCycles(tb.clk, cut - 1)
         assert int(tb.dut.step.value) == 1
-        reset_task = cocotb.start_soon(reset_pulse(tb))
+        reset_task = cocotb.start_soon(tb.reset_pulse())
         await FallingEdge(tb.clk)
         await RisingEdge(tb.clk)  # the first reset edge
         await ReadOnly()
@@ -245,7 +212,7 @@ async def reset_during_a_move(dut) -> None:
             f"cut {cut}: outputs after the first reset edge {outputs}"
         )
         await FallingEdge(tb.dut.step)
-        fall = clocks()
+        fall = now_cycles()
         assert fall - rise == width, f"reset {cut} clocks into the pulse: STEP high {fall - rise} clocks"
         await reset_task
         mark = tb.pins.mark()
@@ -265,8 +232,7 @@ async def word_addresses(dut) -> None:
     """The low two address bits are ignored on both buses: an access at offset + 1 .. 3 reaches the register at
     offset (IPIF: the whole word with its byte enables; AXI4-Lite: cocotbext-axi puts the unaligned address on
     AWADDR / ARADDR with the matching WSTRB, so one byte lane changes or is read)."""
-    tb = make_tb(dut)
-    await tb.reset()
+    tb = await PeripheralTb.started(dut)
     steps = offset("STEPS")
     await tb.bus.write(steps, 0x1122_3344)
     word = 0x1122_3344
@@ -286,17 +252,7 @@ async def word_addresses(dut) -> None:
         assert await tb.bus.read(steps) == word, f"a write at {steps + b:#x} did not reach the register"
 
 
-FAULT_TESTS = [
-    "held_start_keeps_its_move",
-    "bad_values_written_during_a_held_start",
-    "pulses_never_merge",
-    "start_keeps_the_spacing_after_a_move",
-    "reset_during_a_move",
-    "word_addresses",
-]
-
-
 @pytest.mark.parametrize("top", TOPS)
 def test_faults(top: str) -> None:
     """The issue-11 faults through each top."""
-    run_cocotb(top, "test_faults", build_dir(f"{top}_faults"), testcase=FAULT_TESTS)
+    run_cocotb(top, "test_faults", build_dir(f"{top}_faults"))  # every test of this module

@@ -114,7 +114,7 @@ async def reset_unit(dut: Any) -> None:
     dut.req.value = 0
     dut.flush.value = 0
     drive(dut, Request(False, False, 0, 0, 0))
-    await start_clock_and_reset(dut)
+    await start_clock_and_reset(dut.clk, dut.rst)
     await FallingEdge(dut.clk)
 
 

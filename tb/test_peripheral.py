@@ -10,32 +10,24 @@ enables, bus errors, W1C, interrupt, shadowing, bad values) against the register
 from __future__ import annotations
 
 import dataclasses
-import itertools
 import json
 import os
 import random
-from typing import Any
 
 import pytest
 from cocotb.triggers import ClockCycles, RisingEdge
 
-from peripheral_tb import BusError, PeripheralTb, profiles_limit_us
+from peripheral_tb import TOPS, BusError, PeripheralTb, check_stopped, profiles_limit_us, stop_cases
 from stepramp.board.driver import Outputs, StepRampError, plan_writes
 from stepramp.board.plan import Plan, plan_move
 from stepramp.board.regmap import ERROR_CODES, ID_VALUE, REGISTERS, REGISTERS_BY_NAME, RW, offset
 from stepramp.models.engine import edges as model_edges
-from stepramp.models.engine import edges_with_stop as model_edges_with_stop
 from stepramp.sim.profiles import PROFILES, PROFILES_BY_NAME
 from stepramp.sim.runner import run_cocotb
-from tbutil import build_dir, cocotb
+from tbutil import build_dir, cocotb, edges_differ, env_int
 
 ERR = {name: code for name, (code, _) in ERROR_CODES.items()}
 MAPPED = {r.offset for r in REGISTERS}
-TOPS = ("stepramp_plb", "stepramp_axil")
-
-
-def make_tb(dut: Any, idle: bool = False) -> PeripheralTb:
-    return PeripheralTb(dut, dut._name, idle=idle, seed=int(os.environ.get("BUS_SEED", "1")))
 
 
 def valid_plan() -> Plan:
@@ -45,8 +37,7 @@ def valid_plan() -> Plan:
 @cocotb.test(timeout_time=8, timeout_unit="us")  # measured 1.6 us (the slower top)
 async def reset_values_and_id(dut) -> None:
     """Every register reads its documented reset value."""
-    tb = make_tb(dut)
-    await tb.reset()
+    tb = await PeripheralTb.started(dut)
     for reg in REGISTERS:
         got = await tb.bus.read(reg.offset)
         assert got == reg.reset, f"{reg.name}: {got:#x} after reset, expected {reg.reset:#x}"
@@ -56,8 +47,7 @@ async def reset_values_and_id(dut) -> None:
 @cocotb.test(timeout_time=60, timeout_unit="us")  # measured 14 us (the slower top)
 async def read_write_every_register(dut) -> None:
     """RW fields keep what is written (bits outside fields read 0); RO registers ignore writes without error."""
-    tb = make_tb(dut, idle=True)
-    await tb.reset()
+    tb = await PeripheralTb.started(dut, idle=True)
     rng = random.Random(11)
     for reg in REGISTERS:
         if reg.name in ("CTRL", "STATUS", "POSITION"):
@@ -74,8 +64,7 @@ async def read_write_every_register(dut) -> None:
 @cocotb.test(timeout_time=50, timeout_unit="us")  # measured 10 us (the slower top)
 async def byte_enables(dut) -> None:
     """Each byte lane of a write changes only its byte."""
-    tb = make_tb(dut)
-    await tb.reset()
+    tb = await PeripheralTb.started(dut)
     for name in ("STEPS", "CRUISE_HI", "STOP_RATIO", "C_FIRST_LO"):
         addr = offset(name)
         for be in range(16):
@@ -93,8 +82,7 @@ async def byte_enables(dut) -> None:
 async def concurrent_reads_and_writes(dut) -> None:
     """Reads and writes issued at the same time from several coroutines (on AXI they overlap on the channels,
     with idle cycles and backpressure): every write lands, every read returns its register's value."""
-    tb = make_tb(dut, idle=True)
-    await tb.reset()
+    tb = await PeripheralTb.started(dut, idle=True)
     rng = random.Random(5)
     targets = [offset(n) for n in ("STEPS", "C_FIRST_LO", "CRUISE_LO", "CRUISE_HI", "STOP_RATIO", "SA", "SD")]
     values = {addr: rng.getrandbits(31) for addr in targets}
@@ -119,8 +107,7 @@ async def concurrent_reads_and_writes(dut) -> None:
 @cocotb.test(timeout_time=8, timeout_unit="us")  # measured 1.8 us (the slower top)
 async def unmapped_offsets_answer_with_error(dut) -> None:
     """Every offset of the 128-byte window that is not a register answers with IP2Bus_Error / SLVERR."""
-    tb = make_tb(dut)
-    await tb.reset()
+    tb = await PeripheralTb.started(dut)
     for addr in range(0, 128, 4):
         if addr in MAPPED:
             await tb.bus.read(addr)  # no error
@@ -141,8 +128,7 @@ async def unmapped_offsets_answer_with_error(dut) -> None:
 @cocotb.test(timeout_time=8, timeout_unit="us")  # measured 2.0 us (the slower top)
 async def w1c_flags_and_interrupt(dut) -> None:
     """DONE/ERROR are sticky until written 1; irq follows them when enabled."""
-    tb = make_tb(dut)
-    await tb.reset()
+    tb = await PeripheralTb.started(dut)
     drv = tb.driver()
     await drv.program(plan_move(0, 100.0, 100.0, 10.0, 200.0, 1e6))  # N = 0: done at once
     await drv.start()
@@ -196,8 +182,7 @@ BAD_VALUES: list[tuple[str, dict[str, int], str]] = [
 @cocotb.test(timeout_time=2500, timeout_unit="us")  # measured 618 us (the slower top)
 async def bad_register_values_flag_an_error(dut) -> None:
     """Each bad register value: ERROR with its cause, DONE, not a single step pulse, and the core still works."""
-    tb = make_tb(dut)
-    await tb.reset()
+    tb = await PeripheralTb.started(dut)
     drv = tb.driver()
     good = valid_plan()
     for label, change, cause in BAD_VALUES:
@@ -230,8 +215,7 @@ async def bad_register_values_flag_an_error(dut) -> None:
 @cocotb.test(timeout_time=2500, timeout_unit="us")  # measured 552 us (the slower top)
 async def position_register(dut) -> None:
     """POSITION is written while stopped; a write during a move is ignored and flagged POS_BUSY."""
-    tb = make_tb(dut)
-    await tb.reset()
+    tb = await PeripheralTb.started(dut)
     drv = tb.driver()
     await drv.set_position(-123456)
     assert await drv.position() == -123456
@@ -250,8 +234,7 @@ async def position_register(dut) -> None:
 @cocotb.test(timeout_time=3, timeout_unit="ms")  # measured 723 us (the slower top)
 async def motion_registers_are_shadowed(dut) -> None:
     """Writing the next move's registers during a move does not disturb it; the next START uses them."""
-    tb = make_tb(dut, idle=True)
-    await tb.reset()
+    tb = await PeripheralTb.started(dut, idle=True)
     drv = tb.driver()
     first = valid_plan()
     second = plan_move(**PROFILES_BY_NAME["triangle_negative"].args())
@@ -274,8 +257,7 @@ async def motion_registers_are_shadowed(dut) -> None:
 @cocotb.test(timeout_time=2500, timeout_unit="us")  # measured 548 us (the slower top)
 async def start_while_busy_is_ignored(dut) -> None:
     """A second START during a move changes nothing."""
-    tb = make_tb(dut)
-    await tb.reset()
+    tb = await PeripheralTb.started(dut)
     drv = tb.driver()
     plan = valid_plan()
     await drv.program(plan)
@@ -293,22 +275,14 @@ async def start_while_busy_is_ignored(dut) -> None:
 
 
 #: (kind, pulses to wait before the command, the phase it then lands in) on trap_long_cruise (ramps of ~40 steps).
-STOP_CASES = [
-    ("soft", 10, "ACCEL"),
-    ("soft", 300, "RUN"),
-    ("soft", 1175, "DECEL"),
-    ("hard", 10, "ACCEL"),
-    ("hard", 300, "RUN"),
-    ("hard", 1175, "DECEL"),
-]
+STOP_CASES = stop_cases((10, 300, 1175))
 
 
 @cocotb.test(timeout_time=12, timeout_unit="ms")  # measured 2.6 ms (the slower top)
 async def soft_and_hard_stop(dut) -> None:
     """SOFT_STOP and HARD_STOP through the bus in ACCEL, RUN and DECEL: every edge as the model predicts, position
     equal to the pulses seen, a soft stop ending at the slow end of a decel ramp, no pulse after a hard stop."""
-    tb = make_tb(dut)
-    await tb.reset()
+    tb = await PeripheralTb.started(dut)
     await tb.configure(Outputs(mode="half", step_width=4, dir_setup=12, dir_hold=6), enable=True)
     stop_edges: dict[str, list[int]] = {"soft": [], "hard": []}
     for kind in stop_edges:
@@ -329,22 +303,9 @@ async def soft_and_hard_stop(dut) -> None:
         edges = tb.edges_since(n0, s0)
         start = tb.start_edges[s0]
         # The register file's strobe is high after edge w; the engine samples it at w + 1.
-        request = stop_edges[kind][k0] + 1 - start
-        assert edges == model_edges_with_stop(plan, kind, request), f"{kind} stop in {phase}: edges differ"
+        check_stopped(plan, kind, phase, stop_edges[kind][k0] + 1 - start, edges, wait_pulses)
         position += -len(edges) if plan.direction else len(edges)
         assert await drv.position() == position, f"{kind} stop in {phase}: position is not the pulses seen"
-        normal = model_edges(plan)
-        if kind == "hard":
-            assert all(e < request for e in edges), "a pulse after the hard stop"
-            assert len(edges) < len(normal)
-        elif phase == "DECEL":
-            assert edges == normal, "a soft stop in DECEL changes nothing"
-        else:
-            assert len(edges) < len(normal), "a soft stop in ACCEL or RUN ends the move early"
-            tail = [b - a for a, b in itertools.pairwise(edges[wait_pulses:])]
-            slow_end = (plan.c_last >> 16) * plan.prescale
-            assert tail[-1] >= 0.95 * slow_end, f"{kind} stop in {phase}: last interval {tail[-1]} < {slow_end}"
-            assert all(b >= a - plan.prescale for a, b in itertools.pairwise(tail)), "speed rose after a soft stop"
     tb.finish()
 
 
@@ -352,8 +313,7 @@ async def soft_and_hard_stop(dut) -> None:
 async def hard_stop_cancels_a_held_start(dut) -> None:
     """HARD_STOP or SOFT_STOP while the stepping logic holds a START for DIR setup, or HARD_STOP in the same CTRL
     write as START: DONE without error, no STEP pulse, POSITION unchanged; the next move runs as the model says."""
-    tb = make_tb(dut)
-    await tb.reset()
+    tb = await PeripheralTb.started(dut)
     await tb.configure(Outputs(mode="half", step_width=4, dir_setup=3000, dir_hold=10), enable=True)
     drv = tb.driver()
     backwards = plan_move(**{**PROFILES_BY_NAME["trap_basic"].args(), "steps": -40})
@@ -402,8 +362,7 @@ async def hard_stop_cancels_a_held_start(dut) -> None:
 @cocotb.test(timeout_time=2, timeout_unit="ms")  # measured 408 us (the slower top)
 async def stepping_configuration(dut) -> None:
     """ENABLE follows CTRL.ENABLE and gates the windings; DRIVE .. PWM_PERIOD are written only while stopped."""
-    tb = make_tb(dut)
-    await tb.reset()
+    tb = await PeripheralTb.started(dut)
     half = Outputs(mode="half", step_width=12, dir_setup=30, dir_hold=8)
     await tb.configure(half, enable=True)
     await ClockCycles(tb.clk, 3)
@@ -442,8 +401,7 @@ async def profiles_through_the_bus(dut) -> None:
     names = json.loads(os.environ.get("PROFILE_NAMES", "[]"))
     if not names:
         return
-    tb = make_tb(dut, idle=bool(int(os.environ.get("BUS_IDLE", "0"))))
-    await tb.reset()
+    tb = await PeripheralTb.started(dut, idle=bool(env_int("BUS_IDLE", 0)))
     await tb.configure(Outputs(**json.loads(os.environ.get("OUTPUTS", "{}"))), enable=True)
     await tb.driver().enable_irq(done=True, error=True)
     problems: list[str] = []
@@ -455,7 +413,7 @@ async def profiles_through_the_bus(dut) -> None:
         edges, status = await tb.run_plan(drv, plan)
         position += prof.steps
         if edges != model_edges(plan):
-            problems.append(f"{name}: rtl {edges[:4]}... model {model_edges(plan)[:4]}... ({len(edges)} edges)")
+            problems.append(f"{name}: {edges_differ(edges, model_edges(plan))}")
         if status.error or await drv.position() != position:
             problems.append(f"{name}: error={status.error} position {await drv.position()} expected {position}")
     assert not problems, "\n".join(problems)

@@ -20,14 +20,14 @@ from typing import Any
 
 import pytest
 
-from peripheral_tb import PeripheralTb, profiles_limit_us
+from peripheral_tb import TOPS, PeripheralTb, profiles_limit_us
 from stepramp.board.plan import Plan, plan_move
 from stepramp.board.regmap import offset
 from stepramp.models.engine import edges as model_edges
 from stepramp.sim.profiles import PROFILES_BY_NAME, Profile
 from stepramp.sim.runner import run_cocotb
 from stepramp.tools import clib
-from tbutil import REPO, build_dir, cocotb
+from tbutil import REPO, build_dir, cocotb, edges_differ
 
 C_DIR = REPO / "sw" / "c"
 C_LIB = C_DIR / "build" / "libstepramp.so"
@@ -85,8 +85,7 @@ PROFILES_LIMIT_US = profiles_limit_us(json.loads(os.environ.get("PROFILE_NAMES",
 async def c_plans_through_the_bus(dut) -> None:
     """Each profile planned by the C library and programmed over the bus matches the model edge for edge."""
     so = ctypes.CDLL(os.environ["STEPRAMP_C_LIB"])
-    tb = PeripheralTb(dut, dut._name)
-    await tb.reset()
+    tb = await PeripheralTb.started(dut)
     await tb.driver().enable_irq(done=True, error=True)
     problems: list[str] = []
     position = 0
@@ -99,7 +98,7 @@ async def c_plans_through_the_bus(dut) -> None:
         position += prof.steps
         dut._log.info("%s: %d steps, %d edges from the C plan", name, prof.steps, len(edges))
         if edges != want:
-            problems.append(f"{name}: rtl {edges[:4]}... model {want[:4]}... ({len(edges)} vs {len(want)} edges)")
+            problems.append(f"{name}: {edges_differ(edges, want)}")
         if len(edges) != abs(prof.steps):
             problems.append(f"{name}: {len(edges)} pulses for {prof.steps} steps")
         if status.error or await drv.position() != position:
@@ -132,8 +131,7 @@ async def c_driver_writes_replayed(dut) -> None:
     """The C driver's own bus writes for each move, replayed on the bus: the motion registers, then START as a
     byte write. The move matches the model, and the interrupt enables in CTRL byte 1 survive the START."""
     so = ctypes.CDLL(os.environ["STEPRAMP_C_LIB"])
-    tb = PeripheralTb(dut, dut._name)
-    await tb.reset()
+    tb = await PeripheralTb.started(dut)
     drv = tb.driver()
     await drv.enable_irq(done=True, error=True)
     enables = await tb.bus.read(offset("CTRL"))
@@ -154,7 +152,7 @@ async def c_driver_writes_replayed(dut) -> None:
         position += prof.steps
         dut._log.info("%s: %d writes replayed, %d edges", name, len(writes), len(edges))
         if edges != want:
-            problems.append(f"{name}: rtl {edges[:4]}... model {want[:4]}... ({len(edges)} vs {len(want)} edges)")
+            problems.append(f"{name}: {edges_differ(edges, want)}")
         if status.error or await drv.position() != position:
             problems.append(f"{name}: error={status.error} position {await drv.position()} expected {position}")
         if (ctrl := await tb.bus.read(offset("CTRL"))) != enables:
@@ -171,7 +169,7 @@ def _build_c_library() -> Path:
     return C_LIB
 
 
-@pytest.mark.parametrize("top", ["stepramp_plb", "stepramp_axil"])
+@pytest.mark.parametrize("top", TOPS)
 def test_c_plans_through_the_bus(top: str) -> None:
     """The C library's plans, programmed through the peripheral, move the motor like the model."""
     lib = _build_c_library()

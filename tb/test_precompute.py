@@ -326,18 +326,14 @@ def rule_order_plans() -> list[Move]:
 # ---------------------------------------------------------------------------------------------------------------
 
 
+#: The move inputs that are the Plan's fields of the same name (besides l).
+MOVE_INPUTS = ("sa", "sd", "c_first", "c_last", "c_sa", "c_sd", "accel_seed", "decel_seed", "cruise", "stop_ratio")
+
+
 def drive_move(dut: Any, plan: Plan) -> None:
     dut.l.value = (plan.steps - 1) % (1 << 31)  # the engine's p_l = steps - 1 (all ones for N = 0)
-    dut.sa.value = plan.sa
-    dut.sd.value = plan.sd
-    dut.c_first.value = plan.c_first
-    dut.c_last.value = plan.c_last
-    dut.c_sa.value = plan.c_sa
-    dut.c_sd.value = plan.c_sd
-    dut.accel_seed.value = plan.accel_seed
-    dut.decel_seed.value = plan.decel_seed
-    dut.cruise.value = plan.cruise
-    dut.stop_ratio.value = plan.stop_ratio
+    for name in MOVE_INPUTS:
+        getattr(dut, name).value = getattr(plan, name)
 
 
 def read(dut: Any, name: str) -> int | None:
@@ -368,7 +364,7 @@ class Sequencer:
             getattr(dut, port).value = 0
         dut.cur_state.value = STOP_STATE
         drive_move(dut, plan_move(**PROFILES_BY_NAME["steps_0"].args()))
-        await start_clock_and_reset(dut)
+        await start_clock_and_reset(dut.clk, dut.rst)
         await FallingEdge(dut.clk)
 
     async def strobe(self, port: str, state: int | None = None) -> None:

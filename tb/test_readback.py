@@ -47,7 +47,7 @@ import pytest
 from cocotb.triggers import Event, RisingEdge, Timer
 from cocotb.utils import get_sim_time
 
-from peripheral_tb import PeripheralTb
+from peripheral_tb import TOPS, PeripheralTb
 from stepramp.board.driver import Outputs, StepRamp
 from stepramp.board.plan import Plan
 from stepramp.board.regmap import ERROR_CODES, REGISTERS, REGISTERS_BY_NAME, RO, RW, WS, Register, offset
@@ -55,12 +55,11 @@ from stepramp.models.engine import ACCEL, DECEL, RUN
 from stepramp.models.engine import edges as model_edges
 from stepramp.models.engine import phases as model_phases
 from stepramp.models.stepping import STEP_LATENCY
+from stepramp.sim.clocking import CLK_PERIOD_PS
 from stepramp.sim.profiles import PROFILES_BY_NAME
 from stepramp.sim.runner import run_cocotb
-from tbutil import CLK_PERIOD_NS, build_dir, cocotb
+from tbutil import build_dir, cocotb
 
-TOPS = ("stepramp_plb", "stepramp_axil")
-PERIOD_PS = CLK_PERIOD_NS * 1000
 #: Registers whose value the engine drives (the rest are storage, CTRL, or constant).
 DYNAMIC = ("STATUS", "POSITION", "CUR_DELAY", "STEP_COUNT")
 #: STATUS.STATE codes (docs/registers.md).
@@ -107,13 +106,13 @@ class EdgeClock:
 
     def edge(self) -> int:
         """The most recent rising edge (at an edge's own time step: that edge)."""
-        return (round(get_sim_time("ps")) - self.origin) // PERIOD_PS
+        return (round(get_sim_time("ps")) - self.origin) // CLK_PERIOD_PS
 
     async def until(self, n: int) -> None:
         """Return at rising edge n (at once if it has passed)."""
         if n <= self.edge():
             return
-        half_before = self.origin + n * PERIOD_PS - PERIOD_PS // 2
+        half_before = self.origin + n * CLK_PERIOD_PS - CLK_PERIOD_PS // 2
         now = round(get_sim_time("ps"))
         if half_before > now:
             await Timer(half_before - now, unit="ps")

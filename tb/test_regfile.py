@@ -44,12 +44,12 @@ import random
 from collections import Counter, deque
 from typing import Any
 
-from cocotb.clock import Clock
 from cocotb.triggers import FallingEdge
 
 from stepramp.board.regmap import ADDR_BITS, ERROR_CODES, REGISTERS, REGISTERS_BY_NAME, RO, RW, W1C, WS, Register
+from stepramp.sim.clocking import start_clock
 from stepramp.sim.runner import run_cocotb
-from tbutil import CLK_PERIOD_NS, build_dir, cocotb, env_int
+from tbutil import build_dir, cocotb, env_int
 
 # ---------------------------------------------------------------------------------------------------------------
 # The register map as the model sees it (all from stepramp.board.regmap).
@@ -310,7 +310,7 @@ class Bench:
 
     async def start(self) -> None:
         """Start the clock and reset; every output is checked from the first reset edge on."""
-        Clock(self.dut.clk, CLK_PERIOD_NS, unit="ns").start()
+        start_clock(self.dut.clk)
         self._drive()
         await FallingEdge(self.dut.clk)
         await self.reset()

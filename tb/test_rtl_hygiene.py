@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -29,3 +30,13 @@ def test_rtl_synthesises_without_latch(top: str, tmp_path: Path) -> None:
     errors = synth(top, SYNTH_TOPS[top], work, tmp_path)
     assert not errors, "\n".join(errors)
     assert (tmp_path / f"{top}.v").stat().st_size > 0
+
+
+def test_port_names_follow_the_convention() -> None:
+    """docs/conventions.md, "Port names" rule 1: no port carries a direction mark (_i, _o, _in, _out, din, dout)."""
+    port = re.compile(r"^\s+([A-Za-z0-9_]+)\s+:\s+(in|out|inout)\s", re.MULTILINE)
+    marked = re.compile(r"(_(i|o|in|out)|^din|^dout)$", re.IGNORECASE)
+    ports = {(f, m.group(1)) for f in HDL_FILES for m in port.finditer((HDL_DIR / f).read_text())}
+    assert len(ports) > 100, "the port pattern no longer matches the entity declarations"
+    bad = sorted(f"{f}: {name}" for f, name in ports if marked.search(name))
+    assert not bad, f"ports with a direction mark: {bad}"

@@ -3,7 +3,7 @@
 setup/hold timing, enable, mode changes while stopped, and monitors that fail when told a wrong setting.
 
 A fake engine in Python plays the ramp engine's side with its documented timing (docs/stepramp_engine.md): it
-takes start_out at the next edge (edge 0), raises busy, emits pulse 0 two clocks later and then one pulse every
+takes eng_start at the next edge (edge 0), raises busy, emits pulse 0 two clocks later and then one pulse every
 `interval` clocks (>= 64), updating `position` in the cycle of each pulse and dropping busy in the cycle of the last.
 Expected values come from stepramp.models.stepping; the pins are also watched by tb/monitors.py.
 
@@ -75,14 +75,14 @@ class FakeEngine:
 
     dut: Any
     position: int = 0
-    dir_override: int | None = None  # drive eng_dir differently from start_dir (dir_fault test)
+    dir_override: int | None = None  # drive eng_dir differently from eng_direction (dir_fault test)
     moves: list[Move] = field(default_factory=list)
     start_edges: list[int] = field(default_factory=list)  # edge 0 of every accepted start
     step_edges: list[int] = field(default_factory=list)  # edges after which eng_step is '1'
-    start_out_edges: list[int] = field(default_factory=list)  # every edge after which start_out is '1'
+    eng_start_edges: list[int] = field(default_factory=list)  # every edge after which eng_start is '1'
     busy: bool = False
     ignored: int = 0
-    cancelled: int = 0  # starts that came with stop_out
+    cancelled: int = 0  # starts that came with eng_hard_stop
     last_pulse: Event = field(default_factory=Event)
     done: Event = field(default_factory=Event)
 
@@ -95,21 +95,21 @@ class FakeEngine:
         return self
 
     def set_position(self, pos: int) -> None:
-        """pos_load while stopped: the position port takes the value (two's complement)."""
+        """pos_load while stopped: eng_position takes the value (two's complement)."""
         self.position = pos
-        self.dut.position.value = pos & 0xFFFFFFFF
+        self.dut.eng_position.value = pos & 0xFFFFFFFF
 
     async def _run(self) -> None:
         dut = self.dut
         while True:
-            await RisingEdge(dut.start_out)
+            await RisingEdge(dut.eng_start)
             s = edge_now()
-            self.start_out_edges.append(s)
+            self.eng_start_edges.append(s)
             if self.busy:
                 self.ignored += 1  # the engine ignores a start while busy
                 continue
             await ReadOnly()
-            if int(dut.stop_out.value):  # start with hard_stop: the engine accepts and ends it, no pulse
+            if int(dut.eng_hard_stop.value):  # start with hard_stop: the engine accepts and ends it, no pulse
                 if self.moves:
                     self.moves.pop(0)
                 self.cancelled += 1
@@ -121,8 +121,8 @@ class FakeEngine:
 
     async def _play(self, e0: int, move: Move) -> None:
         dut = self.dut
-        await RisingEdge(dut.clk)  # edge 0 samples start_out
-        direction = int(dut.start_dir.value) if self.dir_override is None else self.dir_override
+        await RisingEdge(dut.clk)  # edge 0 samples eng_start
+        direction = int(dut.eng_direction.value) if self.dir_override is None else self.dir_override
         self.last_pulse.clear()
         self.done.clear()
         self.start_edges.append(e0)
@@ -174,7 +174,7 @@ def apply(dut: Any, cfg: Config) -> None:
     dut.dir_setup.value = cfg.dir_setup
     dut.dir_hold.value = cfg.dir_hold
     dut.pwm_period.value = cfg.pwm_period
-    dut.enable_in.value = cfg.enable
+    dut.ctrl_enable.value = cfg.enable
     dut.step_space.value = cfg.step_space
 
 
@@ -186,8 +186,7 @@ async def setup(dut: Any, cfg: Config, position: int = 0) -> FakeEngine:
     dut.soft_stop.value = 0
     eng = FakeEngine(dut, position=position).start()
     _CLOCK_T0_PS[0] = round(get_sim_time("ps"))
-    await start_clock_and_reset(dut)
-    await ClockCycles(dut.clk, 4)
+    await start_clock_and_reset(dut.clk, dut.rst, settle=4)
     return eng
 
 
@@ -220,8 +219,8 @@ async def run_move(dut: Any, eng: FakeEngine, steps: int, direction: int, interv
     q = await request_start(dut, direction)
     await wait_move(dut, eng, n)
     await ClockCycles(dut.clk, 4)
-    while int(dut.step_o.value) == 1:  # let the last STEP pulse end
-        await FallingEdge(dut.step_o)
+    while int(dut.step.value) == 1:  # let the last STEP pulse end
+        await FallingEdge(dut.step)
     await ClockCycles(dut.clk, 2)
     return q
 
@@ -240,8 +239,8 @@ class StepRecorder:
 
     async def _watch(self) -> None:
         while True:
-            await RisingEdge(self.dut.step_o)
-            d = int(self.dut.dir_o.value)
+            await RisingEdge(self.dut.step)
+            d = int(self.dut.dir.value)
             if self.latency:
                 await ClockCycles(self.dut.clk, self.latency)
             await ReadOnly()
@@ -443,11 +442,11 @@ async def mode_changes_while_stopped(dut) -> None:
 
 @cocotb.test(timeout_time=80, timeout_unit="us")  # measured 20 us
 async def enable_gates_windings(dut) -> None:
-    """enable_o is enable_in one clock later; with enable_in = 0 every winding input is 0 in every mode (PWM and
+    """enable is ctrl_enable one clock later; with ctrl_enable = 0 every winding input is 0 in every mode (PWM and
     pwm_period <= 1 too) while STEP/DIR keep working; switching back restores the state of the position."""
     cfg = Config(mode=sm.MODE_HALF, enable=0)
     eng = await setup(dut, cfg, position=1)
-    assert int(dut.enable_o.value) == 0
+    assert int(dut.enable.value) == 0
     for mode in (1, 2, 3, 4):
         cfg.mode, cfg.enable = mode, 0
         apply(dut, cfg)
@@ -473,19 +472,19 @@ async def enable_gates_windings(dut) -> None:
         assert mons.width.pulses == 6
         # enable on: registered one clock later, windings at the current position
         await FallingEdge(dut.clk)
-        dut.enable_in.value = 1
+        dut.ctrl_enable.value = 1
         await RisingEdge(dut.clk)
         e = edge_now()
         await ReadOnly()
-        assert int(dut.enable_o.value) == 1, "enable_o one clock after enable_in"
+        assert int(dut.enable.value) == 1, "enable one clock after ctrl_enable"
         if mode != sm.MODE_PWM:
             assert levels(dut) == sm.winding_levels(mode, eng.position)
         await FallingEdge(dut.clk)
-        dut.enable_in.value = 0
+        dut.ctrl_enable.value = 0
         await RisingEdge(dut.clk)
         assert edge_now() == e + 1
         await ReadOnly()
-        assert int(dut.enable_o.value) == 0 and levels(dut) == (0, 0, 0, 0)
+        assert int(dut.enable.value) == 0 and levels(dut) == (0, 0, 0, 0)
         await FallingEdge(dut.clk)
     # PWM with the carrier held off (pwm_period 0 and 1): outputs off although enabled
     cfg.mode, cfg.enable = sm.MODE_PWM, 1
@@ -502,18 +501,18 @@ async def enable_gates_windings(dut) -> None:
 # --------------------------------------------------------------------------------------------------------------
 @cocotb.test(timeout_time=80, timeout_unit="us")  # measured 17 us
 async def step_width_exact(dut) -> None:
-    """step_o rises one clock after eng_step and stays high exactly max(step_width, 1) clocks."""
+    """step rises one clock after eng_step and stays high exactly max(step_width, 1) clocks."""
     cfg = Config(mode=sm.MODE_FULL)
     eng = await setup(dut, cfg)
     for width in (0, 1, 2, 5, 37, 63):
         cfg.step_width = width
         apply(dut, cfg)
-        mon = StepWidthMonitor(dut.step_o, width, exact=True).start()
+        mon = StepWidthMonitor(dut.step, width, exact=True).start()
         rises: list[int] = []
 
         async def watch(rises: list[int] = rises) -> None:
             while True:
-                await RisingEdge(dut.step_o)
+                await RisingEdge(dut.step)
                 rises.append(edge_now())
 
         task = cocotb.start_soon(watch())
@@ -532,7 +531,7 @@ async def step_overlap_restarts_width(dut) -> None:
     restarts the width: one STEP pulse, high until step_width clocks after the later pulse."""
     cfg = Config(mode=sm.MODE_FULL, step_width=100)
     eng = await setup(dut, cfg)
-    mon = StepWidthMonitor(dut.step_o, 100).start()
+    mon = StepWidthMonitor(dut.step, 100).start()
     await run_move(dut, eng, 2, 0, 64)
     await ClockCycles(dut.clk, 120)
     mon.stop()
@@ -544,7 +543,7 @@ async def step_overlap_restarts_width(dut) -> None:
 # Start gate.
 # --------------------------------------------------------------------------------------------------------------
 class GateRecorder:
-    """Edges of DIR changes, start_out pulses and step_o rising edges."""
+    """Edges of DIR changes, eng_start pulses and step rising edges."""
 
     def __init__(self, dut: Any) -> None:
         self.dut = dut
@@ -552,9 +551,9 @@ class GateRecorder:
         self.start_edges: list[int] = []
         self.step_rises: list[int] = []
         self.tasks = [
-            cocotb.start_soon(self._watch(dut.dir_o.value_change, self.dir_edges)),
-            cocotb.start_soon(self._watch_rise(dut.start_out, self.start_edges)),
-            cocotb.start_soon(self._watch_rise(dut.step_o, self.step_rises)),
+            cocotb.start_soon(self._watch(dut.dir.value_change, self.dir_edges)),
+            cocotb.start_soon(self._watch_rise(dut.eng_start, self.start_edges)),
+            cocotb.start_soon(self._watch_rise(dut.step, self.step_rises)),
         ]
 
     async def _watch(self, trigger: Any, out: list[int]) -> None:
@@ -574,8 +573,8 @@ class GateRecorder:
 
 @cocotb.test(timeout_time=800, timeout_unit="us")  # measured 185 us
 async def start_gate_timing(dut) -> None:
-    """start_out 1 clock after start_req when DIR stays; on a change DIR waits for dir_hold after the last STEP
-    rising edge, start_out for max(dir_setup, 5) clocks to the first STEP rising edge; either way the first STEP
+    """eng_start 1 clock after start_req when DIR stays; on a change DIR waits for dir_hold after the last STEP
+    rising edge, eng_start for max(dir_setup, 5) clocks to the first STEP rising edge; either way the first STEP
     rising edge keeps STEP_WIDTH + STEP_SPACE from the last one: measured edge for edge against
     stepramp.models.stepping.gate_timing, with the DIR monitor on."""
     cfg = Config(mode=sm.MODE_HALF, step_width=4)
@@ -616,13 +615,13 @@ async def start_gate_timing(dut) -> None:
         apply(dut, cfg)
         # a previous move ends with a pulse at a known edge
         eng.moves.append(Move(3, 64))
-        prev_dir = int(dut.dir_o.value)
+        prev_dir = int(dut.dir.value)
         eng.arm()
         await request_start(dut, prev_dir)
         await eng.last_pulse.wait()
         last_eng_step = eng.step_edges[-1]  # eng_step high after this edge
         last_rise = last_eng_step + sm.STEP_LATENCY
-        mon = DirTimingMonitor(dut.step_o, dut.dir_o, setup_clks, hold).start()
+        mon = DirTimingMonitor(dut.step, dut.dir, setup_clks, hold).start()
         rec = GateRecorder(dut)
         eng.moves.append(Move(2, 64))
         busy_trace: list[int] = []
@@ -649,7 +648,7 @@ async def start_gate_timing(dut) -> None:
         got_dir = rec.dir_edges[0] if rec.dir_edges else None
         msg = f"setup {setup_clks} hold {hold} width {width} space {space} dir {prev_dir}->{new_dir} gap {gap}: "
         msg += f"q={q}, want {want}, got "
-        msg += f"dir {rec.dir_edges} start_out {rec.start_edges} step rises {rec.step_rises}"
+        msg += f"dir {rec.dir_edges} eng_start {rec.start_edges} step rises {rec.step_rises}"
         assert got_dir == want.dir_edge and len(rec.dir_edges) <= 1, msg
         assert rec.start_edges == [want.start_edge], msg
         rises = [r for r in rec.step_rises if r > last_rise]
@@ -663,9 +662,9 @@ async def start_gate_timing(dut) -> None:
                 assert want.first_step_edge - want.dir_edge == max(setup_clks, sm.GATE_SETUP_MIN), msg
         assert all(busy_trace[:-1]), f"busy dropped during the start: {busy_trace}"
         mon.check()
-        assert int(dut.dir_o.value) == new_dir and int(dut.dir_fault.value) == 0
+        assert int(dut.dir.value) == new_dir and int(dut.dir_fault.value) == 0
         dut._log.info(
-            "setup %d hold %d %d->%d gap %d: start_out after %d clocks, first STEP %d clocks after DIR",
+            "setup %d hold %d %d->%d gap %d: eng_start after %d clocks, first STEP %d clocks after DIR",
             setup_clks,
             hold,
             prev_dir,
@@ -678,7 +677,7 @@ async def start_gate_timing(dut) -> None:
 
 @cocotb.test(timeout_time=20, timeout_unit="us")  # measured 4.5 us
 async def start_dropped_while_busy(dut) -> None:
-    """A start_req while the engine is busy or while the gate holds a start is dropped: no start_out, no DIR change."""
+    """A start_req while the engine is busy or while the gate holds a start is dropped: no eng_start, no DIR change."""
     cfg = Config(mode=sm.MODE_HALF, dir_setup=50, dir_hold=50)
     eng = await setup(dut, cfg)
     rec = GateRecorder(dut)
@@ -702,13 +701,14 @@ async def start_dropped_while_busy(dut) -> None:
     await ClockCycles(dut.clk, 20)
     rec.stop()
     assert len(rec.dir_edges) == 1 and len(rec.start_edges) == 2, (rec.dir_edges, rec.start_edges)
-    assert rec.dir_edges[0] > q and int(dut.dir_o.value) == 1 and int(dut.gate_busy.value) == 0
+    assert rec.dir_edges[0] > q and int(dut.dir.value) == 1 and int(dut.gate_busy.value) == 0
 
 
 @cocotb.test(timeout_time=80, timeout_unit="us")  # measured 19 us
 async def hard_stop_cancels_a_held_start(dut) -> None:
-    """hard_stop while the gate holds a start (DIR hold, DIR setup) or with the start_req it accepts: start_out and
-    stop_out together after that edge (the engine accepts and ends the move at once), no DIR change from then on."""
+    """hard_stop while the gate holds a start (DIR hold, DIR setup) or with the start_req it accepts: eng_start and
+    eng_hard_stop together after that edge (the engine accepts and ends the move at once), no DIR change from then
+    on."""
     cfg = Config(mode=sm.MODE_HALF, dir_setup=200, dir_hold=100)
     eng = await setup(dut, cfg)
     rec = GateRecorder(dut)
@@ -716,9 +716,9 @@ async def hard_stop_cancels_a_held_start(dut) -> None:
 
     async def watch_stop() -> None:
         while True:
-            await RisingEdge(dut.stop_out)
+            await RisingEdge(dut.eng_hard_stop)
             await ReadOnly()
-            assert int(dut.start_out.value) == 1, "stop_out without start_out"
+            assert int(dut.eng_start.value) == 1, "eng_hard_stop without eng_start"
             stops.append(edge_now())
 
     watcher = cocotb.start_soon(watch_stop())
@@ -742,7 +742,7 @@ async def hard_stop_cancels_a_held_start(dut) -> None:
         await after_edge(h)
         strobe.value = 0
 
-    # A normal move in direction 0 first: stop_out stays low.
+    # A normal move in direction 0 first: eng_hard_stop stays low.
     await run_move(dut, eng, 2, 0)
     assert stops == []
     # DIR hold: direction 1 requested right after the last pulse waits for dir_hold; stopped meanwhile.
@@ -753,7 +753,7 @@ async def hard_stop_cancels_a_held_start(dut) -> None:
     await stop_at(q + 20)
     await ClockCycles(dut.clk, 400)
     assert stops == [q + 20] and rec.start_edges[n_starts:] == [q + 20], (stops, rec.start_edges)
-    assert rec.dir_edges == [] and int(dut.dir_o.value) == 0, "DIR changed after a stop during its hold"
+    assert rec.dir_edges == [] and int(dut.dir.value) == 0, "DIR changed after a stop during its hold"
     assert int(dut.gate_busy.value) == 0
     # DIR setup: DIR changes at once (no pulse for a while), the start waits 195 clocks; stopped meanwhile.
     eng.moves.append(Move(3))  # what the engine would play if the cancel failed
@@ -761,23 +761,23 @@ async def hard_stop_cancels_a_held_start(dut) -> None:
     await stop_at(q + 50)
     await ClockCycles(dut.clk, 400)
     assert stops[-1] == q + 50 and rec.start_edges[-1] == q + 50
-    assert rec.dir_edges == [q + 1] and int(dut.dir_o.value) == 1
+    assert rec.dir_edges == [q + 1] and int(dut.dir.value) == 1
     # A soft stop during DIR setup cancels the start the same way (at rest there is nothing to decelerate).
     eng.moves.append(Move(3))
     q = await request_start(dut, 0)
     await stop_at(q + 30, "soft")
     await ClockCycles(dut.clk, 400)
     assert stops[-1] == q + 30 and rec.start_edges[-1] == q + 30
-    assert rec.dir_edges[-1] == q + 1 and int(dut.dir_o.value) == 0
+    assert rec.dir_edges[-1] == q + 1 and int(dut.dir.value) == 0
     n_dir = len(rec.dir_edges)
-    # start_req and hard_stop at one edge, with a direction change: no DIR change, start_out with stop_out.
+    # start_req and hard_stop at one edge, with a direction change: no DIR change, eng_start with eng_hard_stop.
     eng.moves.append(Move(3))
     q = await request_with_stop(1, dut.hard_stop)
     await ClockCycles(dut.clk, 400)
     assert stops[-1] == q and rec.start_edges[-1] == q
-    assert len(rec.dir_edges) == n_dir and int(dut.dir_o.value) == 0
+    assert len(rec.dir_edges) == n_dir and int(dut.dir.value) == 0
     # A soft stop with the start_req it accepts is not a cancel: the engine decides it (it ignores a soft stop at
-    # its start edge), so start_out comes alone.
+    # its start edge), so eng_start comes alone.
     n_stops = len(stops)
     q = await request_with_stop(0, dut.soft_stop)
     await ClockCycles(dut.clk, 100)
@@ -829,20 +829,18 @@ async def monitors_fail_on_wrong_settings(dut) -> None:
     await run_move(dut, eng, 3, 0)
     w, s, h = cfg.step_width, cfg.dir_setup, cfg.dir_hold
     right = [
-        StepWidthMonitor(dut.step_o, w, exact=True),
-        DirTimingMonitor(dut.step_o, dut.dir_o, s, h),
-        ElectricalMonitor(dut.clk, dut.step_o, dut.dir_o, (dut.a1, dut.a2, dut.b1, dut.b2), 3, position=3),
+        StepWidthMonitor(dut.step, w, exact=True),
+        DirTimingMonitor(dut.step, dut.dir, s, h),
+        ElectricalMonitor(dut.clk, dut.step, dut.dir, (dut.a1, dut.a2, dut.b1, dut.b2), 3, position=3),
     ]
     wrong = {
-        "width + 1": StepWidthMonitor(dut.step_o, w + 1),
-        "exact width - 1": StepWidthMonitor(dut.step_o, w - 1, exact=True),
-        "setup + 1": DirTimingMonitor(dut.step_o, dut.dir_o, s + 1, 0),
-        "hold + 1": DirTimingMonitor(dut.step_o, dut.dir_o, 0, h + 1),
-        "position + 1": ElectricalMonitor(
-            dut.clk, dut.step_o, dut.dir_o, (dut.a1, dut.a2, dut.b1, dut.b2), 3, position=4
-        ),
+        "width + 1": StepWidthMonitor(dut.step, w + 1),
+        "exact width - 1": StepWidthMonitor(dut.step, w - 1, exact=True),
+        "setup + 1": DirTimingMonitor(dut.step, dut.dir, s + 1, 0),
+        "hold + 1": DirTimingMonitor(dut.step, dut.dir, 0, h + 1),
+        "position + 1": ElectricalMonitor(dut.clk, dut.step, dut.dir, (dut.a1, dut.a2, dut.b1, dut.b2), 3, position=4),
         "mode full instead of half": ElectricalMonitor(
-            dut.clk, dut.step_o, dut.dir_o, (dut.a1, dut.a2, dut.b1, dut.b2), 2, position=3
+            dut.clk, dut.step, dut.dir, (dut.a1, dut.a2, dut.b1, dut.b2), 2, position=3
         ),
     }
     for m in [*right, *wrong.values()]:
@@ -872,8 +870,8 @@ async def monitors_fail_on_wrong_settings(dut) -> None:
     eng.set_position(5)
     await ClockCycles(dut.clk, PWM_LATENCY + 1)
     pins = (dut.a1, dut.a2, dut.b1, dut.b2)
-    ok = ElectricalMonitor(dut.clk, dut.step_o, dut.dir_o, pins, 4, position=5, ustep_log2=LG, pwm_period=60)
-    bad = ElectricalMonitor(dut.clk, dut.step_o, dut.dir_o, pins, 4, position=5, ustep_log2=LG - 1, pwm_period=60)
+    ok = ElectricalMonitor(dut.clk, dut.step, dut.dir, pins, 4, position=5, ustep_log2=LG, pwm_period=60)
+    bad = ElectricalMonitor(dut.clk, dut.step, dut.dir, pins, 4, position=5, ustep_log2=LG - 1, pwm_period=60)
     a_ok, b_ok = ok.expected_pwm(5)
     a_bad, b_bad = bad.expected_pwm(5)
     assert (a_ok.polarity, b_ok.polarity) == (a_bad.polarity, b_bad.polarity) and a_ok.duty != a_bad.duty

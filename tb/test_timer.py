@@ -42,7 +42,7 @@ async def timer_spacing(dut) -> None:
     """For each PRESCALE: ticks at restart + P, + 2P, ... and nowhere else."""
     dut.restart.value = 0
     dut.prescale.value = 1
-    await start_clock_and_reset(dut)
+    await start_clock_and_reset(dut.clk, dut.rst)
     for prescale in (1, 2, 3, 7, 16, 100, 0):
         dut.prescale.value = prescale
         restart, ticks = await record_ticks(dut, 400)
@@ -56,7 +56,7 @@ async def timer_prescale_change(dut) -> None:
     """A new PRESCALE takes effect at the next tick: the running period ends with the old value."""
     dut.restart.value = 0
     dut.prescale.value = 10
-    await start_clock_and_reset(dut)
+    await start_clock_and_reset(dut.clk, dut.rst)
     for change_at, old, new in ((25, 10, 3), (31, 3, 17), (5, 1, 4), (40, 8, 1)):
         dut.prescale.value = old
         restart, ticks = await record_ticks(dut, 200, {change_at: new})
@@ -69,7 +69,7 @@ async def timer_restart_realigns(dut) -> None:
     """A restart in the middle of a period drops that period: the next tick is P clocks after the restart."""
     dut.restart.value = 0
     dut.prescale.value = 9
-    await start_clock_and_reset(dut)
+    await start_clock_and_reset(dut.clk, dut.rst)
     for skew in range(12):
         await record_ticks(dut, skew)  # leave the counter somewhere inside a period
         restart, ticks = await record_ticks(dut, 60)

@@ -12,63 +12,23 @@ from __future__ import annotations
 
 import ctypes
 import dataclasses
-import math
 import random
 import re
-import subprocess
 from pathlib import Path
 from typing import Any
 
 import pytest
 
+from c_abi import CPlan, log_uniform, run
 from stepramp.board.driver import plan_writes
 from stepramp.board.plan import MAX_PRESCALE, MAX_STEPS, REG_WIDTHS, Plan, plan_move
 from stepramp.board.regmap import ERROR_CODES, offset
-from stepramp.sim.profiles import INVALID_INPUTS, PROFILES
-from stepramp.tools import clib
-
-C_DIR = Path(__file__).resolve().parents[1] / "c"
-BUILD_DIR = C_DIR / "build"
-PLAN_HEADER = C_DIR / "stepramp_plan.h"
+from stepramp.sim.profiles import INVALID_INPUTS, PROFILES, design_args
 
 FAKEBUS_WORDS = 32
 LOG_MAX = 256
 
 RANDOM_COUNT = 500
-
-_C_TYPES = {
-    "uint32_t": ctypes.c_uint32,
-    "uint64_t": ctypes.c_uint64,
-    "int32_t": ctypes.c_int32,
-    "int64_t": ctypes.c_int64,
-}
-
-
-def _run(cmd: list[str]) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(cmd, capture_output=True, text=True, check=False, timeout=120)
-
-
-@pytest.fixture(scope="module")
-def build() -> Path:
-    """Build the C library and run its host tests (make -C sw/c); a missing toolchain fails, it is not skipped."""
-    return clib.build()
-
-
-def plan_struct_fields() -> list[tuple[str, Any]]:
-    """stepramp_plan_t's fields, read from stepramp_plan.h (so that a field added there is followed here)."""
-    text = PLAN_HEADER.read_text()
-    match = re.search(r"typedef struct \{(.*?)\} stepramp_plan_t;", text, re.S)
-    assert match, f"no stepramp_plan_t in {PLAN_HEADER}"
-    body = re.sub(r"/\*.*?\*/", "", match.group(1), flags=re.S)
-    fields = re.findall(r"(\w+)\s+(\w+)\s*;", body)
-    assert fields, "stepramp_plan_t has no fields"
-    return [(name, _C_TYPES[ctype]) for ctype, name in fields]
-
-
-class CPlan(ctypes.Structure):
-    """stepramp_plan_t."""
-
-    _fields_ = plan_struct_fields()
 
 
 class CWrite(ctypes.Structure):
@@ -153,10 +113,6 @@ START_WRITE: Write = (offset("CTRL"), 0x1, 0x1)
 """START: bit 0 in byte 0 of CTRL, the other lanes (the interrupt enables) untouched."""
 
 
-def _log_uniform(rng: random.Random, lo: float, hi: float) -> float:
-    return math.exp(rng.uniform(math.log(lo), math.log(hi)))
-
-
 def _random_field(rng: random.Random, width: int) -> int:
     r = rng.random()
     if r < 0.1:
@@ -180,22 +136,12 @@ def random_valid_moves(seed: int, count: int) -> list[dict[str, Any]]:
     while len(moves) < count:
         prescale = rng.choice((1, 1, 2, 7, 50, 1000, MAX_PRESCALE, rng.randint(1, MAX_PRESCALE)))
         spr = rng.choice((200.0, 400.0, 1600.0, 3200.0, 51200.0)) * rng.choice((1.0, 1.37))
-        fclk = _log_uniform(rng, 1e5, 2e8)
-        period = max(64.0 / prescale, 1.0) * _log_uniform(rng, 1.0, 1e4)  # cruise period, ticks
-        v = fclk / prescale / period
-        n_a = _log_uniform(rng, 0.1, 1e6)
-        n_d = n_a * _log_uniform(rng, 1e-2, 1e2)
-        alpha = 2.0 * math.pi / spr
-        steps = rng.choice((0, 1, 2, 3, MAX_STEPS, round(_log_uniform(rng, 1.0, MAX_STEPS))))
-        move = {
-            "steps": steps * rng.choice((1, -1)),
-            "accel": alpha * v * v / (2.0 * n_a),
-            "decel": alpha * v * v / (2.0 * n_d),
-            "speed": alpha * v,
-            "spr": spr,
-            "fclk": fclk,
-            "prescale": prescale,
-        }
+        fclk = log_uniform(rng, 1e5, 2e8)
+        period = max(64.0 / prescale, 1.0) * log_uniform(rng, 1.0, 1e4)  # cruise period, ticks
+        n_a = log_uniform(rng, 0.1, 1e6)
+        n_d = n_a * log_uniform(rng, 1e-2, 1e2)
+        steps = rng.choice((0, 1, 2, 3, MAX_STEPS, round(log_uniform(rng, 1.0, MAX_STEPS))))
+        move = design_args(steps * rng.choice((1, -1)), period, n_a, n_d, spr, fclk, prescale)
         try:
             plan_move(**move)
         except ValueError:
@@ -212,7 +158,7 @@ def _move_args(move: dict[str, Any]) -> tuple[Any, ...]:
 
 
 def test_host_driver_tests_pass(build: Path) -> None:
-    result = _run([str(build / "test_stepramp")])
+    result = run([str(build / "test_stepramp")])
     assert result.returncode == 0, f"C driver host tests failed:\n{result.stdout}\n{result.stderr}"
     match = re.search(r"(\d+) checks, 0 failed", result.stdout)
     assert match, result.stdout

@@ -14,21 +14,16 @@ import functools
 import math
 import random
 import re
-import subprocess
 from collections import Counter
 from pathlib import Path
 from typing import Any
 
 import pytest
 
+from c_abi import PLAN_HEADER, CPlan, log_uniform, run
 from stepramp.board import plan as pyplan
-from stepramp.board.plan import MAX_PRESCALE, MAX_STEPS, MoveInfo, Plan, decel_product, plan_move, plan_move_info
-from stepramp.sim.profiles import INVALID_INPUTS, PROFILES
-from stepramp.tools import clib
-
-C_DIR = Path(__file__).resolve().parents[1] / "c"
-BUILD_DIR = C_DIR / "build"
-HEADER = C_DIR / "stepramp_plan.h"
+from stepramp.board.plan import MAX_PRESCALE, MAX_STEPS, MoveInfo, decel_product, plan_move, plan_move_info
+from stepramp.sim.profiles import INVALID_INPUTS, PROFILES, design_args
 
 # A substring of each ValueError message of plan.py -> the stepramp_err_t the C library returns for it.
 # Exactly one key matches any message; the C message (stepramp_strerror) contains the key as well.
@@ -56,26 +51,6 @@ Outcome = dict[str, int] | str
 """The registers of a planned move, or the name of the error (a stepramp_err_t enumerator)."""
 
 
-class CPlan(ctypes.Structure):
-    """stepramp_plan_t."""
-
-    _fields_ = [
-        ("steps", ctypes.c_uint32),
-        ("direction", ctypes.c_uint32),
-        ("prescale", ctypes.c_uint32),
-        ("c_first", ctypes.c_uint64),
-        ("c_last", ctypes.c_uint64),
-        ("sa", ctypes.c_uint32),
-        ("c_sa", ctypes.c_uint64),
-        ("sd", ctypes.c_uint32),
-        ("c_sd", ctypes.c_uint64),
-        ("accel_seed", ctypes.c_uint64),
-        ("decel_seed", ctypes.c_uint64),
-        ("cruise", ctypes.c_uint64),
-        ("stop_ratio", ctypes.c_uint32),
-    ]
-
-
 # stepramp_info_t: plan.MoveInfo field by field, then the unrounded register values (ticks)
 MOVE_INFO_FIELDS = [f.name for f in dataclasses.fields(MoveInfo)]
 RAW_FIELDS = ["t_first", "t_last", "t_sa", "t_sd", "t_accel_seed", "t_decel_seed", "t_cruise"]
@@ -91,23 +66,13 @@ class CInfo(ctypes.Structure):
 @functools.cache
 def _error_names() -> list[str]:
     """The stepramp_err_t enumerators in the header's order (their values: 0, 1, 2, ...)."""
-    text = HEADER.read_text()
+    text = PLAN_HEADER.read_text()
     match = re.search(r"typedef enum \{(.*?)\} stepramp_err_t;", text, re.S)
-    assert match, f"no stepramp_err_t enum in {HEADER}"
+    assert match, f"no stepramp_err_t enum in {PLAN_HEADER}"
     body = re.sub(r"/\*.*?\*/", "", match.group(1), flags=re.S)
     names = [item.split("=")[0].strip() for item in body.split(",") if item.strip()]
     assert names[0] == "STEPRAMP_OK" and "=" not in body.replace("STEPRAMP_OK = 0", ""), "only OK = 0 is explicit"
     return names
-
-
-def _run(cmd: list[str]) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(cmd, capture_output=True, text=True, check=False, timeout=120)
-
-
-@pytest.fixture(scope="module")
-def build() -> Path:
-    """Build the C library and run its host tests (make -C sw/c); a missing toolchain fails, it is not skipped."""
-    return clib.build()
 
 
 def load_library(build_dir: Path) -> ctypes.CDLL:
@@ -216,10 +181,6 @@ def py_outcome_info(move: Move) -> tuple[Outcome, dict[str, int | str]]:
 # --------------------------------------------------------------------------------------------------------
 
 
-def _log_uniform(rng: random.Random, lo: float, hi: float) -> float:
-    return math.exp(rng.uniform(math.log(lo), math.log(hi)))
-
-
 def _random_steps(rng: random.Random) -> int:
     r = rng.random()
     if r < 0.12:
@@ -227,7 +188,7 @@ def _random_steps(rng: random.Random) -> int:
     elif r < 0.35:
         n = rng.randint(4, 100)
     else:
-        n = round(_log_uniform(rng, 1.0, MAX_STEPS))
+        n = round(log_uniform(rng, 1.0, MAX_STEPS))
     return n * rng.choice((1, -1))
 
 
@@ -239,7 +200,7 @@ def _random_prescale(rng: random.Random) -> int:
         return MAX_PRESCALE
     if r < 0.6:
         return rng.randint(1, 8)
-    return round(_log_uniform(rng, 1.0, MAX_PRESCALE))
+    return round(log_uniform(rng, 1.0, MAX_PRESCALE))
 
 
 def _designed_move(rng: random.Random) -> Move:
@@ -247,36 +208,25 @@ def _designed_move(rng: random.Random) -> Move:
     prescale = _random_prescale(rng)
     spr = rng.choice((24.0, 200.0, 400.0, 1000.0, 1600.0, 3200.0, 25600.0, 51200.0)) * rng.choice((1, 1.37))
     if rng.random() < 0.2:
-        spr = _log_uniform(rng, 24.0, 51200.0)
-    fclk = _log_uniform(rng, 1e5, 2e8)
-    f_tick = fclk / prescale
+        spr = log_uniform(rng, 24.0, 51200.0)
+    fclk = log_uniform(rng, 1e5, 2e8)
     # cruise period in ticks: mostly above the MIN_INTERVAL_CLKS limit, sometimes at or below it
-    period = math.ceil(64 / prescale) * _log_uniform(rng, 0.5, 1.0) + _log_uniform(rng, 1e-3, 1e6)
-    v = f_tick / period
-    n_a = _log_uniform(rng, 1e-3, 1e9)
-    n_d = n_a * _log_uniform(rng, 1e-4, 1e4)  # accel / decel ratio up to 1e4 both ways
-    alpha = 2.0 * math.pi / spr
-    return {
-        "steps": _random_steps(rng),
-        "accel": alpha * v * v / (2.0 * n_a),
-        "decel": alpha * v * v / (2.0 * n_d),
-        "speed": alpha * v,
-        "spr": spr,
-        "fclk": fclk,
-        "prescale": prescale,
-    }
+    period = math.ceil(64 / prescale) * log_uniform(rng, 0.5, 1.0) + log_uniform(rng, 1e-3, 1e6)
+    n_a = log_uniform(rng, 1e-3, 1e9)
+    n_d = n_a * log_uniform(rng, 1e-4, 1e4)  # accel / decel ratio up to 1e4 both ways
+    return design_args(_random_steps(rng), period, n_a, n_d, spr, fclk, prescale)
 
 
 def _raw_move(rng: random.Random) -> Move:
     """Physical units drawn independently over wide ranges (many too slow or too fast)."""
-    accel = _log_uniform(rng, 1e-9, 1e9)
+    accel = log_uniform(rng, 1e-9, 1e9)
     return {
         "steps": _random_steps(rng),
         "accel": accel,
-        "decel": accel * _log_uniform(rng, 1e-4, 1e4),
-        "speed": _log_uniform(rng, 1e-7, 1e6),
-        "spr": _log_uniform(rng, 24.0, 51200.0),
-        "fclk": _log_uniform(rng, 1e5, 2e8),
+        "decel": accel * log_uniform(rng, 1e-4, 1e4),
+        "speed": log_uniform(rng, 1e-7, 1e6),
+        "spr": log_uniform(rng, 24.0, 51200.0),
+        "fclk": log_uniform(rng, 1e5, 2e8),
         "prescale": _random_prescale(rng),
     }
 
@@ -344,13 +294,14 @@ def _mismatch(move: Move, py: Outcome, c: Outcome) -> str:
 
 
 def test_host_unit_tests_pass(build: Path) -> None:
-    result = _run([str(build / "test_stepramp_plan")])
+    result = run([str(build / "test_stepramp_plan")])
     assert result.returncode == 0, f"C host tests failed:\n{result.stdout}\n{result.stderr}"
     assert re.search(r"\d+ checks, 0 failed", result.stdout), result.stdout
 
 
-def test_struct_and_enum_match_python(lib: ctypes.CDLL) -> None:
-    assert [name for name, _ in CPlan._fields_] == [f.name for f in dataclasses.fields(Plan)]
+def test_error_enum_matches_python(lib: ctypes.CDLL) -> None:
+    """stepramp_err_t has a code for each ValueError of plan.py (and NULL), and its text says the same; the plan
+    struct is checked against Plan by test_c_driver.py::test_plan_struct_matches_python."""
     names = _error_names()
     assert set(ERROR_KEYS.values()) <= set(names)
     assert set(names) - set(ERROR_KEYS.values()) == {"STEPRAMP_OK", "STEPRAMP_ENULL"}
@@ -368,7 +319,7 @@ def test_constants_are_the_same_doubles(lib: ctypes.CDLL) -> None:
 
 def test_decel_product_bit_for_bit(lib: ctypes.CDLL) -> None:
     rng = random.Random(7)
-    ms = [*range(-2, 700), MAX_STEPS - 3, MAX_STEPS, *(round(_log_uniform(rng, 257, MAX_STEPS)) for _ in range(5000))]
+    ms = [*range(-2, 700), MAX_STEPS - 3, MAX_STEPS, *(round(log_uniform(rng, 257, MAX_STEPS)) for _ in range(5000))]
     bad = [
         (m, decel_product(m), lib.stepramp_decel_product(m))
         for m in ms

@@ -32,6 +32,7 @@ from stepramp.sim.profiles import (
     PROFILES_BY_NAME,
     RANDOM_PROFILES,
     Profile,
+    design_args,
 )
 
 BOUND_C0 = 0.008  # in units of c0_slow: half of the recurrence's 0.014 c0 per ramp is left (docs/algorithm.md)
@@ -91,23 +92,6 @@ def check_move(args: dict[str, Any], label: str = "") -> Result:
     return Result(worst, worst / c0_slow if c0_slow else 0.0, c0_slow)
 
 
-def _design(
-    steps: int, period: float, n_a: float, n_d: float, spr: float, fclk: float, prescale: int
-) -> dict[str, Any]:
-    """plan_move arguments from tick-domain design values (period in ticks, ramp lengths in steps)."""
-    alpha = 2.0 * math.pi / spr
-    v = fclk / prescale / period
-    return {
-        "steps": steps,
-        "accel": alpha * v * v / (2 * n_a),
-        "decel": alpha * v * v / (2 * n_d),
-        "speed": alpha * v,
-        "spr": spr,
-        "fclk": fclk,
-        "prescale": prescale,
-    }
-
-
 def _random_moves(seed: int, count: int, long_moves: int) -> list[dict[str, Any]]:
     """Random valid moves: varied spr, f_clk, prescale 1..8, accel/decel ratio up to 100 both ways."""
     rng = random.Random(seed)
@@ -122,7 +106,7 @@ def _random_moves(seed: int, count: int, long_moves: int) -> list[dict[str, Any]
         n_d = n_a * math.exp(rng.uniform(-math.log(100.0), math.log(100.0)))
         steps = rng.randint(20_000, 200_000) if len(out) < long_moves else rng.randint(1, 5000)
         steps *= rng.choice((1, -1))
-        args = _design(steps, period, n_a, n_d, spr, fclk, prescale)
+        args = design_args(steps, period, n_a, n_d, spr, fclk, prescale)
         try:
             plan_move(**args)
         except ValueError:
@@ -168,7 +152,7 @@ def test_the_bound_is_tight_for_long_ramps() -> None:
     # the recurrence values sum to 0.01397 c0 less than the ideal ramp; half of that is put back in interval 1 and
     # half in the seed (accel), half in the seed (decel): the worst pulse is ~0.007 c0 off (it was 0.028 c0, the
     # move ending early by both deficits, before they were put back)
-    args = _design(100_001, 70.0, 20_000.0, 20_000.0, 200.0, 1e6, 1)
+    args = design_args(100_001, 70.0, 20_000.0, 20_000.0, 200.0, 1e6, 1)
     res = check_move(args)
     assert 0.0065 < abs(res.worst_c0) < 0.0075
 
@@ -232,7 +216,7 @@ def test_phases_follow_the_boundaries() -> None:
 def test_model_is_fast() -> None:
     import time
 
-    plan = plan_move(**_design(100_000, 80.0, 3000.0, 3000.0, 400.0, 2e7, 2))
+    plan = plan_move(**design_args(100_000, 80.0, 3000.0, 3000.0, 400.0, 2e7, 2))
     t0 = time.perf_counter()
     times = tick_times(plan)
     assert time.perf_counter() - t0 < 1.0
@@ -374,7 +358,7 @@ def test_remainder_cleared_accel_to_decel() -> None:
     moves = [
         PROFILES_BY_NAME["triangle_long_ramp"].args(),
         PROFILES_BY_NAME["avr446_demo"].args(),
-        _design(20_001, 70.0, 40_000.0, 15_000.0, 400.0, 1e7, 1),
+        design_args(20_001, 70.0, 40_000.0, 15_000.0, 400.0, 1e7, 1),
     ]
     for args in moves:
         check_move(args)
@@ -402,7 +386,7 @@ def test_accel_much_greater_than_decel(ratio: float, shape: str) -> None:
     n_d = n_a * ratio
     steps = int(1.2 * (n_a + n_d)) if shape == "trapezoid" else int(0.5 * (n_a + n_d))
     for prescale in (1, 3):
-        args = _design(steps, 90.3, n_a, n_d, 400.0, 3e6, prescale)
+        args = design_args(steps, 90.3, n_a, n_d, 400.0, 3e6, prescale)
         plan, info = plan_move_info(**args)
         assert info.triangle == (shape == "triangle")
         assert args["accel"] / args["decel"] == pytest.approx(ratio)
@@ -417,19 +401,19 @@ def test_accel_much_greater_than_decel(ratio: float, shape: str) -> None:
 
 def test_32bit_delays_and_31bit_steps() -> None:
     # delays above 2^16 ticks (c0 ~ 1.6e6 ticks, cruise period 100,000 ticks) and 70,000 > 2^16 steps
-    args = _design(70_000, 100_000.0, 70.0, 90.0, 200.0, 1e8, 1)
+    args = design_args(70_000, 100_000.0, 70.0, 90.0, 200.0, 1e8, 1)
     plan = plan_move(**args)
     assert plan.c_first >> 16 > 2**16
     assert plan.cruise >> 32 > 2**16
     assert plan.steps > 2**16
     check_move(args)
     # delays close to 2^32 ticks
-    args = _design(40, 2.5e9, 0.5, 0.5, 200.0, 1e8, 1)
+    args = design_args(40, 2.5e9, 0.5, 0.5, 200.0, 1e8, 1)
     plan = plan_move(**args)
     assert plan.cruise >> 32 > 2**31
     check_move(args)
     # the largest step count: the first and last intervals are right (generator, no full list)
-    args = _design(-MAX_STEPS, 1000.0, 50.0, 80.5, 200.0, 1e8, 1)
+    args = design_args(-MAX_STEPS, 1000.0, 50.0, 80.5, 200.0, 1e8, 1)
     plan = plan_move(**args)
     move = ideal.ideal_move(**args)
     head = list(itertools.islice(interval_values(plan), 200))
@@ -464,7 +448,7 @@ def test_one_two_three_step_moves() -> None:
 def test_no_zero_or_negative_interval() -> None:
     moves = [p.args() for p in NAMED_PROFILES] + RANDOM_MOVES[::4]
     # intervals of ~1 tick with a large prescale, and fractional periods just above an integer
-    moves += [_design(300, 1.0 + 1e-9, 5.0, 7.0, 200.0, 1e7, 64), _design(300, 1.999, 3.0, 2.0, 200.0, 1e7, 64)]
+    moves += [design_args(300, 1.0 + 1e-9, 5.0, 7.0, 200.0, 1e7, 64), design_args(300, 1.999, 3.0, 2.0, 200.0, 1e7, 64)]
     for args in moves:
         plan = plan_move(**args)
         times = tick_times(plan)

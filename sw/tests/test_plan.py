@@ -28,21 +28,24 @@ from stepramp.sim.profiles import INVALID_INPUTS, PROFILES
 
 SPR = 200.0
 ALPHA = 2.0 * math.pi / SPR
-TABLE_FIELDS = [
-    "steps",
-    "direction",
-    "prescale",
-    "c_first",
-    "c_last",
-    "sa",
-    "c_sa",
-    "sd",
-    "c_sd",
-    "accel_seed",
-    "decel_seed",
-    "cruise",
-    "stop_ratio",
+#: The plan table of docs/algorithm.md ("What the driver computes"): each field of Plan, in order, and its width in
+#: bits (uint31: 31, Q32.16: 48, Q32.32: 64, Q16.16: 32).
+TABLE: list[tuple[str, int]] = [
+    ("steps", 31),
+    ("direction", 1),
+    ("prescale", 16),
+    ("c_first", 48),
+    ("c_last", 48),
+    ("sa", 31),
+    ("c_sa", 48),
+    ("sd", 31),
+    ("c_sd", 48),
+    ("accel_seed", 48),
+    ("decel_seed", 48),
+    ("cruise", 64),
+    ("stop_ratio", 32),
 ]
+TABLE_FIELDS = [name for name, _ in TABLE]
 
 
 def _args(steps: int, a: float, d: float, v: float, fclk: float = 1e6, prescale: int = 1) -> dict:
@@ -68,21 +71,7 @@ def test_constants() -> None:
 
 def test_fields_and_widths_match_the_table() -> None:
     assert [f.name for f in dataclasses.fields(Plan)] == TABLE_FIELDS
-    assert REG_WIDTHS == {
-        "steps": 31,
-        "direction": 1,
-        "prescale": 16,
-        "c_first": 48,
-        "c_last": 48,
-        "sa": 31,
-        "c_sa": 48,
-        "sd": 31,
-        "c_sd": 48,
-        "accel_seed": 48,
-        "decel_seed": 48,
-        "cruise": 64,
-        "stop_ratio": 32,
-    }
+    assert dict(TABLE) == REG_WIDTHS
     plan = plan_move(**_args(100, 1e5, 1e5, 2000.0))
     d = plan.to_dict()
     assert list(d) == TABLE_FIELDS

@@ -69,9 +69,9 @@ FULL_STEP_TABLE: tuple[tuple[int, int], ...] = HALF_STEP_TABLE[1::2]
 # ----------------------------------------------------------------------------------------------------------------
 #: The engine's first pulse comes 2 clocks after the edge that samples its start (docs/stepramp_engine.md).
 ENGINE_FIRST_PULSE_LATENCY = 2
-#: step_o rises at the edge that samples eng_step = '1' (one register): 1 clock after eng_step goes high.
+#: STEP rises at the edge that samples eng_step = '1' (one register): 1 clock after eng_step goes high.
 STEP_LATENCY = 1
-#: From the edge that registers start_out to the edge at which step_o rises for the engine's pulse 0.
+#: From the edge that registers eng_start to the edge at which STEP rises for the engine's pulse 0.
 START_TO_FIRST_STEP = 1 + ENGINE_FIRST_PULSE_LATENCY + STEP_LATENCY
 #: A direction change: the first STEP rising edge comes max(dir_setup, this) clocks after the DIR change.
 GATE_SETUP_MIN = START_TO_FIRST_STEP + 1
@@ -268,8 +268,8 @@ def step_pulse_width(step_width: int) -> int:
 class GateTiming:
     """What the start gate does with a start_req sampled at edge `request`.
 
-    dir_edge: edge at which DIR changes (None: no change). start_edge: start_out is '1' in the cycle after it.
-    first_step_edge: edge at which step_o rises for the engine's pulse 0 (if the move has one).
+    dir_edge: edge at which DIR changes (None: no change). start_edge: eng_start is '1' in the cycle after it.
+    first_step_edge: edge at which STEP rises for the engine's pulse 0 (if the move has one).
     """
 
     request: int
@@ -279,7 +279,7 @@ class GateTiming:
 
     @property
     def latency(self) -> int:
-        """Clocks from start_req high to start_out high (1 when the direction does not change)."""
+        """Clocks from start_req high to eng_start high (1 when the direction does not change)."""
         return self.start_edge - self.request + 1
 
 
@@ -294,9 +294,9 @@ def gate_timing(
 ) -> GateTiming:
     """The start gate's rule for one accepted start_req (sampled at edge `request`, gate idle, engine idle).
 
-    Same direction: start_out after edge request (1 clock after start_req). Direction change: DIR changes at
-    D = max(request + 1, last_step_edge + max(dir_hold, 1)), start_out after edge D + 1 + max(dir_setup - 5, 0),
-    so that the first STEP rising edge comes max(dir_setup, 5) clocks after D. In both cases start_out waits until
+    Same direction: eng_start after edge request (1 clock after start_req). Direction change: DIR changes at
+    D = max(request + 1, last_step_edge + max(dir_hold, 1)), eng_start after edge D + 1 + max(dir_setup - 5, 0),
+    so that the first STEP rising edge comes max(dir_setup, 5) clocks after D. In both cases eng_start waits until
     the first STEP rising edge is at least min_gap = max(step_width, 1) + max(step_space, 1) clocks after
     last_step_edge (docs/algorithm.md, "Step spacing"). last_step_edge: the last edge that sampled eng_step = '1'
     (None: none since reset), which is also the edge the STEP pin rose.

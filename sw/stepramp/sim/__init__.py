@@ -1,3 +1,3 @@
 # SPDX-License-Identifier: MIT
-"""Simulation: the cocotb runner, the engine bench, the RTL session, monitors, bus masters, waveform layouts,
-profiles."""
+"""Simulation: the cocotb runner, the benches' clock and reset, the engine bench, the RTL session, the step watch,
+the bus master, waveform layouts, profiles."""

@@ -43,21 +43,15 @@ from pathlib import Path
 from typing import Any
 
 import cocotb
-from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, First, ReadOnly, RisingEdge, SimTimeoutError, Timer, with_timeout
 from cocotb.utils import get_sim_time
 
 from stepramp.board.plan import Plan
+from stepramp.sim.clocking import CLK_PERIOD_NS, now_cycles, start_clock_and_reset
 from stepramp.sim.waves import LAYOUTS, missing_in, signal_paths
-
-CLK_PERIOD_NS = 10
 
 #: Engine inputs driven from a move's register values: the Plan's fields are the engine's port names.
 INPUTS = tuple(field.name for field in dataclasses.fields(Plan))
-
-
-def _edge() -> int:
-    return round(get_sim_time("ns") / CLK_PERIOD_NS)
 
 
 def _signed(value: Any, bits: int) -> int:
@@ -66,18 +60,6 @@ def _signed(value: Any, bits: int) -> int:
 
 
 STOP_PORTS = {"soft": "soft_stop", "hard": "hard_stop"}
-
-
-async def _strobe(dut: Any, port: str, at_cycle: int, start_edge: int) -> None:
-    """Drive port '1' for the clock cycle before rising edge start_edge + at_cycle (at_cycle >= 1)."""
-    signal = getattr(dut, port)
-    await Timer(at_cycle * CLK_PERIOD_NS - CLK_PERIOD_NS // 2, unit="ns")  # the falling edge before it
-    signal.value = 1
-    await RisingEdge(dut.clk)
-    sampled = _edge() - start_edge
-    await FallingEdge(dut.clk)
-    signal.value = 0
-    assert sampled == at_cycle, f"{port} sampled at edge {sampled}, requested {at_cycle}"
 
 
 #: Ports an "events" entry may drive.
@@ -101,16 +83,23 @@ def _set_event(dut: Any, event: dict[str, Any]) -> None:
 
 
 async def _event(dut: Any, event: dict[str, Any], start_edge: int) -> None:
-    """Drive an event's port '1' for the clock cycle before rising edge start_edge + at_cycle (at_cycle >= 1)."""
+    """Drive an event's port '1' (or a stop's strobe) for the clock cycle before rising edge start_edge + at_cycle
+    (at_cycle >= 1)."""
     at_cycle = int(event["at_cycle"])
     await Timer(at_cycle * CLK_PERIOD_NS - CLK_PERIOD_NS // 2, unit="ns")  # the falling edge before it
     _set_event(dut, event)
     await RisingEdge(dut.clk)
-    sampled = _edge() - start_edge
+    sampled = now_cycles() - start_edge
     await FallingEdge(dut.clk)
     if not event.get("_keep"):  # an event at the next edge drives the same port now
         getattr(dut, event["port"]).value = 0
     assert sampled == at_cycle, f"{event['port']} sampled at edge {sampled}, requested {at_cycle}"
+
+
+def _stops(move: dict[str, Any]) -> list[dict[str, Any]]:
+    """A move's stop requests as a list ("stop" is one request or a list of them)."""
+    raw = move.get("stop")
+    return [] if raw is None else [raw] if isinstance(raw, dict) else list(raw)
 
 
 def _events(move: dict[str, Any]) -> list[dict[str, Any]]:
@@ -133,7 +122,7 @@ async def _watch_after_reset(dut: Any, move: dict[str, Any], start_edge: int) ->
     watch = int(move.get("reset_watch_cycles", 100)) * CLK_PERIOD_NS
     timer = Timer(watch, unit="ns")
     fired = await First(RisingEdge(dut.step), RisingEdge(dut.done), RisingEdge(dut.busy), timer)
-    snap["stray"] = None if fired is timer else _edge() - start_edge
+    snap["stray"] = None if fired is timer else now_cycles() - start_edge
     if fired is not timer:
         await FallingEdge(dut.clk)
     return snap
@@ -172,8 +161,7 @@ async def _play(dut: Any, move: dict[str, Any], next_move: dict[str, Any] | None
             getattr(dut, name).value = move["after_load"][name]
         if lead > 1:
             await ClockCycles(dut.clk, lead - 1)
-    raw_stop = move.get("stop")
-    stops: list[dict[str, Any]] = [] if raw_stop is None else [raw_stop] if isinstance(raw_stop, dict) else raw_stop
+    stops = _stops(move)
     requests = [(STOP_PORTS[stop["kind"]], int(stop["at_cycle"])) for stop in stops]
     if any(at_cycle < 0 for _, at_cycle in requests):
         raise ValueError(f"stop at_cycle must be >= 0: {stops}")
@@ -191,11 +179,9 @@ async def _play(dut: Any, move: dict[str, Any], next_move: dict[str, Any] | None
         if int(event["at_cycle"]) == 0:
             _set_event(dut, event)
     await RisingEdge(dut.clk)
-    start_edge = _edge()
-    strobes = [
-        cocotb.start_soon(_strobe(dut, port, at_cycle, start_edge)) for port, at_cycle in requests if at_cycle >= 1
-    ]
-    strobes += [cocotb.start_soon(_event(dut, e, start_edge)) for e in events if int(e["at_cycle"]) >= 1]
+    start_edge = now_cycles()
+    pulses: list[dict[str, Any]] = [{"port": port, "at_cycle": at_cycle} for port, at_cycle in requests] + events
+    strobes = [cocotb.start_soon(_event(dut, e, start_edge)) for e in pulses if int(e["at_cycle"]) >= 1]
     await FallingEdge(dut.clk)
     after_start = _snapshot(dut)
     # an event at edge 1 drives its port '1' at this very falling edge: leave it to the event
@@ -231,7 +217,7 @@ async def _play_held(
     if move.get("events") or move.get("stop") or move.get("load_lead") or "inputs_after_start" in move:
         raise ValueError("a held start takes no events, stops, load_lead or inputs_after_start")
     await RisingEdge(dut.clk)
-    start_edge = _edge()
+    start_edge = now_cycles()
     await FallingEdge(dut.clk)
     after_start = _snapshot(dut)
     if hold_next and next_move is not None:
@@ -270,7 +256,7 @@ async def _observe(
             return {"edges": edges, "states": states, "done": False}
         await First(RisingEdge(dut.step), RisingEdge(dut.done), Timer(remaining, unit="ns"))
         await ReadOnly()
-        offset = _edge() - start_edge
+        offset = now_cycles() - start_edge
         if int(dut.step.value) == 1 and (not edges or edges[-1] != offset):
             edges.append(offset)
             states.append(int(dut.state.value))
@@ -307,8 +293,7 @@ def _limit_cycles(moves: list[dict[str, Any]]) -> int:
     (idle events, load lead, strobes after done, the reset watch, the gap) and 20 clocks of slack."""
     total = 0
     for move in moves:
-        raw_stop = move.get("stop")
-        stops = [] if raw_stop is None else [raw_stop] if isinstance(raw_stop, dict) else raw_stop
+        stops = _stops(move)
         at_cycles = [0, *(int(x["at_cycle"]) for x in [*stops, *move.get("events", [])])]
         total += int(move["timeout_cycles"]) + max(at_cycles) - min(at_cycles) + int(move.get("load_lead", 0))
         total += int(move.get("reset_watch_cycles", 100)) + int(move.get("gap_cycles", 5)) + 20
@@ -330,21 +315,10 @@ def _backstop_ns() -> int:
 async def play_moves(dut: Any) -> None:
     """Play every move of the request, back to back, and write what was observed."""
     request = json.loads(Path(os.environ["STEPRAMP_SIM_REQUEST"]).read_text())
-    Clock(dut.clk, CLK_PERIOD_NS, unit="ns").start()
-    dut.start.value = 0
-    dut.load.value = 0
-    dut.min_gap.value = 2
-    dut.soft_stop.value = 0
-    dut.hard_stop.value = 0
-    dut.pos_load.value = 0
-    dut.pos_value.value = 0
-    for name in INPUTS:
+    for name in ("start", "load", "soft_stop", "hard_stop", "pos_load", "pos_value", *INPUTS):
         getattr(dut, name).value = 0
-    dut.rst.value = 1
-    await ClockCycles(dut.clk, 3)
-    await FallingEdge(dut.clk)
-    dut.rst.value = 0
-    await ClockCycles(dut.clk, 2)
+    dut.min_gap.value = 2
+    await start_clock_and_reset(dut.clk, dut.rst, settle=2)
     # The waveform layout (stepramp.sim.waves) names signals of this design: they must exist.
     missing = missing_in(dut, signal_paths(LAYOUTS["stepramp_engine"]))
     assert not missing, f"the GTKWave layout names signals stepramp_engine does not have: {missing}"

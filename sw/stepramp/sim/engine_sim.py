@@ -10,12 +10,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from stepramp.board.driver import STATE_NAMES  # the engine's `state` port is STATUS.STATE's encoding
 from stepramp.board.plan import Plan
 from stepramp.models.engine import last_edge
 from stepramp.sim.runner import run_cocotb
-
-#: Engine states as the RTL encodes them on its `state` port.
-STATE_NAMES = ("STOP", "ACCEL", "RUN", "DECEL")
 
 
 @dataclass(frozen=True)

@@ -9,6 +9,7 @@ each ramp in steps) and converted to the physical units that :func:`stepramp.boa
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import random
 from dataclasses import dataclass
@@ -32,15 +33,21 @@ class Profile:
 
     def args(self) -> dict[str, Any]:
         """Keyword arguments for plan_move / ideal_move."""
-        return {
-            "steps": self.steps,
-            "accel": self.accel,
-            "decel": self.decel,
-            "speed": self.speed,
-            "spr": self.spr,
-            "fclk": self.fclk,
-            "prescale": self.prescale,
-        }
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name != "name"}
+
+
+def design_args(
+    steps: int, period: float, n_a: float, n_d: float, spr: float = 200.0, fclk: float = 1e6, prescale: int = 1
+) -> dict[str, Any]:
+    """plan_move keyword arguments from tick-domain design values.
+
+    period: cruise period in ticks; n_a, n_d: steps needed to reach / leave the cruise speed
+    (a triangle when n_a + n_d > steps - 1, with its peak at (steps - 1) * n_a / (n_a + n_d)).
+    """
+    alpha = 2.0 * math.pi / spr
+    v = fclk / prescale / period  # steps/s
+    accel, decel = alpha * v * v / (2.0 * n_a), alpha * v * v / (2.0 * n_d)
+    return dict(steps=steps, accel=accel, decel=decel, speed=alpha * v, spr=spr, fclk=fclk, prescale=prescale)
 
 
 def _design(
@@ -54,23 +61,8 @@ def _design(
     fclk: float = 1e6,
     prescale: int = 1,
 ) -> Profile:
-    """A profile from tick-domain design values.
-
-    period: cruise period in ticks; n_a, n_d: steps needed to reach / leave the cruise speed
-    (a triangle when n_a + n_d > steps - 1, with its peak at (steps - 1) * n_a / (n_a + n_d)).
-    """
-    alpha = 2.0 * math.pi / spr
-    v = fclk / prescale / period  # steps/s
-    return Profile(
-        name,
-        steps,
-        alpha * v * v / (2.0 * n_a),
-        alpha * v * v / (2.0 * n_d),
-        alpha * v,
-        spr,
-        fclk,
-        prescale,
-    )
+    """A profile from tick-domain design values (design_args)."""
+    return Profile(name, **design_args(steps, period, n_a, n_d, spr, fclk, prescale))
 
 
 NAMED_PROFILES: list[Profile] = [

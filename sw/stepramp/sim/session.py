@@ -206,9 +206,10 @@ class RtlSession:
 
 try:
     import cocotb
-    from cocotb.clock import Clock
-    from cocotb.triggers import ClockCycles, FallingEdge, First, RisingEdge, SimTimeoutError, Timer, with_timeout
+    from cocotb.triggers import ClockCycles, First, RisingEdge, SimTimeoutError, Timer, with_timeout
     from cocotb.utils import get_sim_time
+
+    from stepramp.sim.clocking import apply_reset, start_clock
 except ImportError:  # the front end does not need cocotb
     cocotb = None  # type: ignore[assignment]
 
@@ -224,7 +225,7 @@ if cocotb is not None:
 
         cfg: dict[str, Any] = json.loads(os.environ["STEPRAMP_SESSION_CONFIG"])
         period_ps = round(1e12 / cfg["fclk"])
-        Clock(dut.clk, period_ps, unit="ps").start()
+        start_clock(dut.clk, period_ps)
 
         async def limited(work: Any, clocks: int, what: str) -> Any:
             """Await work within a simulated-time limit of `clocks` clock periods; fail clearly if it hangs."""
@@ -237,11 +238,7 @@ if cocotb is not None:
         drv = StepRamp(bus, fclk=cfg["fclk"], spr=cfg["spr"], prescale=cfg["prescale"])
 
         async def setup() -> StepWatch:
-            dut.rst.value = 1
-            await ClockCycles(dut.clk, 3)
-            await FallingEdge(dut.clk)
-            dut.rst.value = 0
-            await ClockCycles(dut.clk, 2)
+            await apply_reset(dut.clk, dut.rst, settle=2)
             pins = StepWatch(dut.step, dut.core_inst.busy, period_ps)
             await drv.check_id()
             await drv.configure_outputs(

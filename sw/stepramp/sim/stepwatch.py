@@ -11,30 +11,28 @@ from typing import Any
 
 import cocotb
 from cocotb.triggers import RisingEdge
-from cocotb.utils import get_sim_time
 
 from stepramp.models.stepping import STEP_LATENCY
+from stepramp.sim.clocking import now_cycles
 
 
 class StepWatch:
     """Records the STEP pin's rising edges and the engine's starts (the rising edge of its busy: the model's edge 0)."""
 
     def __init__(self, step: Any, busy: Any, period_ps: int) -> None:
+        """Watch from now on; edges are numbered as stepramp.sim.clocking.now_cycles numbers them (the clock started at
+        time 0 with a period of period_ps)."""
         self.period_ps = period_ps
         self.step_edges: list[int] = []
         self.start_edges: list[int] = []
         cocotb.start_soon(self.watch(step, self.step_edges))
         cocotb.start_soon(self.watch(busy, self.start_edges))
 
-    def now(self) -> int:
-        """Index of the most recent rising clock edge (simulation time in clock periods, rounded)."""
-        return round(get_sim_time("ps") / self.period_ps)
-
     async def watch(self, signal: Any, edges: list[int]) -> None:
         """Record the clock edge of every rising edge of a signal."""
         while True:
             await RisingEdge(signal)
-            edges.append(self.now())
+            edges.append(now_cycles(self.period_ps))
 
     def mark(self) -> tuple[int, int]:
         """Where the next move's records will start: pass to `since` once it is done."""

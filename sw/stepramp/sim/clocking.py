@@ -1,0 +1,83 @@
+# SPDX-License-Identifier: MIT
+"""Inside a simulation (cocotb): the clock and reset every bench starts with, and simulated time in clock edges.
+
+One place for the timing every bench shares, so that the step edges they compare with the bit-exact model count from
+the same clock: the benches' clock period, starting a clock, a synchronous reset held for a number of rising edges and
+released at the falling edge after them (the inputs change away from the edges that sample them), and the index of
+the most recent rising edge of a clock started at time 0. Used by the testbenches in tb/, `stepramp.sim.engine_bench`,
+`stepramp.sim.session` and `stepramp.sim.stepwatch`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import AsyncIterator
+from typing import Any
+
+from cocotb.clock import Clock
+from cocotb.triggers import ClockCycles, FallingEdge
+from cocotb.utils import get_sim_time
+
+#: The benches' clock period (100 MHz); the session and the demo run the clock the driver is given instead.
+CLK_PERIOD_NS = 10
+CLK_PERIOD_PS = CLK_PERIOD_NS * 1000
+
+#: Rising edges a reset is held for.
+RESET_CYCLES = 3
+
+
+def start_clock(clk: Any, period_ps: int = CLK_PERIOD_PS) -> None:
+    """Start a clock on clk (cocotb's GPI clock): a rising edge now, then one every period_ps."""
+    Clock(clk, period_ps, unit="ps").start()
+
+
+@contextlib.asynccontextmanager
+async def reset_held(clk: Any, rst: Any, *, active: int = 1, cycles: int = RESET_CYCLES) -> AsyncIterator[None]:
+    """Drive rst to `active` and wait `cycles` rising edges of clk; the body runs there, with the reset still on;
+    then release rst at the next falling edge."""
+    rst.value = active
+    await ClockCycles(clk, cycles)
+    yield
+    await FallingEdge(clk)
+    rst.value = 1 - active
+
+
+async def apply_reset(clk: Any, rst: Any, *, active: int = 1, cycles: int = RESET_CYCLES, settle: int = 0) -> None:
+    """Hold rst at `active` for `cycles` rising edges, release it at the falling edge after them, then wait `settle`
+    rising edges."""
+    async with reset_held(clk, rst, active=active, cycles=cycles):
+        pass
+    if settle:
+        await ClockCycles(clk, settle)
+
+
+async def start_clock_and_reset(
+    clk: Any, rst: Any, *, period_ps: int = CLK_PERIOD_PS, cycles: int = RESET_CYCLES, settle: int = 0
+) -> None:
+    """start_clock, then apply_reset (active high); the caller drives the other inputs."""
+    start_clock(clk, period_ps)
+    await apply_reset(clk, rst, cycles=cycles, settle=settle)
+
+
+def now_periods(period_ps: float = CLK_PERIOD_PS) -> float:
+    """Simulation time in clock periods, not rounded (rising edge e of a clock started at time 0 is at e.0)."""
+    return get_sim_time("ps") / period_ps
+
+
+def now_cycles(period_ps: float = CLK_PERIOD_PS) -> int:
+    """Simulation time in clock periods, rounded: the index of the nearest rising edge of a clock started at time 0
+    (the most recent one, at that edge's own time step and in the first half of the cycle after it)."""
+    return round(now_periods(period_ps))
+
+
+__all__ = [
+    "CLK_PERIOD_NS",
+    "CLK_PERIOD_PS",
+    "RESET_CYCLES",
+    "apply_reset",
+    "now_cycles",
+    "now_periods",
+    "reset_held",
+    "start_clock",
+    "start_clock_and_reset",
+]
