@@ -1,12 +1,17 @@
 -- SPDX-License-Identifier: MIT
--- stepramp_pkg: helpers shared by the stepramp entities (clog2); compiled first (docs/integration.md, "Compile
--- order").
+-- stepramp_pkg: helpers shared by the stepramp entities (log2_ceil, clog2); compiled first
+-- (docs/integration.md, "Compile order").
 
 library ieee;
   use ieee.std_logic_1164.all;
   use ieee.numeric_std.all;
 
 package stepramp_pkg is
+
+  -- The smallest b >= 0 with 2 ** b >= n (the exact log2 of a power of two).
+  function log2_ceil (
+    n : positive
+  ) return natural;
 
   -- Number of bits needed to hold the values 0 .. n - 1 (at least 1).
   function clog2 (
@@ -17,15 +22,15 @@ end package stepramp_pkg;
 
 package body stepramp_pkg is
 
-  function clog2 (
+  function log2_ceil (
     n : positive
-  ) return positive is
+  ) return natural is
 
-    variable bits : positive;
+    variable bits : natural;
 
   begin
 
-    bits := 1;
+    bits := 0;
 
     while 2 ** bits < n loop
 
@@ -34,6 +39,19 @@ package body stepramp_pkg is
     end loop;
 
     return bits;
+
+  end function log2_ceil;
+
+  function clog2 (
+    n : positive
+  ) return positive is
+  begin
+
+    if (n <= 2) then
+      return 1;
+    end if;
+
+    return log2_ceil(n);
 
   end function clog2;
 

@@ -8,6 +8,9 @@ library ieee;
   use ieee.numeric_std.all;
   use ieee.math_real.all;
 
+library work;
+  use work.stepramp_pkg.all;
+
 entity stepramp_stepper is
   generic (
     G_MICROSTEPS : positive := 16;
@@ -56,30 +59,10 @@ end entity stepramp_stepper;
 
 architecture rtl of stepramp_stepper is
 
-  -- log2 of a power of two (the generic checks below make sure it is one).
-  function log2_of (
-    n : positive
-  ) return natural is
-
-    variable v_bits : natural;
-
-  begin
-
-    v_bits := 0;
-
-    while 2 ** v_bits < n loop
-
-      v_bits := v_bits + 1;
-
-    end loop;
-
-    return v_bits;
-
-  end function log2_of;
-
-  -- Microsteps per full step as a power of two, and the width of the electrical index at full resolution
+  -- Microsteps per full step as a power of two (log2_ceil is exact for the powers of two the generic check below
+  -- admits), and the width of the electrical index at full resolution
   -- (4 * G_MICROSTEPS positions per electrical cycle).
-  constant C_LG : natural  := log2_of(G_MICROSTEPS);
+  constant C_LG : natural  := log2_ceil(G_MICROSTEPS);
   constant C_EW : positive := C_LG + 2;
 
   type t_mag_table is array (natural range <>) of unsigned(G_DUTY_BITS downto 0);
