@@ -1,29 +1,7 @@
 -- SPDX-License-Identifier: MIT
--- stepramp_regfile: the bus registers of the stepramp core (docs/registers.md), bus-agnostic.
---
--- The bus side is a pair of one-cycle strobes (wr, rd) with a byte address, write data and byte enables; the
--- answer (ack, with err for an unmapped offset, and rdata for reads) comes one clock later, registered. The tops
--- (stepramp_plb for the PLB-like IPIF, stepramp_axil for AXI4-Lite) turn their bus into these strobes.
---
--- The engine side carries the staging copy of the move registers, the command strobes and the engine's status.
--- Motion registers are plain storage: the engine latches them at the edge that accepts START (stepramp_core), so
--- writing them during a move, or while a start is held back, only prepares the next move (shadowing). Sticky
--- DONE/ERROR are set by the engine's strobes and cleared by writing 1; a set and a clear in the same cycle keep the
--- flag set, so no event is lost.
---
--- Read-back RAM. The storage words (STEPS .. STOP_RATIO, DRIVE .. STEP_SPACE) are kept twice. The flip-flop copy
--- (mem) drives the engine and the stepping logic, which take every word at once (the engine latches the whole move
--- at START). A write-through shadow copy in an inferred RAM answers the bus reads, so there is no wide read
--- multiplexer over the flip-flops (it cost about 600 iCE40 LUT4). The RAM is 32 words by 32 bits, indexed by the
--- word address, with one write enable per byte lane and one read port registered and enabled by rd: its output
--- register holds the read data of a storage word until the next read, like rdata_r, which holds the live words (ID,
--- CTRL, STATUS, POSITION, CUR_DELAY, STEP_COUNT; 0 for an unmapped offset); ram_sel_r, loaded with them, picks one of
--- the two. The RAM takes exactly the writes that reach mem (byte-merged and masked; not the refused ones). A RAM
--- cannot be reset, so a flag per storage word (written) tells whether it was written since reset: until then a read
--- returns the word's reset value through rdata_r, and the first write fills all four lanes of the RAM word (the lanes
--- not enabled with the reset value, which mem still holds), so from then on the RAM word equals mem. A read and a
--- write in one cycle read the old word, as mem does. ghdl synth makes it four 32 x 8 memories (one per lane); yosys
--- maps each to an iCE40 SB_RAM40_4K (emulating the read-before-write in logic) or to an xc7 RAM32M.
+-- stepramp_regfile: the bus registers of the stepramp core, bus-agnostic (one-cycle rd/wr strobes, the answer one
+-- clock later), with the staging copy of the move and a read-back RAM; masks and reset values come from the register
+-- map (stepramp_regs_pkg, generated from rdl/stepramp.rdl). Ports and timing: docs/stepramp_plb.md.
 
 library ieee;
   use ieee.std_logic_1164.all;
@@ -188,39 +166,23 @@ architecture rtl of stepramp_regfile is
 
   end function is_config;
 
-  -- Bits of a storage register that exist (the others read 0).
+  -- Bits of a storage register that exist (the others read 0), from the register map (stepramp_regs_pkg).
   function storage_mask (
     w : natural
   ) return std_logic_vector is
   begin
 
-    if (w = word(C_REG_PRESCALE) or w = word(C_REG_STEP_WIDTH) or w = word(C_REG_PWM_PERIOD) or
-        w = word(C_REG_STEP_SPACE)) then
-      return x"0000FFFF";
-    elsif (w = word(C_REG_DRIVE)) then
-      return x"00000077";
-    elsif (w = word(C_REG_C_FIRST_HI) or w = word(C_REG_C_LAST_HI) or w = word(C_REG_C_SA_HI) or
-           w = word(C_REG_C_SD_HI) or w = word(C_REG_ACCEL_SEED_HI) or w = word(C_REG_DECEL_SEED_HI)) then
-      return x"0000FFFF";
-    elsif (w = word(C_REG_SA) or w = word(C_REG_SD)) then
-      return x"7FFFFFFF";
-    else
-      return x"FFFFFFFF";
-    end if;
+    return C_REG_RW_MASK(w);
 
   end function storage_mask;
 
-  -- Reset value of a storage register.
+  -- Reset value of a storage register, from the register map.
   function reset_value (
     w : natural
   ) return std_logic_vector is
   begin
 
-    if (w = word(C_REG_PRESCALE) or w = word(C_REG_STEP_WIDTH) or w = word(C_REG_STEP_SPACE)) then
-      return x"00000001";
-    else
-      return x"00000000";
-    end if;
+    return C_REG_RESET(w);
 
   end function reset_value;
 
@@ -407,13 +369,10 @@ begin
 
         for i in mem'range loop
 
-          mem(i) <= (others => '0');
+          mem(i) <= C_REG_RESET(i);
 
         end loop;
 
-        mem(word(C_REG_PRESCALE))   <= x"00000001";
-        mem(word(C_REG_STEP_WIDTH)) <= x"00000001";
-        mem(word(C_REG_STEP_SPACE)) <= x"00000001";
       end if;
     end if;
 

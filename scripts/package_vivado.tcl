@@ -83,7 +83,27 @@ set_property range 4096 $block
 set_property width 32 $block
 set_property usage register $block
 
-# stepramp_axil has no generics, so the IP has no user parameters.
+# Registers and fields from the IP-XACT that rdl/stepramp.rdl generates (python -m stepramp.tools.regmap_gen), so
+# that the address editor and the hardware handoff see them. reset_value is set where this Vivado has it.
+source [file join $root scripts ipxact_registers.tcl]
+foreach reg [stepramp_ipxact_registers [file join $root rdl stepramp.xml]] {
+  lassign $reg name offset description fields
+  set r [ipx::add_register $name $block]
+  set_property address_offset $offset $r
+  set_property size 32 $r
+  set_property description $description $r
+  foreach fld $fields {
+    lassign $fld fname lsb width access reset fdescription
+    set f [ipx::add_field $fname $r]
+    set_property bit_offset $lsb $f
+    set_property bit_width $width $f
+    set_property access $access $f
+    set_property description $fdescription $f
+    catch {set_property reset_value $reset $f}
+  }
+}
+
+# The generic G_MICROSTEPS keeps its default (16) unless it is exposed with ipx::add_user_parameter.
 ipx::create_xgui_files $core
 ipx::update_checksums $core
 ipx::check_integrity $core
