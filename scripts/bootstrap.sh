@@ -14,6 +14,7 @@ command -v ghdl >/dev/null 2>&1 || need_apt+=(ghdl)
 command -v yosys >/dev/null 2>&1 || need_apt+=(yosys)
 command -v make >/dev/null 2>&1 || need_apt+=(make)
 command -v gcc >/dev/null 2>&1 || need_apt+=(gcc)
+command -v tclsh >/dev/null 2>&1 || need_apt+=(tcl)  # sw/tests/test_vivado_tcl.py runs the Vivado script's IP-XACT reader
 # GHDL's LLVM back end simulates about twice as fast as mcode: worth its install time, but optional.
 want_llvm=0
 if [ ! -x /usr/bin/ghdl-llvm ] && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
