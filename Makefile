@@ -12,10 +12,13 @@ VHDL  := $(wildcard hdl/*.vhd)
 BACKEND = GHDL_BACKEND=$${GHDL_BACKEND:-$$(test -x /usr/bin/ghdl-llvm && echo llvm || echo mcode)}
 
 .DEFAULT_GOAL := test
-.PHONY: setup test lint synth-check synth demo shell waves clean help
+.PHONY: setup test coverage mutate soak lint synth-check synth demo shell waves clean help
 
 help:
 	@echo "make test         lint, synthesis check and the whole regression (pytest -n $(JOBS))"
+	@echo "make coverage     the regression, then its functional coverage report (build/coverage/report.md)"
+	@echo "make mutate       mutation check of the RTL (MUTANTS=80 SEED=1): killed / valid / total and the survivors"
+	@echo "make soak         random soak on both tops (SECONDS=60 SEED=1; OPS=K replays the first K operations)"
 	@echo "make demo         simulate the AVR446 demo move on the RTL, write build/demo/"
 	@echo "make waves        open the demo's waveform laid out (GTKWave; else Surfer; else print the command)"
 	@echo "make shell        the AVR446 demo's command shell on the simulated core (type ? for help)"
@@ -35,8 +38,29 @@ lint: setup
 synth-check: setup
 	$(PY) -m stepramp.tools.rtlcheck --out build/synth_check
 
+# Every simulation of the regression writes its functional coverage to build/coverage (stepramp.sim.coverage); the
+# regression fails when a bin stays empty.
+COVERAGE := build/coverage
 test: lint
-	$(BACKEND) $(PY) -m pytest -n $(JOBS) -rA --durations=5
+	rm -rf $(COVERAGE)
+	STEPRAMP_COVERAGE_DIR=$(CURDIR)/$(COVERAGE) $(BACKEND) $(PY) -m pytest -n $(JOBS) -rA --durations=5
+	$(PY) -m stepramp.tools.coverage $(COVERAGE) --check
+
+coverage: test
+	@cat $(COVERAGE)/report.md
+
+# Mutation check (not part of `make test`): MUTANTS mutants of the RTL drawn with SEED, each against its quick suite.
+MUTANTS ?= 80
+SEED    ?= 1
+mutate: setup
+	$(BACKEND) $(PY) -m stepramp.tools.mutate --sample $(MUTANTS) --seed $(SEED)
+
+# Random soak on both tops: SECONDS of wall time each (or OPS operations), seeded; a failing seed replays exactly.
+SECONDS ?= 60
+OPS     ?= 0
+soak: setup
+	SOAK_SEED=$(SEED) SOAK_SECONDS=$(if $(filter 0,$(OPS)),$(SECONDS),0) SOAK_OPS=$(OPS) \
+	  $(BACKEND) $(PY) -m pytest -n 2 -q -rA -p no:cacheprovider tb/test_soak.py | grep -E "^soak|passed|failed|Error|replay"; test $${PIPESTATUS[0]} = 0
 
 synth:
 	@scripts/bootstrap.sh $(VENV) synth

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
-# Make sure what the regression needs is here: python3 with venv, GHDL, yosys, then the .venv with pinned
+# Make sure what the regression needs is here: python3 with venv, GHDL, yosys, iverilog, tcl, then the .venv with pinned
 # packages; with "synth" also nextpnr-ice40 (for `make synth`).
 # Installs Debian packages only when they are missing and we are root; otherwise stops with what to install.
 # Usage: scripts/bootstrap.sh [VENV] [synth]
@@ -15,6 +15,7 @@ command -v yosys >/dev/null 2>&1 || need_apt+=(yosys)
 command -v make >/dev/null 2>&1 || need_apt+=(make)
 command -v gcc >/dev/null 2>&1 || need_apt+=(gcc)
 command -v tclsh >/dev/null 2>&1 || need_apt+=(tcl)  # sw/tests/test_vivado_tcl.py runs the Vivado script's IP-XACT reader
+command -v iverilog >/dev/null 2>&1 || need_apt+=(iverilog)  # the second simulator: tb/test_netlist.py runs ghdl synth's netlist
 # GHDL's LLVM back end simulates about twice as fast as mcode: worth its install time, but optional.
 want_llvm=0
 if [ ! -x /usr/bin/ghdl-llvm ] && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then

@@ -20,11 +20,13 @@ from typing import Any
 from cocotb.triggers import ClockCycles, FallingEdge, First, RisingEdge, Timer
 
 from monitors import MotionMonitors
-from stepramp.board.driver import Outputs, Status, StepRamp
+from stepramp.board.driver import Outputs, Status, StepRamp, StepRampError
 from stepramp.board.plan import Plan, plan_move
+from stepramp.board.regmap import ERROR_CODES
 from stepramp.models.engine import edges as edges_of
 from stepramp.models.engine import edges_with_stop, last_edge
 from stepramp.sim.clocking import CLK_PERIOD_NS, CLK_PERIOD_PS, apply_reset, reset_held, start_clock
+from stepramp.sim.coverage import watch_coverage
 from stepramp.sim.ipif import IpifError, IpifMaster
 from stepramp.sim.profiles import PROFILES_BY_NAME
 from stepramp.sim.stepwatch import StepWatch
@@ -221,6 +223,7 @@ class PeripheralTb(MotionBench):
         """The bench of the top under test (dut._name), reset; idle cycles from the seed in BUS_SEED (1)."""
         tb = cls(dut, dut._name, idle=idle, seed=env_int("BUS_SEED", 1))
         await tb.reset()
+        tb.bus = watch_coverage(dut.core_inst, tb.bus)
         return tb
 
     async def reset(self) -> None:
@@ -302,7 +305,42 @@ def profiles_limit_us(names: list[str]) -> int:
     return math.ceil(2 * cycles * CLK_PERIOD_NS / 1000) + 100
 
 
+#: Register corruptions of a valid plan and the error each must give (no motion, no hang).
+BAD_VALUES: list[tuple[str, dict[str, int], str]] = [
+    ("zero prescale", {"prescale": 0}, "PRESCALE"),
+    ("zero c_first", {"c_first": 0}, "C_FIRST"),
+    ("c_first below one tick", {"c_first": 0xFFFF}, "C_FIRST"),
+    ("zero c_last", {"c_last": 0}, "C_LAST"),
+    ("zero accel seed", {"accel_seed": 0}, "ACCEL_SEED"),
+    ("zero cruise", {"cruise": 0}, "CRUISE"),
+    ("cruise below one tick", {"cruise": 0xFFFF_FFFF}, "CRUISE"),
+    ("zero decel seed", {"decel_seed": 0}, "DECEL_SEED"),
+    ("all-ones sa", {"sa": 0x7FFF_FFFF}, "BOUNDS"),
+    ("all-ones sd", {"sd": 0x7FFF_FFFF}, "BOUNDS"),
+    ("sa after sd", {"sa": 150, "sd": 20}, "BOUNDS"),
+    ("zero sa", {"sa": 0}, "BOUNDS"),
+]
+
+
+async def expect_rejected(tb: PeripheralTb, drv: StepRamp, plan: Plan, label: str, cause: str) -> None:
+    """START a plan with a bad value: the core must answer with ERROR and error code `cause`, DONE, no STEP pulse."""
+    code = ERROR_CODES[cause][0]
+    await drv.program(plan)
+    before = len(tb.step_edges)
+    await drv.start()
+    try:
+        await drv.wait_done(idle=lambda: ClockCycles(tb.clk, 5), polls=200)
+    except StepRampError:
+        pass
+    else:
+        raise AssertionError(f"{label}: no error")
+    status = await drv.status()
+    assert status.err_code == code, f"{label}: error {status.err_name}, expected {cause} ({code})"
+    assert len(tb.step_edges) == before, f"{label}: the core moved"
+
+
 __all__ = [
+    "BAD_VALUES",
     "PORTS",
     "TOPS",
     "AxilAccess",
@@ -314,6 +352,7 @@ __all__ = [
     "MotionBench",
     "PeripheralTb",
     "check_stopped",
+    "expect_rejected",
     "pauses",
     "profiles_limit_us",
     "stop_cases",

@@ -18,9 +18,10 @@ REPO = Path(__file__).resolve().parents[1]
 
 
 def build_dir(name: str) -> Path:
-    """A build directory of its own for one test (pytest -n needs one per test)."""
+    """A build directory of its own for one test (pytest -n needs one per test), under build/sim or under
+    $STEPRAMP_SIM_BUILD (make mutate runs several copies of the suite at once, each in its own)."""
     safe = re.sub(r"[^A-Za-z0-9_.-]+", "_", name)
-    path = REPO / "build" / "sim" / safe
+    path = Path(os.environ.get("STEPRAMP_SIM_BUILD", REPO / "build" / "sim")) / safe
     path.mkdir(parents=True, exist_ok=True)
     return path
 

@@ -52,6 +52,7 @@ from stepramp.board.regmap import (
 from stepramp.models import stepping as sm
 from stepramp.models.engine import edges as model_edges
 from stepramp.sim.clocking import CLK_PERIOD_PS, apply_reset, start_clock
+from stepramp.sim.coverage import watch_coverage
 from stepramp.sim.profiles import PROFILES_BY_NAME
 from stepramp.sim.runner import run_cocotb
 from stepramp.sim.stepwatch import StepWatch
@@ -209,6 +210,7 @@ class CoreTb(MotionBench):
         cocotb.start_soon(self._watch(FallingEdge, self.dut.irq, self.irq_falls))
         cocotb.start_soon(self._watch(FallingEdge, self.dut.busy, self.busy_falls))
         self._start_monitors(position=0)
+        self.bus = watch_coverage(self.dut, self.bus)
 
     def edge(self) -> int:
         """The most recent rising clock edge (the master's and StepWatch's numbering)."""

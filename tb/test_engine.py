@@ -177,12 +177,16 @@ def hard_stop_cases() -> list[tuple[str, Plan, Stop]]:
             times = [0, 1, 2, in_accel, in_run, in_decel, normal[k], normal[k] - 1, normal[-1]]
             if name == "trap_basic":
                 times.append(normal[-1] + 1)  # after the last pulse: not busy any more, ignored
+                # at the phase boundaries: late in the last interval of ACCEL and of RUN (the next interval is of
+                # the next phase), and early in the first interval of RUN and of DECEL (pulses sa - 1 and sd - 1)
+                times += [normal[b - 1] + d for b in (plan.sa, plan.sd) for d in (-3, 3)]
         cases += [(name, plan, Stop("hard", e)) for e in times]
     return cases
 
 
 def test_engine_hard_stop() -> None:
-    """Hard stop in ACCEL, RUN, DECEL, at the start edge, at a pulse edge, one cycle before one, after the move."""
+    """Hard stop in ACCEL, RUN, DECEL, at the start edge, at a pulse edge, one cycle before one, after the move, and on
+    both sides of the ACCEL -> RUN and RUN -> DECEL boundaries."""
     cases = hard_stop_cases()
     results = play_stops("hard_stop", cases)
     position = 0

@@ -17,7 +17,16 @@ import random
 import pytest
 from cocotb.triggers import ClockCycles, RisingEdge
 
-from peripheral_tb import TOPS, BusError, PeripheralTb, check_stopped, profiles_limit_us, stop_cases
+from peripheral_tb import (
+    BAD_VALUES,
+    TOPS,
+    BusError,
+    PeripheralTb,
+    check_stopped,
+    expect_rejected,
+    profiles_limit_us,
+    stop_cases,
+)
 from stepramp.board.driver import Outputs, StepRampError, plan_writes
 from stepramp.board.plan import Plan, plan_move
 from stepramp.board.regmap import ERROR_CODES, ID_VALUE, REGISTERS, REGISTERS_BY_NAME, RW, offset
@@ -162,23 +171,6 @@ async def w1c_flags_and_interrupt(dut) -> None:
     assert await tb.bus.read(offset("CTRL")) == 1 << REGISTERS_BY_NAME["CTRL"].field("IRQ_ERROR_EN").lsb
 
 
-#: Register corruptions of a valid plan and the error each must give (no motion, no hang).
-BAD_VALUES: list[tuple[str, dict[str, int], str]] = [
-    ("zero prescale", {"prescale": 0}, "PRESCALE"),
-    ("zero c_first", {"c_first": 0}, "C_FIRST"),
-    ("c_first below one tick", {"c_first": 0xFFFF}, "C_FIRST"),
-    ("zero c_last", {"c_last": 0}, "C_LAST"),
-    ("zero accel seed", {"accel_seed": 0}, "ACCEL_SEED"),
-    ("zero cruise", {"cruise": 0}, "CRUISE"),
-    ("cruise below one tick", {"cruise": 0xFFFF_FFFF}, "CRUISE"),
-    ("zero decel seed", {"decel_seed": 0}, "DECEL_SEED"),
-    ("all-ones sa", {"sa": 0x7FFF_FFFF}, "BOUNDS"),
-    ("all-ones sd", {"sd": 0x7FFF_FFFF}, "BOUNDS"),
-    ("sa after sd", {"sa": 150, "sd": 20}, "BOUNDS"),
-    ("zero sa", {"sa": 0}, "BOUNDS"),
-]
-
-
 @cocotb.test(timeout_time=2500, timeout_unit="us")  # measured 618 us (the slower top)
 async def bad_register_values_flag_an_error(dut) -> None:
     """Each bad register value: ERROR with its cause, DONE, not a single step pulse, and the core still works."""
@@ -186,18 +178,7 @@ async def bad_register_values_flag_an_error(dut) -> None:
     drv = tb.driver()
     good = valid_plan()
     for label, change, cause in BAD_VALUES:
-        await drv.program(dataclasses.replace(good, **change))
-        before = len(tb.step_edges)
-        await drv.start()
-        try:
-            await drv.wait_done(idle=lambda: ClockCycles(tb.clk, 5), polls=50)
-        except StepRampError:
-            pass
-        else:
-            raise AssertionError(f"{label}: no error")
-        status = await drv.status()
-        assert status.err_code == ERR[cause], f"{label}: error code {status.err_code}, expected {ERR[cause]}"
-        assert len(tb.step_edges) == before, f"{label}: the core moved"
+        await expect_rejected(tb, drv, dataclasses.replace(good, **change), label, cause)
         assert await drv.position() == 0
     # STEPS = -2^31 (all ones would be -1: a valid 1-step move) is rejected by the register file.
     await drv.program(good)
@@ -271,6 +252,42 @@ async def start_while_busy_is_ignored(dut) -> None:
     assert len(tb.start_edges) == s0 + 1, "a START during the move restarted the engine"
     await ClockCycles(tb.clk, 100)
     assert not (await drv.status()).busy
+    tb.finish()
+
+
+@cocotb.test(timeout_time=2500, timeout_unit="us")  # measured 560 us
+async def every_register_written_while_busy(dut) -> None:
+    """Every register written during a move: the move runs as the model says; the motion registers take the value
+    (for the next START), the stepping configuration and POSITION ignore it and flag CFG_BUSY / POS_BUSY (the last
+    cause stays in ERR_CODE), ID does not change, STATUS written 0 clears nothing, CTRL's enables take it."""
+    tb = await PeripheralTb.started(dut)
+    drv = tb.driver()
+    plan = valid_plan()
+    await drv.program(plan)
+    n0, s0 = tb.pins.mark()
+    await drv.start()
+    await RisingEdge(dut.step)
+    ctrl = REGISTERS_BY_NAME["CTRL"]
+    enables = ctrl.field("IRQ_DONE_EN").mask | ctrl.field("IRQ_ERROR_EN").mask
+    rng = random.Random(3)
+    want: dict[str, int] = {}
+    assert (await drv.status()).busy
+    for reg in REGISTERS:  # offset order: POSITION before DRIVE .. STEP_SPACE, so CFG_BUSY is the last cause
+        before = await tb.bus.read(reg.offset)
+        value = {"CTRL": enables, "STATUS": 0}.get(reg.name, rng.getrandbits(32))
+        await tb.bus.write(reg.offset, value)
+        if reg.name in ("CTRL",) or offset("STEPS") <= reg.offset <= offset("STOP_RATIO"):
+            want[reg.name] = value & sum(f.mask for f in reg.fields if f.access == RW)
+        elif reg.name in ("ID", "DRIVE", "STEP_WIDTH", "DIR_TIMING", "PWM_PERIOD", "STEP_SPACE"):
+            want[reg.name] = before
+    assert (await drv.status()).busy, "the move ended before the last write: not every write was while busy"
+    with pytest.raises(StepRampError, match="CFG_BUSY"):
+        await drv.wait_done(idle=lambda: tb.irq_or(5_000))
+    assert tb.edges_since(n0, s0) == model_edges(plan), "a write while busy changed the move"
+    assert await drv.position() == plan.steps, "POSITION written while busy: the write must be ignored"
+    for name, value in want.items():
+        got = await tb.bus.read(offset(name))
+        assert got == value, f"{name} written while busy reads {got:#x}, expected {value:#x}"
     tb.finish()
 
 
@@ -431,6 +448,7 @@ REGISTER_TESTS = [
     "position_register",
     "motion_registers_are_shadowed",
     "start_while_busy_is_ignored",
+    "every_register_written_while_busy",
     "stepping_configuration",
     "soft_and_hard_stop",
     "hard_stop_cancels_a_held_start",

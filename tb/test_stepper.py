@@ -30,6 +30,7 @@ from monitors import (
     StepWidthMonitor,
 )
 from stepramp.models import stepping as sm
+from stepramp.sim import coverage
 from stepramp.sim.runner import run_cocotb
 from tbutil import CLK_PERIOD_NS, build_dir, cocotb, env_int, start_clock_and_reset
 
@@ -187,6 +188,7 @@ async def setup(dut: Any, cfg: Config, position: int = 0) -> FakeEngine:
     eng = FakeEngine(dut, position=position).start()
     _CLOCK_T0_PS[0] = round(get_sim_time("ps"))
     await start_clock_and_reset(dut.clk, dut.rst, settle=4)
+    coverage.watch_stepper(dut)
     return eng
 
 

@@ -47,6 +47,7 @@ from cocotb.triggers import ClockCycles, FallingEdge, First, ReadOnly, RisingEdg
 from cocotb.utils import get_sim_time
 
 from stepramp.board.plan import Plan
+from stepramp.sim import coverage
 from stepramp.sim.clocking import CLK_PERIOD_NS, now_cycles, start_clock_and_reset
 from stepramp.sim.waves import LAYOUTS, missing_in, signal_paths
 
@@ -319,6 +320,7 @@ async def play_moves(dut: Any) -> None:
         getattr(dut, name).value = 0
     dut.min_gap.value = 2
     await start_clock_and_reset(dut.clk, dut.rst, settle=2)
+    coverage.watch_engine(dut)
     # The waveform layout (stepramp.sim.waves) names signals of this design: they must exist.
     missing = missing_in(dut, signal_paths(LAYOUTS["stepramp_engine"]))
     assert not missing, f"the GTKWave layout names signals stepramp_engine does not have: {missing}"

@@ -1,0 +1,341 @@
+# SPDX-License-Identifier: MIT
+"""Random soak: constrained-random bus sequences on both tops, the model as scoreboard, the monitors on.
+
+One cocotb test, `soak`, plays operations drawn from a seeded generator through the driver, on stepramp_plb (IPIF)
+or stepramp_axil (AXI4-Lite, with idle cycles and backpressure on every channel from the same seed):
+
+* ``move``: a random move (steps, cruise period, ramp lengths, PRESCALE, direction): every STEP edge equal to
+  stepramp.models.engine.edges, no error, POSITION the sum of the steps;
+* ``stop``: a move with a soft or a hard stop after a random number of pulses: every edge as
+  stepramp.models.engine.edges_with_stop says for the edge the engine sampled the strobe at, POSITION the pulses seen;
+* ``busy_writes``: a move with one to four writes to random registers during it (every register, random values;
+  CTRL only its enables, STATUS only 0): the move is unchanged, motion registers take the value (shadowed), the
+  stepping configuration and POSITION ignore it with CFG_BUSY / POS_BUSY, the read-only registers ignore it;
+* ``idle_writes``: writes to random registers while stopped, each read back against the register map (RW fields
+  keep the value, read-only registers do not change, STATUS W1C clears what is written 1), POSITION presets;
+* ``bad_value``: a valid plan with one bad register value (peripheral_tb.BAD_VALUES): its error code, no pulse,
+  POSITION unchanged;
+* ``reset``: the top's reset in the middle of a move: the edges before it are the model's first edges, no pulse
+  after it, every register at its reset value;
+* ``configure``: random stepping outputs (mode, widths, DIR timing, PWM period, ENABLE) through the driver, which
+  restarts the monitors (STEP width, DIR setup/hold, windings) with them.
+
+The same seed gives the same operations (and the same bus pauses), so a failing seed replays exactly:
+`make soak SEED=S OPS=K` stops after the failing operation K. `make soak SECONDS=N SEED=S` runs for N seconds of
+wall time per top and prints the counts; the regression runs a short one (`test_soak`, fixed seed, 25 operations
+per top). Every operation has its own simulated-time limit from the model, so a hang fails at once.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import random
+import time
+from collections import Counter
+from pathlib import Path
+from typing import Any
+
+import pytest
+from cocotb.triggers import ClockCycles, RisingEdge, with_timeout
+
+from peripheral_tb import BAD_VALUES, TOPS, PeripheralTb, expect_rejected
+from stepramp.board.driver import MODES, Outputs, StepRamp, StepRampError
+from stepramp.board.plan import Plan, plan_move
+from stepramp.board.regmap import REGISTERS, REGISTERS_BY_NAME, RW, W1C, offset
+from stepramp.models.engine import edges as model_edges
+from stepramp.models.engine import edges_with_stop
+from stepramp.sim.profiles import design_args
+from stepramp.sim.runner import run_cocotb
+from tbutil import build_dir, cocotb, edges_differ, env_int
+
+MOTION = tuple(r.name for r in REGISTERS if offset("STEPS") <= r.offset <= offset("STOP_RATIO"))
+CONFIG = ("DRIVE", "STEP_WIDTH", "DIR_TIMING", "PWM_PERIOD", "STEP_SPACE")
+READ_ONLY = ("ID", "CUR_DELAY", "STEP_COUNT")
+#: Operation weights.
+OPS = {"move": 6, "stop": 4, "busy_writes": 3, "idle_writes": 3, "bad_value": 2, "reset": 1, "configure": 2}
+#: The soak's driver: a 1 MHz plan clock on a 200 steps/rev motor (the tick is one clock at PRESCALE 1).
+FCLK, SPR = 1e6, 200.0
+#: Simulated time one operation may take.
+OP_LIMIT_MS = 10
+
+
+def rw_mask(name: str) -> int:
+    return sum(f.mask for f in REGISTERS_BY_NAME[name].fields if f.access == RW)
+
+
+class SoakError(AssertionError):
+    """A scoreboard mismatch (an AssertionError, so that cocotb reports the test as failed)."""
+
+
+class Soak:
+    """The bench, the generator and the scoreboard (position, the registers' expected values, the counts)."""
+
+    def __init__(self, tb: PeripheralTb, rng: random.Random) -> None:
+        self.tb = tb
+        self.rng = rng
+        self.position = 0
+        self.counts: Counter[str] = Counter()
+        self.edges_checked = 0
+        self.stop_edges: dict[str, list[int]] = {"soft": [], "hard": []}
+        for kind, edges in self.stop_edges.items():
+            cocotb.start_soon(tb.pins.watch(getattr(tb.dut.core_inst, f"{kind}_stop"), edges))
+
+    # -- generators ---------------------------------------------------------------------------------------------
+    def plan(self, min_steps: int = 1) -> tuple[StepRamp, Plan]:
+        """A random valid move: 1 .. 160 steps, cruise period 70 .. 300 ticks, ramps of 1 .. 60 steps, PRESCALE 1 .. 2.
+        The shortest interval stays above the stepping configuration's pulse spacing (at most 60 clocks)."""
+        rng = self.rng
+        steps = rng.randint(min_steps, 160) * rng.choice((1, -1))
+        prescale = rng.choice((1, 1, 2))
+        args = design_args(steps, rng.uniform(70, 300), rng.uniform(1, 60), rng.uniform(1, 60), prescale=prescale)
+        drv = self.tb.driver({"fclk": FCLK, "spr": SPR, "prescale": prescale})
+        return drv, plan_move(**args)
+
+    async def wait_done(self, drv: StepRamp) -> Any:
+        return await drv.wait_done(idle=lambda: self.tb.irq_or(5_000))
+
+    # -- checks -------------------------------------------------------------------------------------------------
+    def check_edges(self, what: str, got: list[int], want: list[int]) -> None:
+        if got != want:
+            raise SoakError(f"{what}: {edges_differ(got, want)}")
+        self.edges_checked += len(got)
+
+    async def check_position(self, what: str) -> None:
+        got = await self.tb.driver().position()
+        if got != self.position:
+            raise SoakError(f"{what}: POSITION {got}, expected {self.position}")
+
+    # -- operations ---------------------------------------------------------------------------------------------
+    async def op_move(self) -> None:
+        drv, plan = self.plan()
+        edges, status = await self.tb.run_plan(drv, plan)
+        self.check_edges("move", edges, model_edges(plan))
+        if status.error:
+            raise SoakError(f"move: error {status.err_name}")
+        self.position += -plan.steps if plan.direction else plan.steps
+        await self.check_position("move")
+        self.counts["moves"] += 1
+
+    async def op_stop(self) -> None:
+        drv, plan = self.plan(min_steps=8)
+        kind = self.rng.choice(("soft", "hard"))
+        wait = self.rng.randint(1, plan.steps - 2)
+        tb = self.tb
+        await drv.program(plan)
+        n0, s0 = tb.pins.mark()
+        k0 = len(self.stop_edges[kind])
+        await drv.start()
+        while len(tb.step_edges) < n0 + wait:
+            await RisingEdge(tb.dut.step)
+        await (drv.soft_stop() if kind == "soft" else drv.hard_stop())
+        await self.wait_done(drv)
+        edges = tb.edges_since(n0, s0)
+        if len(self.stop_edges[kind]) <= k0:
+            raise SoakError(f"{kind} stop: the strobe never reached the engine")
+        request = self.stop_edges[kind][k0] + 1 - tb.start_edges[s0]  # the engine samples it one edge later
+        self.check_edges(f"{kind} stop after {wait} pulses", edges, edges_with_stop(plan, kind, request))
+        self.position += -len(edges) if plan.direction else len(edges)
+        await self.check_position(f"{kind} stop")
+        self.counts[f"{kind} stops"] += 1
+        self.counts["moves"] += 1
+
+    async def op_busy_writes(self) -> None:
+        tb, rng = self.tb, self.rng
+        drv, plan = self.plan(min_steps=20)
+        await drv.program(plan)
+        n0, s0 = tb.pins.mark()
+        await drv.start()
+        await RisingEdge(tb.dut.step)
+        expected_err: str | None = None
+        written: dict[str, int] = {}
+        for _ in range(rng.randint(1, 4)):
+            name = rng.choice([r.name for r in REGISTERS])
+            value = rng.getrandbits(32)
+            ctrl = REGISTERS_BY_NAME["CTRL"]
+            if name == "CTRL":  # enables only; ENABLE stays as configured
+                value = value & (ctrl.field("IRQ_DONE_EN").mask | ctrl.field("IRQ_ERROR_EN").mask)
+                value |= ctrl.field("ENABLE").mask if tb.enabled else 0
+            elif name == "STATUS":
+                value = 0
+            busy = (await drv.status()).busy
+            await tb.bus.write(offset(name), value)
+            if not busy:
+                break  # the move ended meanwhile: what follows is not a write while busy
+            if name in CONFIG:
+                expected_err = "CFG_BUSY"
+            elif name == "POSITION":
+                expected_err = "POS_BUSY"
+            elif name in MOTION:
+                written[name] = value & rw_mask(name)
+            self.counts["busy writes"] += 1
+        try:
+            status = await self.wait_done(drv)
+            err = None if not status.error else status.err_name
+        except StepRampError:
+            err = (await drv.status()).err_name
+        self.check_edges("move with writes while busy", tb.edges_since(n0, s0), model_edges(plan))
+        if expected_err is not None and err != expected_err:
+            raise SoakError(f"writes while busy: error {err}, expected {expected_err}")
+        if expected_err is None and err is not None:
+            raise SoakError(f"writes while busy: unexpected error {err}")
+        await drv.clear_flags()
+        self.position += -plan.steps if plan.direction else plan.steps
+        await self.check_position("writes while busy")
+        for name, value in written.items():
+            got = await tb.bus.read(offset(name))
+            if got != value:
+                raise SoakError(f"{name} written while busy reads {got:#x}, expected {value:#x} (shadowed)")
+        self.counts["moves"] += 1
+
+    async def op_idle_writes(self) -> None:
+        tb, rng = self.tb, self.rng
+        drv = tb.driver()
+        for _ in range(rng.randint(1, 6)):
+            name = rng.choice([n for n in (*MOTION, *READ_ONLY, "POSITION", "STATUS", "CTRL")])
+            value = rng.getrandbits(32)
+            addr = offset(name)
+            if name in READ_ONLY:
+                before = await tb.bus.read(addr)
+                await tb.bus.write(addr, value)
+                want = before
+            elif name == "POSITION":
+                await tb.bus.write(addr, value)
+                self.position = value - (1 << 32) if value >> 31 else value
+                want = value
+            elif name == "STATUS":
+                reg = REGISTERS_BY_NAME["STATUS"]
+                before = await tb.bus.read(addr)
+                await tb.bus.write(addr, value)
+                cleared = sum(f.mask for f in reg.fields if f.access == W1C) & value
+                want = before & ~cleared
+            elif name == "CTRL":
+                ctrl = REGISTERS_BY_NAME["CTRL"]
+                value = value & (ctrl.field("IRQ_DONE_EN").mask | ctrl.field("IRQ_ERROR_EN").mask)
+                value |= ctrl.field("ENABLE").mask if tb.enabled else 0
+                await tb.bus.write(addr, value)
+                want = value
+            else:
+                await tb.bus.write(addr, value)
+                want = value & rw_mask(name)
+            got = await tb.bus.read(addr)
+            if got != want:
+                raise SoakError(f"idle write {value:#x} to {name}: reads {got:#x}, expected {want:#x}")
+            self.counts["idle writes"] += 1
+        await self.check_position("idle writes")
+        await drv.clear_flags()
+
+    async def op_bad_value(self) -> None:
+        tb = self.tb
+        drv, good = self.plan(min_steps=3)
+        label, change, cause = self.rng.choice(BAD_VALUES)
+        await expect_rejected(tb, drv, dataclasses.replace(good, **change), f"bad value {label}", cause)
+        await drv.clear_flags()
+        await self.check_position(f"bad value {label}")
+        self.counts["bad values"] += 1
+
+    async def op_reset(self) -> None:
+        tb = self.tb
+        drv, plan = self.plan(min_steps=10)
+        await drv.program(plan)
+        n0, s0 = tb.pins.mark()
+        await drv.start()
+        want = model_edges(plan)
+        await ClockCycles(tb.clk, self.rng.randint(1, max(2, want[-1])))
+        tb.finish()  # the reset changes DIR and the windings at once, as documented: the monitors stop here
+        await tb.reset_pulse()
+        before = tb.edges_since(n0, s0)
+        self.check_edges("edges before a reset", before, want[: len(before)])
+        mark = tb.pins.mark()
+        await ClockCycles(tb.clk, 2000)
+        if tb.pins.mark()[0] != mark[0]:
+            raise SoakError("a STEP pulse after the reset")
+        for reg in REGISTERS:
+            got = await tb.bus.read(reg.offset)
+            if got != reg.reset:
+                raise SoakError(f"after a reset mid-move: {reg.name} reads {got:#x}, expected {reg.reset:#x}")
+        self.position = 0
+        tb.outputs, tb.enabled = Outputs(), False
+        tb._start_monitors(position=0)
+        await tb.driver().enable_irq(done=True, error=True)
+        self.counts["resets"] += 1
+
+    async def op_configure(self) -> None:
+        rng = self.rng
+        mode = rng.choice(list(MODES))
+        outputs = Outputs(
+            mode=mode,
+            ustep_log2=rng.randint(0, 4) if mode == "pwm" else 0,
+            step_width=rng.randint(1, 30),
+            dir_setup=rng.randint(0, 60),
+            dir_hold=rng.randint(0, 60),
+            pwm_period=rng.randint(8, 64) if mode == "pwm" else 0,
+            step_space=rng.randint(1, 20),
+        )
+        await self.tb.configure(outputs, enable=rng.random() < 0.9)
+        self.counts["configurations"] += 1
+
+    async def play(self, name: str) -> None:
+        """One operation, within a simulated-time limit (a hang fails here, not at the test's limit): 10 ms, five
+        times the longest move the generator makes (160 steps of 600 clocks, about 1 ms) plus its bus traffic."""
+        await with_timeout(getattr(self, f"op_{name}")(), OP_LIMIT_MS, "ms")
+
+
+SEED = env_int("SOAK_SEED", 1)
+SECONDS = float(os.environ.get("SOAK_SECONDS", "0"))
+OPS_LIMIT = env_int("SOAK_OPS", 25)
+# The test's own limit: 20 ms of simulated time per operation, or per wall second of a timed run (GHDL
+# simulates well under 20 ms of this design per second); each operation has a tighter limit of its own.
+TEST_LIMIT_MS = max(OPS_LIMIT, SECONDS) * 20 + 10
+
+
+@cocotb.test(timeout_time=TEST_LIMIT_MS, timeout_unit="ms")
+async def soak(dut) -> None:
+    """Random operations until SOAK_OPS of them (or SOAK_SECONDS of wall time) have passed."""
+    tb = await PeripheralTb.started(dut, idle=True)
+    rng = random.Random(SEED)
+    soak = Soak(tb, rng)
+    await tb.configure(Outputs(mode="half", step_width=5, dir_setup=20, dir_hold=10), enable=True)
+    await tb.driver().enable_irq(done=True, error=True)
+    t0 = time.monotonic()
+    names, weights = list(OPS), list(OPS.values())
+    ops = 0
+    while ops < OPS_LIMIT or (SECONDS and time.monotonic() - t0 < SECONDS):
+        if SECONDS and time.monotonic() - t0 >= SECONDS:
+            break
+        name = rng.choices(names, weights)[0]
+        try:
+            await soak.play(name)
+        except AssertionError as exc:
+            raise SoakError(
+                f"{tb.top} seed {SEED}, operation {ops + 1} ({name}): {exc}\n"
+                f"  replay: make soak SEED={SEED} OPS={ops + 1}"
+            ) from exc
+        ops += 1
+        soak.counts[f"op {name}"] += 1
+    tb.finish()
+    summary = {
+        "top": tb.top,
+        "seed": SEED,
+        "operations": ops,
+        "edges_checked": soak.edges_checked,
+        "wall_s": round(time.monotonic() - t0, 1),
+        **dict(sorted(soak.counts.items())),
+    }
+    dut._log.info("soak: %s", json.dumps(summary))
+    Path(os.environ.get("SOAK_RESULT", "soak.json")).write_text(json.dumps(summary) + "\n")
+
+
+@pytest.mark.parametrize("top", TOPS)
+def test_soak(top: str) -> None:
+    """A short soak on each top (SOAK_SEED, default 1; SOAK_OPS, default 25; SOAK_SECONDS for a timed run): every
+    operation checked against the model; prints the counts."""
+    folder = build_dir(f"{top}_soak")
+    result = folder / "soak.json"
+    result.unlink(missing_ok=True)
+    env = {"SOAK_RESULT": str(result), "BUS_SEED": str(SEED)}
+    run_cocotb(top, "test_soak", folder, testcase="soak", extra_env=env)
+    summary = json.loads(result.read_text())
+    print(f"soak {top}: {json.dumps(summary)}")
+    assert summary["operations"] >= (1 if SECONDS else OPS_LIMIT)
