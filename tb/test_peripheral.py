@@ -15,7 +15,7 @@ import os
 import random
 
 import pytest
-from cocotb.triggers import ClockCycles, RisingEdge
+from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge
 
 from peripheral_tb import (
     BAD_VALUES,
@@ -51,6 +51,34 @@ async def reset_values_and_id(dut) -> None:
         got = await tb.bus.read(reg.offset)
         assert got == reg.reset, f"{reg.name}: {got:#x} after reset, expected {reg.reset:#x}"
     assert await tb.bus.read(offset("ID")) == ID_VALUE
+    if tb.top == "stepramp_plb":
+        await ipif_data_and_first_access(tb)
+
+
+async def ipif_data_and_first_access(tb: PeripheralTb) -> None:
+    """IPIF (docs/stepramp_plb.md, "Bus timing"): ip2bus_data is 0 outside a read acknowledge (buses OR the slaves'
+    data), and an access whose bus2ip_cs rises with the release of reset is acknowledged one clock later, as any."""
+    dut, clk = tb.dut, tb.clk
+    await tb.bus.write(offset("STEPS"), 0xFFFF_FFFF)
+    for _ in range(6):  # idle cycles and a write: no data on the bus
+        await RisingEdge(clk)
+        await ReadOnly()
+        assert int(dut.ip2bus_data.value) == 0, "ip2bus_data is not 0 outside a read acknowledge"
+    await FallingEdge(clk)
+    dut.rst.value = 1
+    await ClockCycles(clk, 3)
+    await FallingEdge(clk)
+    dut.rst.value = 0
+    dut.bus2ip_addr.value, dut.bus2ip_rnw.value, dut.bus2ip_be.value = offset("ID"), 1, 0xF
+    dut.bus2ip_cs.value = 1
+    await RisingEdge(clk)
+    await ReadOnly()
+    acked = int(dut.ip2bus_rdack.value)
+    data = int(dut.ip2bus_data.value)
+    await FallingEdge(clk)
+    dut.bus2ip_cs.value = 0
+    assert acked == 1, "the first access after reset was not acknowledged one clock after bus2ip_cs"
+    assert data == ID_VALUE
 
 
 @cocotb.test(timeout_time=60, timeout_unit="us")  # measured 14 us (the slower top)
@@ -237,13 +265,14 @@ async def motion_registers_are_shadowed(dut) -> None:
 
 @cocotb.test(timeout_time=2500, timeout_unit="us")  # measured 548 us (the slower top)
 async def start_while_busy_is_ignored(dut) -> None:
-    """A second START during a move changes nothing."""
+    """A second START during a move changes nothing, even with other motion registers written since the first."""
     tb = await PeripheralTb.started(dut)
     drv = tb.driver()
     plan = valid_plan()
     await drv.program(plan)
     n0, s0 = len(tb.step_edges), len(tb.start_edges)
     await drv.start()
+    await drv.program(plan_move(**PROFILES_BY_NAME["triangle_negative"].args()))  # staged for the next START
     for _ in range(3):
         await ClockCycles(tb.clk, 1500)
         await drv.start()
