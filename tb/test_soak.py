@@ -13,8 +13,8 @@ or stepramp_axil (AXI4-Lite, with idle cycles and backpressure on every channel 
   stepping configuration and POSITION ignore it with CFG_BUSY / POS_BUSY, the read-only registers ignore it;
 * ``idle_writes``: writes to random registers while stopped, each read back against the register map (RW fields
   keep the value, read-only registers do not change, STATUS W1C clears what is written 1), POSITION presets;
-* ``bad_value``: a valid plan with one bad register value (peripheral_tb.BAD_VALUES): its error code, no pulse,
-  POSITION unchanged;
+* ``bad_value``: a valid trapezoid (ramps and a cruise, so that every motion register is used) with one bad register
+  value (peripheral_tb.BAD_VALUES): its error code, no pulse, POSITION unchanged;
 * ``reset``: the top's reset in the middle of a move: the edges before it are the model's first edges, no pulse
   after it, every register at its reset value;
 * ``configure``: random stepping outputs (mode, widths, DIR timing, PWM period, ENABLE) through the driver, which
@@ -83,6 +83,14 @@ class Soak:
             cocotb.start_soon(tb.pins.watch(getattr(tb.dut.core_inst, f"{kind}_stop"), edges))
 
     # -- generators ---------------------------------------------------------------------------------------------
+    def trapezoid(self) -> tuple[StepRamp, Plan]:
+        """A random move that uses every motion register (ramps of 5 .. 15 steps, a cruise, 40 .. 160 steps): each
+        of peripheral_tb.BAD_VALUES must then be rejected."""
+        rng = self.rng
+        steps = rng.randint(40, 160) * rng.choice((1, -1))
+        args = design_args(steps, rng.uniform(70, 300), rng.uniform(5, 15), rng.uniform(5, 15))
+        return self.tb.driver({"fclk": FCLK, "spr": SPR, "prescale": 1}), plan_move(**args)
+
     def plan(self, min_steps: int = 1) -> tuple[StepRamp, Plan]:
         """A random valid move: 1 .. 160 steps, cruise period 70 .. 300 ticks, ramps of 1 .. 60 steps, PRESCALE 1 .. 2.
         The shortest interval stays above the stepping configuration's pulse spacing (at most 60 clocks)."""
@@ -228,7 +236,7 @@ class Soak:
 
     async def op_bad_value(self) -> None:
         tb = self.tb
-        drv, good = self.plan(min_steps=3)
+        drv, good = self.trapezoid()
         label, change, cause = self.rng.choice(BAD_VALUES)
         await expect_rejected(tb, drv, dataclasses.replace(good, **change), f"bad value {label}", cause)
         await drv.clear_flags()

@@ -77,6 +77,7 @@ def run_cocotb(
     extra_env: Mapping[str, str] | None = None,
     testcase: str | Sequence[str] | None = None,
     log_file: Path | None = None,
+    netlist: bool = False,
 ) -> Path:
     """Build the RTL up to toplevel and run a cocotb test module against it with GHDL.
 
@@ -84,12 +85,35 @@ def run_cocotb(
     .ghw of a top with a layout in stepramp.sim.waves, a GTKWave save file (.gtkw) is written beside it. With WAVES=1 in
     the environment every call writes build_dir/<toplevel>.ghw.
     log_file: send the build and simulation output there instead of stdout.
+    netlist: simulate `ghdl synth`'s Verilog netlist of the top (its generics baked in) with Icarus Verilog instead
+    (stepramp.sim.netlist; the benches see STEPRAMP_NETLIST=1 and collect no coverage).
     Returns the results file; under pytest a failing test raises SystemExit.
     """
     from cocotb_tools.runner import get_runner  # imported late: the model does not need cocotb
 
-    runner = get_runner("ghdl")
     build_dir = build_dir.resolve()
+    if netlist:
+        from stepramp.sim.netlist import write_netlist
+
+        icarus = get_runner("icarus")
+        icarus.build(
+            sources=[write_netlist(toplevel, build_dir, parameters)],
+            hdl_toplevel=toplevel,
+            build_dir=build_dir,
+            timescale=("1ns", "1ps"),
+            always=True,
+            log_file=log_file,
+        )
+        return icarus.test(
+            hdl_toplevel=toplevel,
+            test_module=test_module,
+            build_dir=build_dir,
+            test_dir=build_dir,
+            extra_env={**dict(extra_env or {}), "STEPRAMP_NETLIST": "1", "STEPRAMP_COVERAGE_DIR": ""},
+            testcase=testcase,
+            log_file=log_file,
+        )
+    runner = get_runner("ghdl")
     runner.build(
         sources=hdl_sources(toplevel),
         hdl_toplevel=toplevel,
