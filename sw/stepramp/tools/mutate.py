@@ -95,6 +95,10 @@ EQUIVALENT: dict[str, str] = {
     "precompute:222:18:bit:1": "v_big's default: every path that reads v_big (the soft-stop decision) assigns it first",
     "regs_pkg:144:15:bit:00000001": "C_REG_RESET(1) is CTRL's: it goes into mem(1) at reset, but CTRL is not a storage "
     "word (it reads back from its own flip-flops, tb/test_peripheral.py reset_values_and_id) and nothing reads mem(1)",
+    "core:147:20:logic:or": "load = start_req or not busy_any: the engine also copies the staged move on every idle "
+    "clock, but uses the copy only from a start, and the last copy before a start is taken at the START edge either "
+    "way; while busy it loads on a second START, which the engine ignores while busy (start_while_busy_is_ignored "
+    "stages another plan before such STARTs and sees the running move unchanged)",
 }
 
 
