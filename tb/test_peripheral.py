@@ -305,7 +305,7 @@ async def every_register_written_while_busy(dut) -> None:
         before = await tb.bus.read(reg.offset)
         value = {"CTRL": enables, "STATUS": 0}.get(reg.name, rng.getrandbits(32))
         await tb.bus.write(reg.offset, value)
-        if reg.name in ("CTRL",) or offset("STEPS") <= reg.offset <= offset("STOP_RATIO"):
+        if reg.name == "CTRL" or offset("STEPS") <= reg.offset <= offset("STOP_RATIO"):
             want[reg.name] = value & sum(f.mask for f in reg.fields if f.access == RW)
         elif reg.name in ("ID", "DRIVE", "STEP_WIDTH", "DIR_TIMING", "PWM_PERIOD", "STEP_SPACE"):
             want[reg.name] = before
