@@ -197,22 +197,14 @@ async def _watch_stop(strobe: Any, kind: str, tracker: _PhaseTracker) -> None:
 
 
 async def _watch_error(flag: Any, code: Any) -> None:
-    """An error flag rising, or its code changing while it is up."""
-    names = {c: name for name, (c, _) in ERROR_CODES.items()}
-    while True:
-        await flag.value_change
-        if _int(flag) == 1:
-            value = _int(code)
-            if value is not None and value in names and value != 0:
-                sample_error(names[value])
+    """An error flag rising, or its code changing while the flag is up: sample the code."""
+    from cocotb.triggers import First
 
-
-async def _watch_code(flag: Any, code: Any) -> None:
-    names = {c: name for name, (c, _) in ERROR_CODES.items()}
+    names = {c: name for name, (c, _) in ERROR_CODES.items() if c != 0}
     while True:
-        await code.value_change
+        await First(flag.value_change, code.value_change)
         value = _int(code)
-        if _int(flag) == 1 and value is not None and value in names and value != 0:
+        if _int(flag) == 1 and value in names:
             sample_error(names[value])
 
 
@@ -286,7 +278,6 @@ def watch_core(core: Any) -> None:
     if regfile is not None and _has(regfile, "error_flag", "err_code_r"):
         _register_export()
         cocotb.start_soon(_watch_error(regfile.error_flag, regfile.err_code_r))
-        cocotb.start_soon(_watch_code(regfile.error_flag, regfile.err_code_r))
 
 
 class CoveredBus:
