@@ -82,6 +82,7 @@ architecture rtl of stepramp_core is
   signal state         : std_logic_vector(1 downto 0);
   signal eng_dir       : std_logic;
   signal position      : std_logic_vector(31 downto 0);
+  signal elec_pos      : std_logic_vector(8 downto 0);
   signal step_count    : std_logic_vector(30 downto 0);
   signal cur_delay     : std_logic_vector(31 downto 0);
 
@@ -173,7 +174,7 @@ begin
       eng_step      => eng_step,
       eng_busy      => busy,
       eng_dir       => eng_dir,
-      eng_position  => position,
+      eng_elec_pos  => elec_pos,
       eng_start     => eng_start,
       eng_hard_stop => gate_stop,
       eng_direction => eng_direction,
@@ -219,6 +220,7 @@ begin
       err_code   => err_code,
       state      => state,
       position   => position,
+      elec_pos   => elec_pos,
       step_count => step_count,
       cur_delay  => cur_delay
     );

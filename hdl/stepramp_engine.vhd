@@ -47,6 +47,8 @@ entity stepramp_engine is
     err_code   : out   std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
     state      : out   std_logic_vector(1 downto 0);
     position   : out   std_logic_vector(31 downto 0);
+    -- Electrical position: the pulses counted up/down modulo 512, moved by pulses only (pos_load leaves it).
+    elec_pos   : out   std_logic_vector(8 downto 0);
     step_count : out   std_logic_vector(30 downto 0);
     cur_delay  : out   std_logic_vector(31 downto 0)
   );
@@ -102,6 +104,7 @@ architecture rtl of stepramp_engine is
   signal dir_r        : std_logic;
   signal state_r      : std_logic_vector(1 downto 0);
   signal position_r   : unsigned(31 downto 0);
+  signal elec_pos_r   : unsigned(8 downto 0);
   signal step_count_r : unsigned(30 downto 0);
   signal cur_delay_r  : unsigned(31 downto 0);
   signal chk_code     : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
@@ -453,8 +456,10 @@ begin
         step_count_r <= step_count_r + 1;
         if (dir_r = '0') then
           position_r <= position_r + 1;
+          elec_pos_r <= elec_pos_r + 1;
         else
           position_r <= position_r - 1;
+          elec_pos_r <= elec_pos_r - 1;
         end if;
       end if;
 
@@ -496,7 +501,8 @@ begin
         end if;
       end if;
 
-      -- Position preset while stopped (a start at the same edge still sees the new position).
+      -- Position preset while stopped (a start at the same edge still sees the new position). The electrical
+      -- position stays: a preset (homing) must not move the motor's field.
       if (pos_load = '1' and phase = C_PH_IDLE) then
         position_r <= unsigned(pos_value);
       end if;
@@ -512,6 +518,7 @@ begin
         dir_r        <= '0';
         state_r      <= C_ST_STOP;
         position_r   <= (others => '0');
+        elec_pos_r   <= (others => '0');
         step_count_r <= (others => '0');
         cur_delay_r  <= (others => '0');
         tmr_restart  <= '0';
@@ -531,6 +538,7 @@ begin
   err_code   <= err_code_r;
   state      <= state_r;
   position   <= std_logic_vector(position_r);
+  elec_pos   <= std_logic_vector(elec_pos_r);
   step_count <= std_logic_vector(step_count_r);
   cur_delay  <= std_logic_vector(cur_delay_r);
 

@@ -40,7 +40,7 @@ entity stepramp_stepper is
     eng_step     : in    std_logic;
     eng_busy     : in    std_logic;
     eng_dir      : in    std_logic;
-    eng_position : in    std_logic_vector(31 downto 0);
+    eng_elec_pos : in    std_logic_vector(8 downto 0);
     -- To the ramp engine (eng_hard_stop is ORed with the register file's hard_stop).
     eng_start     : out   std_logic;
     eng_hard_stop : out   std_logic;
@@ -365,9 +365,9 @@ begin
   -- On/off modes: half-step index h, then AVR446 Table 2-1 (h = 0: A+, 1: A+B+, 2: B+, 3: A-B+, 4: A-, 5: A-B-,
   -- 6: B-, 7: A+B-). Wave drive uses the even h, full step two-phase-on the odd h.
   ---------------------------------------------------------------------------------------------------------------------
-  half_idx <= unsigned(eng_position(1 downto 0)) & '0' when mode = C_MODE_WAVE else
-              unsigned(eng_position(1 downto 0)) & '1' when mode = C_MODE_FULL else
-              unsigned(eng_position(2 downto 0));
+  half_idx <= unsigned(eng_elec_pos(1 downto 0)) & '0' when mode = C_MODE_WAVE else
+              unsigned(eng_elec_pos(1 downto 0)) & '1' when mode = C_MODE_FULL else
+              unsigned(eng_elec_pos(2 downto 0));
 
   lvl_a1 <= '1' when half_idx = 7 or half_idx = 0 or half_idx = 1 else
             '0';
@@ -387,7 +387,7 @@ begin
   u_shift <= C_LG - to_integer(unsigned(ustep_log2)) when to_integer(unsigned(ustep_log2)) < C_LG else
              0;
 
-  e_idx    <= shift_left(unsigned(eng_position(C_EW - 1 downto 0)), u_shift);
+  e_idx    <= shift_left(unsigned(eng_elec_pos(C_EW - 1 downto 0)), u_shift);
   quad     <= std_logic_vector(e_idx(C_EW - 1 downto C_EW - 2));
   frac_idx <= to_integer(e_idx and to_unsigned(G_MICROSTEPS - 1, C_EW));
 

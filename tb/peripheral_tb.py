@@ -18,6 +18,7 @@ import random
 from collections.abc import Iterator
 from typing import Any
 
+import cocotb
 from cocotb.triggers import ClockCycles, FallingEdge, First, RisingEdge, Timer
 
 from monitors import MotionMonitors
@@ -170,9 +171,25 @@ class MotionBench:
     bus: Any
     outputs: Outputs
     enabled: bool
+    # The electrical position the pins have shown since the last reset: +1 per STEP rising edge with DIR '0', -1 with
+    # DIR '1' (docs/algorithm.md "Electrical position": a POSITION write does not move it).
+    elec_pos: int = 0
+    _counting: bool = False
 
     def _start_monitors(self, position: int) -> None:
         raise NotImplementedError
+
+    def count_steps(self) -> None:
+        """Count the electrical position from the pins from now on (at reset: elec_pos = 0); once per bench."""
+        self.elec_pos = 0
+        if not self._counting:
+            self._counting = True
+            cocotb.start_soon(self._count_steps())
+
+    async def _count_steps(self) -> None:
+        while True:
+            await RisingEdge(self.dut.step)
+            self.elec_pos += -1 if int(self.dut.dir.value) else 1
 
     def finish(self) -> None:
         raise NotImplementedError
@@ -199,7 +216,7 @@ class MotionBench:
         # The PWM duty follows a new mode after the serial multipliers (stepramp.models.stepping.winding_latency, < 40
         # clocks): let the outputs settle before the monitors look at them.
         await ClockCycles(self.clk, 100)
-        self._start_monitors(position=await drv.position())
+        self._start_monitors(position=self.elec_pos)
 
 
 class PeripheralTb(MotionBench):
@@ -235,12 +252,14 @@ class PeripheralTb(MotionBench):
         assert not missing, f"the GTKWave layout names signals {self.top} does not have: {missing}"
         self.pins = StepWatch(self.dut.step, self.dut.core_inst.busy, CLK_PERIOD_PS)
         self.step_edges, self.start_edges = self.pins.step_edges, self.pins.start_edges
+        self.count_steps()
         self._start_monitors(position=0)
 
     async def reset_pulse(self) -> None:
         """The top's reset again (rst, or aresetn low), as at the start, from the next falling edge."""
         await FallingEdge(self.clk)
         await apply_reset(self.clk, self.port.rst, active=self.port.rst_active)
+        self.elec_pos = 0
 
     def _start_monitors(self, position: int) -> None:
         """STEP width, DIR setup/hold, shoot-through and electrical position monitors for the current settings."""

@@ -209,6 +209,7 @@ class CoreTb(MotionBench):
         cocotb.start_soon(self._watch(RisingEdge, self.dut.irq, self.irq_rises))
         cocotb.start_soon(self._watch(FallingEdge, self.dut.irq, self.irq_falls))
         cocotb.start_soon(self._watch(FallingEdge, self.dut.busy, self.busy_falls))
+        self.count_steps()
         self._start_monitors(position=0)
         self.bus = watch_coverage(self.dut, self.bus)
 

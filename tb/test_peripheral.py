@@ -30,6 +30,7 @@ from peripheral_tb import (
 from stepramp.board.driver import Outputs, StepRampError, plan_writes
 from stepramp.board.plan import Plan, plan_move
 from stepramp.board.regmap import ERROR_CODES, ID_VALUE, REGISTERS, REGISTERS_BY_NAME, RW, offset
+from stepramp.models import stepping as sm
 from stepramp.models.engine import edges as model_edges
 from stepramp.sim.profiles import PROFILES, PROFILES_BY_NAME
 from stepramp.sim.runner import run_cocotb
@@ -237,6 +238,36 @@ async def position_register(dut) -> None:
     with pytest.raises(StepRampError, match="POS_BUSY"):
         await drv.wait_done(idle=lambda: tb.irq_or(5_000))
     assert await drv.position() == -123456 + plan.steps
+    tb.finish()
+
+
+@cocotb.test(timeout_time=3, timeout_unit="ms")
+async def position_preset_keeps_the_field(dut) -> None:
+    """A POSITION write while stopped (homing) leaves the windings where they are: the electrical position counts
+    pulses only (docs/algorithm.md, "Electrical position"), so the next move goes on from the same field angle
+    (half step, the electrical monitor on across the presets; found by `make soak SECONDS=600 SEED=11`)."""
+    tb = await PeripheralTb.started(dut)
+    await tb.configure(Outputs(mode="half", step_width=4, dir_setup=12, dir_hold=6), enable=True)
+    drv = tb.driver()
+    plan = valid_plan()
+    await tb.run_plan(drv, plan)
+    pins = (dut.a1, dut.a2, dut.b1, dut.b2)
+    field = sm.winding_levels(sm.MODE_HALF, plan.steps)
+    for value in (plan.steps + 1, plan.steps + 4, -7, 2**31 - 1):
+        await drv.set_position(value)
+        await ClockCycles(tb.clk, 5)
+        await ReadOnly()
+        got = tuple(int(p.value) for p in pins)
+        assert got == field, f"POSITION := {value}: windings {got}, expected {field} (unchanged)"
+        await FallingEdge(tb.clk)
+        assert await drv.position() == value
+    await tb.run_plan(drv, plan)
+    await ReadOnly()
+    got = tuple(int(p.value) for p in pins)
+    assert got == sm.winding_levels(sm.MODE_HALF, 2 * plan.steps), f"after the next move: windings {got}"
+    await FallingEdge(tb.clk)
+    assert await drv.position() == ((2**31 - 1 + plan.steps) & 0xFFFF_FFFF) - 2**32
+    assert tb.monitors is not None and tb.monitors.electrical.checked >= 2 * plan.steps
     tb.finish()
 
 
@@ -475,6 +506,7 @@ REGISTER_TESTS = [
     "w1c_flags_and_interrupt",
     "bad_register_values_flag_an_error",
     "position_register",
+    "position_preset_keeps_the_field",
     "motion_registers_are_shadowed",
     "start_while_busy_is_ignored",
     "every_register_written_while_busy",

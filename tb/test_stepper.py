@@ -4,7 +4,9 @@ setup/hold timing, enable, mode changes while stopped, and monitors that fail wh
 
 A fake engine in Python plays the ramp engine's side with its documented timing (docs/stepramp_engine.md): it
 takes eng_start at the next edge (edge 0), raises busy, emits pulse 0 two clocks later and then one pulse every
-`interval` clocks (>= 64), updating `position` in the cycle of each pulse and dropping busy in the cycle of the last.
+`interval` clocks (>= 64), updating the electrical position (`eng_elec_pos`, the pulses counted modulo 512) in the
+cycle of each pulse and dropping busy in the cycle of the last. The bench may also set `eng_elec_pos` directly, to
+reach any electrical position at once (the real engine only counts pulses).
 Expected values come from stepramp.models.stepping; the pins are also watched by tb/monitors.py.
 
 Edge numbers: edge e is the rising edge at e * CLK_PERIOD_NS; inputs are driven at the falling edge after edge
@@ -96,9 +98,9 @@ class FakeEngine:
         return self
 
     def set_position(self, pos: int) -> None:
-        """pos_load while stopped: eng_position takes the value (two's complement)."""
+        """Jump to electrical position pos (a bench shortcut): eng_elec_pos takes pos modulo 512."""
         self.position = pos
-        self.dut.eng_position.value = pos & 0xFFFFFFFF
+        self.dut.eng_elec_pos.value = pos & 0x1FF
 
     async def _run(self) -> None:
         dut = self.dut
@@ -258,7 +260,7 @@ async def windings_follow_steps(dut) -> None:
     backwards and across reversals, starting from positive and negative positions."""
     cfg = Config(step_width=8, dir_setup=12, dir_hold=9)
     eng = await setup(dut, cfg)
-    for mode, start in ((1, 0), (2, 5), (3, -3), (0, 2), (3, 2**31 - 3), (6, 1)):
+    for mode, start in ((1, 0), (2, 5), (3, -3), (0, 2), (3, 512 - 3), (6, 1)):
         cfg.mode = mode
         apply(dut, cfg)
         eng.set_position(start)
@@ -280,7 +282,7 @@ async def windings_follow_steps(dut) -> None:
         assert got == expected, f"mode {mode}: windings {got[:10]}..., expected {expected[:10]}..."
         assert mons.electrical.checked == len(got) + 1 and mons.width.pulses == len(got)
         assert eng.position == start + 11 - 5 + 1 - 1 - 13 + 3
-        # The signed position wraps at 2^31 and the electrical position goes on.
+        # From 509 the 9-bit eng_elec_pos wraps at 512 and the electrical position goes on.
         dut._log.info("mode %d: %d steps checked from position %d", mode, len(got), start)
 
 
