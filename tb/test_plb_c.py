@@ -14,7 +14,6 @@ from __future__ import annotations
 import ctypes
 import json
 import os
-import re
 from pathlib import Path
 from typing import Any
 
@@ -24,6 +23,7 @@ from peripheral_tb import TOPS, PeripheralTb, profiles_limit_us
 from stepramp.board.plan import Plan, plan_move
 from stepramp.board.regmap import offset
 from stepramp.models.engine import edges as model_edges
+from stepramp.sim.cdriver import c_struct
 from stepramp.sim.profiles import PROFILES_BY_NAME, Profile
 from stepramp.sim.runner import run_cocotb
 from stepramp.tools import clib
@@ -35,27 +35,10 @@ C_LIB = C_DIR / "build" / "libstepramp.so"
 #: A trapezoid, a triangle with negative steps, a move starting in RUN, and one with PRESCALE > 1.
 PROFILE_NAMES = ("trap_basic", "triangle_negative", "run_start", "trap_prescale_4")
 
-_C_TYPES = {
-    "uint32_t": ctypes.c_uint32,
-    "uint64_t": ctypes.c_uint64,
-    "int32_t": ctypes.c_int32,
-    "int64_t": ctypes.c_int64,
-}
-
-
-def _plan_struct() -> type[ctypes.Structure]:
-    """stepramp_plan_t as a ctypes structure, its fields read from stepramp_plan.h."""
-    text = (C_DIR / "stepramp_plan.h").read_text()
-    match = re.search(r"typedef struct \{(.*?)\} stepramp_plan_t;", text, re.S)
-    assert match, "no stepramp_plan_t in stepramp_plan.h"
-    body = re.sub(r"/\*.*?\*/", "", match.group(1), flags=re.S)
-    fields = [(name, _C_TYPES[ctype]) for ctype, name in re.findall(r"(\w+)\s+(\w+)\s*;", body)]
-    return type("CPlan", (ctypes.Structure,), {"_fields_": fields})
-
 
 def c_plan_move(so: ctypes.CDLL, prof: Profile) -> Plan:
     """The C library's plan of a profile, as a Python Plan."""
-    c_plan_t = _plan_struct()
+    c_plan_t = c_struct(C_DIR / "stepramp_plan.h", "stepramp_plan_t")
     so.stepramp_plan_move.argtypes = [
         ctypes.POINTER(c_plan_t),
         ctypes.c_int64,

@@ -203,6 +203,21 @@ void stepramp_set_position(const stepramp_t *dev, int32_t position)
     write_reg(dev, STEPRAMP_REG_POSITION, (uint32_t)position); /* modulo 2^32: two's complement */
 }
 
+int stepramp_isr(const stepramp_t *dev, stepramp_status_t *status)
+{
+    stepramp_status_t st;
+    uint32_t flags = stepramp_status(dev, &st) & (STEPRAMP_STATUS_DONE_MASK | STEPRAMP_STATUS_ERROR_MASK);
+
+    if (status != NULL) {
+        *status = st;
+    }
+    if (flags == 0u) {
+        return STEPRAMP_ENOIRQ;
+    }
+    write_reg(dev, STEPRAMP_REG_STATUS, flags);
+    return st.error ? STEPRAMP_ECORE(st.err_code) : STEPRAMP_OK;
+}
+
 int stepramp_wait_done(const stepramp_t *dev, uint32_t max_polls)
 {
     uint32_t i;
@@ -268,6 +283,9 @@ const char *stepramp_strresult(int result)
     }
     if (result == STEPRAMP_ETIMEOUT) {
         return "no DONE within the allowed number of status polls";
+    }
+    if (result == STEPRAMP_ENOIRQ) {
+        return "no interrupt from this core: neither STATUS.DONE nor STATUS.ERROR is set";
     }
     if (result == STEPRAMP_EOUTPUTS) {
         return "invalid stepping outputs: mode must be 0 .. 4 and ustep_log2 0 .. 7";

@@ -56,6 +56,7 @@ enum {
     STEPRAMP_EID = 64,        /**< the ID register does not hold STEPRAMP_ID_MAGIC in bits 31:16 */
     STEPRAMP_ETIMEOUT = 65,   /**< stepramp_wait_done: no STATUS.DONE within max_polls reads */
     STEPRAMP_EOUTPUTS = 66,   /**< stepramp_configure_outputs: NULL, mode > 4 or ustep_log2 > 7 */
+    STEPRAMP_ENOIRQ = 67,     /**< stepramp_isr: neither STATUS.DONE nor STATUS.ERROR was set (not this core) */
     STEPRAMP_ECORE_BASE = 128 /**< STEPRAMP_ECORE(code): the core flagged STATUS.ERROR with ERR_CODE code */
 };
 
@@ -202,6 +203,18 @@ void stepramp_set_position(const stepramp_t *dev, int32_t position);
  *         (the flags are cleared in both cases); STEPRAMP_ETIMEOUT (flags untouched) when DONE never came
  */
 int stepramp_wait_done(const stepramp_t *dev, uint32_t max_polls);
+
+/**
+ * The work of an interrupt handler for the core's irq line (CTRL.IRQ_DONE / IRQ_ERROR enabled): read STATUS once,
+ * clear the flags that read '1' among DONE and ERROR (write 1 to exactly those, so a flag that rises after the read
+ * stays set and keeps irq high), which drops irq, and report.
+ *
+ * @param status filled in with the STATUS word as read (may be NULL)
+ * @return with DONE set, the move's result as stepramp_wait_done gives it: STEPRAMP_OK, or STEPRAMP_ECORE(err_code)
+ *         when ERROR was set too; with ERROR alone (a POSITION write during the move: the move goes on, status->done
+ *         is 0), STEPRAMP_ECORE(err_code); with neither, STEPRAMP_ENOIRQ (nothing written)
+ */
+int stepramp_isr(const stepramp_t *dev, stepramp_status_t *status);
 
 /**
  * A STATUS.ERR_CODE value in words: the cause column of the error table of docs/registers.md

@@ -458,6 +458,43 @@ static void test_wait_done(void)
     CHECK_EQ(bus->bus_errors, 0u);
 }
 
+static void test_isr(void)
+{
+    stepramp_t dev;
+    stepramp_status_t st;
+
+    /* DONE without error: both flags as read are cleared (DONE only: the write is 0x10), result OK */
+    dev = fresh(1e6, 200.0, 1u);
+    stepramp_fakebus_set_status(0u, 0u, 1u, 0u, STEPRAMP_STATUS_DONE_MASK);
+    CHECK_EQ(stepramp_isr(&dev, &st), STEPRAMP_OK);
+    CHECK(st.done && !st.error && st.dir == 1u);
+    CHECK_EQ(bus->status_reads, 1u);
+    CHECK(bus->writes == 1u && bus->log[0].offset == O_STATUS && bus->log[0].value == STEPRAMP_STATUS_DONE_MASK);
+    CHECK_EQ(reg(O_STATUS) & 0x30u, 0u);
+
+    /* DONE with ERROR: the core error, both flags cleared, the cause kept */
+    dev = fresh(1e6, 200.0, 1u);
+    stepramp_fakebus_set_status(0u, 0u, 0u, STEPRAMP_ERR_LATE, 0x30u);
+    CHECK_EQ(stepramp_isr(&dev, &st), STEPRAMP_ECORE(STEPRAMP_ERR_LATE));
+    CHECK(st.done && st.error && st.err_code == STEPRAMP_ERR_LATE);
+    CHECK(bus->writes == 1u && bus->log[0].value == 0x30u);
+    CHECK_EQ(reg(O_STATUS) & 0x30u, 0u);
+
+    /* ERROR alone (POS_BUSY during a move): ERROR cleared, DONE not written, the move goes on */
+    dev = fresh(1e6, 200.0, 1u);
+    stepramp_fakebus_set_status(STEPRAMP_STATE_RUN, 1u, 0u, STEPRAMP_ERR_POS_BUSY, STEPRAMP_STATUS_ERROR_MASK);
+    CHECK_EQ(stepramp_isr(&dev, &st), STEPRAMP_ECORE(STEPRAMP_ERR_POS_BUSY));
+    CHECK(!st.done && st.error && st.busy);
+    CHECK(bus->writes == 1u && bus->log[0].value == STEPRAMP_STATUS_ERROR_MASK);
+
+    /* neither flag: not this core's interrupt, nothing written; NULL status is allowed */
+    dev = fresh(1e6, 200.0, 1u);
+    stepramp_fakebus_set_status(STEPRAMP_STATE_ACCEL, 1u, 0u, 0u, 0u);
+    CHECK_EQ(stepramp_isr(&dev, NULL), STEPRAMP_ENOIRQ);
+    CHECK(bus->status_reads == 1u && bus->writes == 0u);
+    CHECK(strstr(stepramp_strresult(STEPRAMP_ENOIRQ), "DONE") != NULL);
+}
+
 static void test_position(void)
 {
     static const int32_t values[] = {0, 1, -1, 123456, -123456, INT32_MAX, INT32_MIN, INT32_MIN + 1, 0x12345678};
@@ -576,6 +613,7 @@ int main(void)
     test_status_decoding();
     test_clear_flags();
     test_wait_done();
+    test_isr();
     test_position();
     test_invalid_move_writes_nothing();
     test_error_texts();

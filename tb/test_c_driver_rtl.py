@@ -1,0 +1,261 @@
+# SPDX-License-Identifier: MIT
+"""The C driver (sw/c/stepramp.c) itself against the RTL, both tops.
+
+build/libstepramp_cb.so is the driver compiled for a host whose bus is a set of callbacks
+(sw/c/stepramp_cbbus.c); stepramp.sim.cdriver.CDriver attaches those callbacks to the bench's bus master and runs
+every C call in a thread bridged into the simulation (cocotb's bridge/resume). So each register access, byte lane and
+polling loop of the C code reaches the core as a MicroBlaze program's would, and the core's answer is checked
+against the bit-exact model (stepramp.models.engine) and the register map (stepramp.board.regmap), never against the
+driver's own view:
+
+- c_driver_moves_by_polling: stepramp_init, stepramp_move and stepramp_wait_done per profile (a trapezoid, a
+  triangle with negative steps, a move starting in RUN, PRESCALE 4): every STEP edge as the model's, the position;
+- c_driver_isr: stepramp_isr on the irq line: nothing pending (ENOIRQ), a move's end (OK, irq drops), a POSITION
+  write during a move (ECORE(POS_BUSY) while the move goes on, then OK at its end), a plan with PRESCALE 0
+  (ECORE(PRESCALE), no pulse);
+- c_driver_stops: stepramp_soft_stop and stepramp_hard_stop in RUN, edges as stepramp.models.engine.edges_with_stop;
+- c_driver_status_fields: stepramp_status in the middle of ACCEL, RUN and DECEL: its fields equal the register map's
+  decoding of the raw word, the state is the model's phase there.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import dataclasses
+import os
+from pathlib import Path
+from typing import Any
+
+import pytest
+from cocotb.triggers import ClockCycles, First, RisingEdge
+
+from peripheral_tb import TOPS, PeripheralTb, profiles_limit_us
+from stepramp.board.plan import Plan, plan_move
+from stepramp.board.regmap import ERROR_CODES, ID_VALUE, REGISTERS_BY_NAME
+from stepramp.models.engine import edges as model_edges
+from stepramp.models.engine import edges_with_stop, phase_of
+from stepramp.sim.cdriver import CDriver
+from stepramp.sim.profiles import PROFILES_BY_NAME, Profile
+from stepramp.sim.runner import run_cocotb
+from stepramp.tools import clib
+from tbutil import REPO, build_dir, cocotb, edges_differ
+
+C_CB_LIB = REPO / "sw" / "c" / "build" / "libstepramp_cb.so"
+
+#: A trapezoid, a triangle with negative steps, a move starting in RUN, and one with PRESCALE > 1.
+POLLED = ("trap_basic", "triangle_negative", "run_start", "trap_prescale_4")
+
+#: The driver's results (stepramp.h): STEPRAMP_OK, STEPRAMP_ENOIRQ, STEPRAMP_ECORE(code) = 128 + code.
+OK, ENOIRQ, ECORE_BASE = 0, 67, 128
+ERR = {name: code for name, (code, _) in ERROR_CODES.items()}
+STATE_CODES = {"STOP": 0, "ACCEL": 1, "RUN": 2, "DECEL": 3}
+
+
+async def c_bench(dut: Any, prof: Profile) -> tuple[PeripheralTb, CDriver]:
+    """The top, reset, with the C driver on its bus master, initialised for a profile's clock and motor (the driver's
+    STEPRAMP_IDLE() waits 200 clocks)."""
+    tb = await PeripheralTb.started(dut)
+    cdrv = CDriver(Path(os.environ["STEPRAMP_C_CB_LIB"]), tb.bus, idle=lambda: ClockCycles(tb.clk, 200))
+    await c_init(cdrv, prof)
+    return tb, cdrv
+
+
+async def c_init(cdrv: CDriver, prof: Profile) -> None:
+    rc = await cdrv.dev_call("stepramp_init", cdrv.base, prof.fclk, prof.spr, prof.prescale)
+    assert rc == OK, f"stepramp_init: {await cdrv.call('stepramp_strresult', rc)}"
+    assert cdrv.dev.version == ID_VALUE & 0xFFFF, f"stepramp_init read version {cdrv.dev.version:#x}"
+
+
+async def c_move(cdrv: CDriver, prof: Profile) -> None:
+    rc = await cdrv.dev_call("stepramp_move", prof.steps, prof.accel, prof.decel, prof.speed)
+    assert rc == OK, f"{prof.name}: stepramp_move: {await cdrv.call('stepramp_strresult', rc)}"
+
+
+async def c_isr(cdrv: CDriver) -> int:
+    return int(await cdrv.dev_call("stepramp_isr", ctypes.byref(cdrv.status)))
+
+
+async def until_pulses(tb: PeripheralTb, count: int) -> None:
+    while len(tb.step_edges) < count:
+        await RisingEdge(tb.dut.step)
+
+
+async def irq_dropped(tb: PeripheralTb) -> None:
+    """irq is low after the handler's clearing write: it follows the flags one clock later (docs/stepramp_plb.md)."""
+    await ClockCycles(tb.clk, 2)
+    assert not int(tb.dut.irq.value), "irq still high two clocks after stepramp_isr cleared the flags"
+
+
+async def irq_within(tb: PeripheralTb, cycles: int) -> bool:
+    if not int(tb.dut.irq.value):
+        await First(RisingEdge(tb.dut.irq), ClockCycles(tb.clk, cycles))
+    return bool(int(tb.dut.irq.value))
+
+
+# Limit: the polled profiles as the model says they last (measured 1.64 ms).
+@cocotb.test(timeout_time=profiles_limit_us(list(POLLED)), timeout_unit="us")
+async def c_driver_moves_by_polling(dut) -> None:
+    """stepramp_move then stepramp_wait_done per profile: edges of the model's plan, POSITION the steps' sum."""
+    tb, cdrv = await c_bench(dut, PROFILES_BY_NAME[POLLED[0]])
+    problems: list[str] = []
+    position = 0
+    for name in POLLED:
+        prof = PROFILES_BY_NAME[name]
+        await c_init(cdrv, prof)
+        n0, s0, idles0 = len(tb.step_edges), len(tb.start_edges), cdrv.idles
+        await c_move(cdrv, prof)
+        rc = await cdrv.dev_call("stepramp_wait_done", 100_000)
+        edges = tb.edges_since(n0, s0)
+        want = model_edges(plan_move(**prof.args()))
+        position += prof.steps
+        dut._log.info("%s: %d edges, %d STATUS polls", name, len(edges), cdrv.idles - idles0 + 1)
+        if rc != OK:
+            problems.append(f"{name}: stepramp_wait_done: {await cdrv.call('stepramp_strresult', rc)}")
+        if edges != want:
+            problems.append(f"{name}: {edges_differ(edges, want)}")
+        if cdrv.idles == idles0:
+            problems.append(f"{name}: wait_done never ran STEPRAMP_IDLE() (DONE before the first poll?)")
+        got = await cdrv.dev_call("stepramp_position")
+        if got != position:
+            problems.append(f"{name}: stepramp_position {got}, expected {position}")
+    assert not problems, "\n".join(problems)
+    tb.finish()
+
+
+@cocotb.test(timeout_time=4, timeout_unit="ms")  # measured 1.06 ms
+async def c_driver_isr(dut) -> None:
+    """stepramp_isr as the irq handler: ENOIRQ, OK at a move's end, ECORE(POS_BUSY) during a move, ECORE(PRESCALE)."""
+    prof = PROFILES_BY_NAME["trap_basic"]
+    tb, cdrv = await c_bench(dut, prof)
+    await cdrv.dev_call("stepramp_enable_irq", 1, 1)
+    assert await c_isr(cdrv) == ENOIRQ, "stepramp_isr with nothing pending is not ENOIRQ"
+    assert not cdrv.status.done and not cdrv.status.error
+    # 1: a move ends; the handler reports OK and irq drops.
+    n0 = len(tb.step_edges)
+    await c_move(cdrv, prof)
+    assert await irq_within(tb, 200_000), "no irq at the end of the move"
+    assert len(tb.step_edges) - n0 == prof.steps
+    assert await c_isr(cdrv) == OK
+    assert cdrv.status.done and not cdrv.status.error and not cdrv.status.busy
+    await irq_dropped(tb)
+    # 2: a POSITION write during a move: ERROR (POS_BUSY) raises irq while the move goes on; then DONE without error.
+    n0 = len(tb.step_edges)
+    await c_move(cdrv, prof)
+    await until_pulses(tb, n0 + 20)
+    await cdrv.dev_call("stepramp_set_position", 12345)
+    assert await irq_within(tb, 20), "no irq for the POSITION write during the move"
+    rc = await c_isr(cdrv)
+    assert rc == ECORE_BASE + ERR["POS_BUSY"], f"isr returned {rc}"
+    assert cdrv.status.busy and not cdrv.status.done, "the move did not go on after the refused POSITION write"
+    assert (await cdrv.call("stepramp_corename", cdrv.status.err_code)) == "POS_BUSY"
+    await irq_dropped(tb)
+    assert await irq_within(tb, 200_000), "no irq at the end of the move"
+    rc = await c_isr(cdrv)
+    await irq_dropped(tb)
+    assert rc == OK, f"isr at the end of the move returned {rc}: {await cdrv.call('stepramp_strresult', rc)}"
+    assert len(tb.step_edges) - n0 == prof.steps
+    assert await cdrv.dev_call("stepramp_position") == 2 * prof.steps, "the refused POSITION write moved POSITION"
+    # 3: a plan with PRESCALE 0, programmed and started: rejected, nothing moves.
+    plan = cdrv.plan_t()
+    rc = await cdrv.dev_call("stepramp_plan", ctypes.byref(plan), prof.steps, prof.accel, prof.decel, prof.speed)
+    assert rc == OK
+    plan.prescale = 0
+    assert await cdrv.dev_call("stepramp_program", ctypes.byref(plan)) == OK
+    n0 = len(tb.step_edges)
+    await cdrv.dev_call("stepramp_start")
+    assert await irq_within(tb, 1_000), "no irq for a rejected start"
+    rc = await c_isr(cdrv)
+    assert rc == ECORE_BASE + ERR["PRESCALE"], f"isr returned {rc}"
+    assert cdrv.status.done and cdrv.status.error
+    await irq_dropped(tb)
+    await ClockCycles(tb.clk, 2_000)
+    assert len(tb.step_edges) == n0, "a rejected move pulsed STEP"
+    tb.finish()
+
+
+@cocotb.test(timeout_time=4, timeout_unit="ms")  # measured 0.96 ms
+async def c_driver_stops(dut) -> None:
+    """stepramp_soft_stop and stepramp_hard_stop in RUN: the edges of the model's stop at the request's edge."""
+    prof = PROFILES_BY_NAME["trap_long_cruise"]
+    tb, cdrv = await c_bench(dut, prof)
+    plan = plan_move(**prof.args())
+    requests: dict[str, list[int]] = {"soft": [], "hard": []}
+    assert tb.pins is not None
+    for kind in requests:
+        cocotb.start_soon(tb.pins.watch(getattr(dut.core_inst, f"{kind}_stop"), requests[kind]))
+    wait_pulses = (plan.sa + plan.sd) // 2
+    assert phase_of(plan, wait_pulses) == "RUN"
+    position = 0
+    for kind in requests:
+        n0, s0, k0 = len(tb.step_edges), len(tb.start_edges), len(requests[kind])
+        await c_move(cdrv, prof)
+        await until_pulses(tb, n0 + wait_pulses)
+        await cdrv.dev_call(f"stepramp_{kind}_stop")
+        rc = await cdrv.dev_call("stepramp_wait_done", 100_000)
+        assert rc == OK, f"{kind} stop: {await cdrv.call('stepramp_strresult', rc)}"
+        edges = tb.edges_since(n0, s0)
+        # The register file's strobe is high after edge w; the engine samples it at w + 1.
+        request = requests[kind][k0] + 1 - tb.start_edges[s0]
+        want = edges_with_stop(plan, kind, request)
+        assert edges == want, f"{kind} stop: {edges_differ(edges, want)}"
+        position += len(edges)
+        assert await cdrv.dev_call("stepramp_position") == position
+    tb.finish()
+
+
+def status_fields(raw: int) -> dict[str, int]:
+    """STATUS decoded with the register map's field table."""
+    reg = REGISTERS_BY_NAME["STATUS"]
+    return {f.name: (raw >> f.lsb) & ((1 << f.width) - 1) for f in reg.fields}
+
+
+@cocotb.test(timeout_time=2, timeout_unit="ms")  # measured 0.52 ms
+async def c_driver_status_fields(dut) -> None:
+    """stepramp_status in the middle of each phase of a negative trapezoid: its fields are the register map's
+    decoding of the raw word; state, busy and direction are those of the model's plan at that pulse."""
+    prof = PROFILES_BY_NAME["trap_basic"]
+    tb, cdrv = await c_bench(dut, prof)
+    backwards = dataclasses.replace(prof, name="trap_basic_negative", steps=-prof.steps)
+    plan: Plan = plan_move(**backwards.args())
+    samples = [plan.sa // 2, (plan.sa + plan.sd) // 2, (plan.sd + plan.steps) // 2]
+    assert [phase_of(plan, k) for k in samples] == ["ACCEL", "RUN", "DECEL"], f"plan {plan}"
+    n0 = len(tb.step_edges)
+    await c_move(cdrv, backwards)
+    st = cdrv.status
+    for k in samples:
+        await until_pulses(tb, n0 + k)
+        raw = int(await cdrv.dev_call("stepramp_status", ctypes.byref(st)))
+        fields = status_fields(raw)
+        decoded = {
+            "STATE": st.state,
+            "BUSY": st.busy,
+            "DIR": st.dir,
+            "DONE": st.done,
+            "ERROR": st.error,
+            "ERR_CODE": st.err_code,
+        }
+        assert st.raw == raw
+        assert decoded == {name: fields[name] for name in decoded}, f"pulse {k}: C {decoded}, map {fields}"
+        assert (st.state, st.busy, st.dir) == (STATE_CODES[phase_of(plan, k)], 1, 1), f"pulse {k}: {decoded}"
+    rc = await cdrv.dev_call("stepramp_wait_done", 100_000)
+    assert rc == OK
+    st_raw = int(await cdrv.dev_call("stepramp_status", ctypes.byref(st)))
+    assert (st.state, st.busy, st.dir, st.done) == (0, 0, 1, 0), f"after the move: {status_fields(st_raw)}"
+    tb.finish()
+
+
+C_TESTS = ["c_driver_moves_by_polling", "c_driver_isr", "c_driver_stops", "c_driver_status_fields"]
+
+
+@pytest.mark.parametrize("top", TOPS)
+def test_c_driver_on_rtl(top: str) -> None:
+    """The C driver's calls against each top (the library is built here: make -C sw/c lib)."""
+    clib.build("lib")
+    assert C_CB_LIB.is_file(), f"make -C sw/c lib did not build {C_CB_LIB}"
+    run_cocotb(
+        top,
+        "test_c_driver_rtl",
+        build_dir(f"{top}_c_driver"),
+        testcase=C_TESTS,
+        extra_env={"STEPRAMP_C_CB_LIB": str(C_CB_LIB)},
+    )
