@@ -112,9 +112,12 @@ architecture rtl of stepramp_stepper is
   -- since_step saturates above the largest min_gap - C_START_TO_STEP - 1 (min_gap <= 2 * 65535).
   constant C_SINCE_MAX : unsigned(16 downto 0) := (others => '1');
 
-  -- STEP pulse.
-  signal step_r     : std_logic;
-  signal width_cnt  : unsigned(15 downto 0);
+  -- STEP pulse. The reset keeps a pulse in progress, so it reads step_r: both start at 0 at configuration (the
+  -- flip-flops' power-up value), which lets the first reset decide in every simulator (a netlist's X would stay).
+  -- vsg_off signal_007
+  signal step_r    : std_logic             := '0';
+  signal width_cnt : unsigned(15 downto 0) := (others => '0');
+  -- vsg_on signal_007
   signal width_m1   : unsigned(15 downto 0);
   signal since_step : unsigned(16 downto 0); -- edges since eng_step was last sampled '1' (saturating)
   signal min_gap_r  : unsigned(16 downto 0);

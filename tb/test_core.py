@@ -22,8 +22,8 @@ Tests (one simulation, one after the other):
   the W1C clear, never without its enable);
 * soft_and_hard_stop: SOFT_STOP and HARD_STOP through CTRL in ACCEL, RUN and DECEL against
   stepramp.models.engine.edges_with_stop;
-* windings: wave, full and half step follow every POSITION written, ENABLE off switches them off, and half-step and
-  PWM moves with the electrical-position monitor on.
+* windings: wave, full and half step follow the STEP pulses (1-step moves through two electrical periods and back),
+  not POSITION writes; ENABLE off switches them off; half-step and PWM moves with the electrical-position monitor on.
 
 The motion monitors (STEP width, DIR setup / hold, shoot-through, windings against stepramp.models.stepping) run in
 every motion test. About 4 ms of simulated time at a 10 ns clock.
@@ -39,7 +39,7 @@ from cocotb.utils import get_sim_time
 from monitors import MotionMonitors, StepWidthMonitor
 from peripheral_tb import MotionBench, check_stopped, stop_cases
 from stepramp.board.driver import MODES, Outputs, StepRamp
-from stepramp.board.plan import Plan
+from stepramp.board.plan import Plan, plan_move
 from stepramp.board.regmap import (
     ADDR_BITS,
     ID_VALUE,
@@ -473,28 +473,38 @@ async def soft_and_hard_stop(dut) -> None:
 
 @cocotb.test(timeout_time=3, timeout_unit="ms")
 async def windings(dut) -> None:
-    """The winding outputs follow POSITION (stepramp.models.stepping): every value written in wave, full and half step,
-    off with ENABLE off; half-step and PWM moves with the electrical-position monitor on."""
+    """The winding outputs follow the electrical position, the STEP pulses counted from the pins (docs/algorithm.md,
+    "Electrical position"; stepramp.models.stepping): in wave, full and half step, 1-step moves forwards through two
+    electrical periods and back past 0, POSITION presets that move nothing, off with ENABLE off; then half-step and PWM
+    moves with the electrical-position monitor on."""
     tb = CoreTb(dut)
     await tb.reset()
     drv = tb.driver()
-    positions = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, -1, -2, -3, -7, -8, 12345, -(2**31), 2**31 - 1]
+    one_step = {**PROFILES_BY_NAME["trap_basic"].args(), "steps": 1}
     for mode in ("wave", "full", "half"):
         await tb.configure(Outputs(mode=mode, step_width=4, dir_setup=10, dir_hold=5), enable=True)
-        tb.finish()  # the monitors count STEP pulses, not POSITION writes
-        for p in positions:
+        for steps in [1] * 9 + [-1] * 12:
+            mark = tb.mark()
+            await drv.program(plan_move(**{**one_step, "steps": steps}))
+            await drv.start()
+            await drv.wait_done(idle=lambda: tb.irq_or(500))
+            assert len(tb.edges_since(mark)) == 1, f"{mode}: a 1-step move of {steps} gave no single pulse"
+            want = sm.winding_levels(MODES[mode], tb.elec_pos, True)
+            assert tb.windings() == want, f"{mode}, {tb.elec_pos} steps: a1 a2 b1 b2 = {tb.windings()}, want {want}"
+        for p in (12345, -(2**31), 2**31 - 1, 0):
             await drv.set_position(p)
             await ClockCycles(tb.clk, 3)
-            want = sm.winding_levels(MODES[mode], p, True)
-            assert tb.windings() == want, f"{mode}, POSITION {p}: a1 a2 b1 b2 = {tb.windings()}, want {want}"
+            assert tb.windings() == want, f"{mode}: POSITION {p} moved the windings to {tb.windings()}"
         await drv.set_enable(False)
         await ClockCycles(tb.clk, 3)
         assert tb.windings() == (0, 0, 0, 0) and int(dut.enable.value) == 0, f"{mode}: windings on with ENABLE off"
+    tb.finish()
 
-    # Half-step moves from an odd position, forwards and back (a DIR change), the monitors following every STEP.
-    await drv.set_position(5)
+    # Half-step moves from an odd electrical position, forwards and back (a DIR change), the monitors following every
+    # STEP.
+    assert tb.elec_pos % 2 == 1, f"electrical position {tb.elec_pos} is even"
     await tb.configure(Outputs(mode="half", step_width=4, dir_setup=10, dir_hold=5), enable=True)
-    position = 5
+    position = 0
     for name in ("triangle_sym", "triangle_negative"):
         drv, plan = plan_of(tb, name)
         mark = tb.mark()
@@ -504,7 +514,7 @@ async def windings(dut) -> None:
         position += signed_steps(plan)
         assert tb.edges_since(mark) == model_edges(plan), f"{name}: edges"
         assert await drv.position() == position, f"{name}: POSITION"
-        assert tb.windings() == sm.winding_levels(sm.MODE_HALF, position, True), f"{name}: windings at the end"
+        assert tb.windings() == sm.winding_levels(sm.MODE_HALF, tb.elec_pos, True), f"{name}: windings at the end"
     assert tb.monitors is not None and tb.monitors.electrical.checked >= 101 + 75
     tb.finish()
 

@@ -81,13 +81,15 @@ def simulate(
     log_file: Path | None = None,
     stops: Sequence[Stop | Sequence[Stop] | None] | None = None,
     extras: Sequence[dict[str, Any]] | None = None,
+    netlist: bool = False,
 ) -> list[SimResult]:
     """Play the moves back to back in one simulation; one SimResult per move (fewer if the engine hung).
 
     stops: an optional stop (or list of stops) per move (None: no stop). Under pytest a hang (or any failure inside
     the simulation) raises SystemExit from the runner. extras: per move, more keys of the request
     (stepramp.sim.engine_bench: "min_gap", "load_lead" with "after_load", "gap_cycles", "events", "reset_watch_cycles",
-    "inputs_after_start", "start_held", "record_counters").
+    "inputs_after_start", "start_held", "record_counters"). netlist: simulate ghdl synth's Verilog netlist of the
+    engine on Icarus Verilog instead (stepramp.sim.netlist).
     """
     if stops is not None and len(stops) != len(plans):
         raise ValueError(f"{len(stops)} stops for {len(plans)} plans")
@@ -118,6 +120,7 @@ def simulate(
         waves=waves,
         extra_env={"STEPRAMP_SIM_REQUEST": str(request), "STEPRAMP_SIM_RESULT": str(result_file)},
         log_file=log_file,
+        netlist=netlist,
     )
     if not result_file.exists():
         raise RuntimeError(f"the simulation wrote no result; see the log in {build_dir}")
