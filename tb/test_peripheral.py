@@ -54,6 +54,8 @@ async def reset_values_and_id(dut) -> None:
     assert await tb.bus.read(offset("ID")) == ID_VALUE
     if tb.top == "stepramp_plb":
         await ipif_data_and_first_access(tb)
+    else:
+        await axil_quiet_in_reset(tb)
 
 
 async def ipif_data_and_first_access(tb: PeripheralTb) -> None:
@@ -80,6 +82,37 @@ async def ipif_data_and_first_access(tb: PeripheralTb) -> None:
     dut.bus2ip_cs.value = 0
     assert acked == 1, "the first access after reset was not acknowledged one clock after bus2ip_cs"
     assert data == ID_VALUE
+
+
+async def axil_quiet_in_reset(tb: PeripheralTb) -> None:
+    """AXI4-Lite (the protocol's reset rule): from the first edge of reset on, BVALID and RVALID are low and stay low
+    after it until an access asks for a response; the address and data channels are ready. Then the tie rule from
+    reset on."""
+    dut, clk = tb.dut, tb.clk
+    await tb.bus.write(offset("STEPS"), 5)  # a response channel used before the reset
+    await FallingEdge(clk)
+    dut.aresetn.value = 0
+    for cycle in range(6):
+        await RisingEdge(clk)
+        await ReadOnly()
+        if cycle == 3:
+            await FallingEdge(clk)
+            dut.aresetn.value = 1
+            continue
+        valid = (int(dut.s_axil_bvalid.value), int(dut.s_axil_rvalid.value))
+        ready = (int(dut.s_axil_awready.value), int(dut.s_axil_wready.value), int(dut.s_axil_arready.value))
+        assert valid == (0, 0), f"cycle {cycle} of the reset: BVALID, RVALID = {valid}"
+        assert ready == (1, 1, 1), f"cycle {cycle} of the reset: AWREADY, WREADY, ARREADY = {ready}"
+    # The first accesses after the reset: a write and a read of STEPS presented in the same clock, three times. "On
+    # a tie the kind that did not go last goes first" (docs/stepramp_plb.md) starts as if a write went last: the
+    # read goes first and reads the old value; the write then went last, so each later tie goes the same way.
+    reads = []
+    for value in (0x11, 0x22, 0x33):
+        write = cocotb.start_soon(tb.bus.write(offset("STEPS"), value))
+        read = cocotb.start_soon(tb.bus.read(offset("STEPS")))
+        await write
+        reads.append(await read)
+    assert reads == [0, 0x11, 0x22], f"reads tied with writes of 0x11, 0x22, 0x33 after reset gave {reads}"
 
 
 @cocotb.test(timeout_time=60, timeout_unit="us")  # measured 14 us (the slower top)

@@ -89,16 +89,26 @@ SUITES: dict[str, list[str]] = {
 }
 
 
-#: Mutants that change nothing the core does, by id, with the reason (not run; not counted as valid).
+#: Mutants that change nothing the core does, with the reason (not run; not counted as valid). Keyed by Mutant.site:
+#: the file, the line's code and the column in it, and the change, so that a verdict follows its line when lines
+#: above it come or go, and lapses when the line itself changes.
 EQUIVALENT: dict[str, str] = {
-    "pkg:50:10:rel:<": "clog2(2): n < 2 fails, log2_ceil(2) = 1 is returned, the same as the early return",
-    "precompute:222:18:bit:1": "v_big's default: every path that reads v_big (the soft-stop decision) assigns it first",
-    "regs_pkg:144:15:bit:00000001": "C_REG_RESET(1) is CTRL's: it goes into mem(1) at reset, but CTRL is not a storage "
-    "word (it reads back from its own flip-flops, tb/test_peripheral.py reset_values_and_id) and nothing reads mem(1)",
-    "core:147:20:logic:or": "load = start_req or not busy_any: the engine also copies the staged move on every idle "
-    "clock, but uses the copy only from a start, and the last copy before a start is taken at the START edge either "
-    "way; while busy it loads on a second START, which the engine ignores while busy (start_while_busy_is_ignored "
-    "stages another plan before such STARTs and sees the running move unchanged)",
+    "pkg: if (n <= 2) then @6 rel -> <": (
+        "clog2(2): n < 2 fails, log2_ceil(2) = 1 is returned, the same as the early return"
+    ),
+    "precompute: v_big    := '0'; @12 bit -> '1'": (
+        "v_big's default: every path that reads v_big (the soft-stop decision) assigns it first"
+    ),
+    'regs_pkg: 1      => x"00000000", @11 bit -> "00000001"': (
+        "C_REG_RESET(1) is CTRL's: it goes into mem(1) at reset, but CTRL is not a storage word (it reads back from "
+        "its own flip-flops, tb/test_peripheral.py reset_values_and_id) and nothing reads mem(1)"
+    ),
+    "core: load <= start_req and not busy_any; @18 logic -> or": (
+        "load = start_req or not busy_any: the engine also copies the staged move on every idle clock, but uses the "
+        "copy only from a start, and the last copy before a start is taken at the START edge either way; while busy "
+        "it loads on a second START, which the engine ignores while busy (start_while_busy_is_ignored stages another "
+        "plan before such STARTs and sees the running move unchanged)"
+    ),
 }
 
 
@@ -112,11 +122,21 @@ class Mutant:
     kind: str
     original: str
     replacement: str
+    #: The line as written (without its comment): what EQUIVALENT is keyed on, so that a line moving up or down the
+    #: file keeps its verdict and a changed line loses it.
+    source: str = ""
 
     @property
     def ident(self) -> str:
         new = re.sub(r"[^A-Za-z0-9/=<>+-]", "", self.replacement)
         return f"{Path(self.file).stem.removeprefix('stepramp_')}:{self.line}:{self.col}:{self.kind}:{new}"
+
+    @property
+    def site(self) -> str:
+        """The key of EQUIVALENT: file, the line's code and the column in it (indentation stripped), the change."""
+        code = self.source.strip()
+        col = self.col - (len(self.source) - len(self.source.lstrip()))
+        return f"{Path(self.file).stem.removeprefix('stepramp_')}: {code} @{col} {self.kind} -> {self.replacement}"
 
     def describe(self) -> str:
         return f"{self.file}:{self.line}: {self.kind} '{self.original}' -> '{self.replacement}'"
@@ -197,7 +217,7 @@ def sites(path: Path) -> list[Mutant]:
         for m in _REL.finditer(code):
             op = m.group(0)
             if op in _REL_SWAP and inside(m.start()):
-                found.append(Mutant(name, number, m.start(), "rel", op, _REL_SWAP[op]))
+                found.append(Mutant(name, number, m.start(), "rel", op, _REL_SWAP[op], code))
         is_assignment = ("<=" in code or ":=" in code) and not re.match(
             r"\s*(signal|constant|variable|type|subtype|generic|port)\b", code, re.I
         )
@@ -205,21 +225,21 @@ def sites(path: Path) -> list[Mutant]:
             if inside(m.start()) or is_assignment:
                 word = m.group(1)
                 swap = {"and": "or", "or": "and"}[word.lower()]
-                found.append(Mutant(name, number, m.start(), "logic", word, swap))
+                found.append(Mutant(name, number, m.start(), "logic", word, swap, code))
         if is_assignment:
             for m in _ARITH.finditer(code):
                 value = int(m.group(2))
                 for new in (value + 1, value - 1):
                     if new >= 0:
                         text = m.group(0)
-                        found.append(Mutant(name, number, m.start(), "arith", text, f"{m.group(1)} {new}"))
+                        found.append(Mutant(name, number, m.start(), "arith", text, f"{m.group(1)} {new}", code))
         for m in _BIT.finditer(code):
             flipped = "1" if m.group(1) == "0" else "0"
-            found.append(Mutant(name, number, m.start(), "bit", m.group(0), f"'{flipped}'"))
+            found.append(Mutant(name, number, m.start(), "bit", m.group(0), f"'{flipped}'", code))
         for m in _BITSTR.finditer(code):
             bits = m.group(1)
             flipped = bits[:-1] + ("1" if bits[-1] == "0" else "0")
-            found.append(Mutant(name, number, m.start(), "bit", m.group(0), f'"{flipped}"'))
+            found.append(Mutant(name, number, m.start(), "bit", m.group(0), f'"{flipped}"', code))
     return found
 
 
@@ -261,8 +281,8 @@ def _analyses(hdl: Path, work: Path) -> str | None:
 def run_one(mutant: Mutant, index: int, timeout_s: float) -> Outcome:
     """Write, analyse and test one mutant in build/mutate/m<index>."""
     t0 = time.monotonic()
-    if mutant.ident in EQUIVALENT:
-        return Outcome(mutant, "equivalent", EQUIVALENT[mutant.ident], 0.0)
+    if mutant.site in EQUIVALENT:
+        return Outcome(mutant, "equivalent", EQUIVALENT[mutant.site], 0.0)
     root = OUT / f"m{index}"
     shutil.rmtree(root, ignore_errors=True)
     hdl = root / "hdl"
