@@ -13,6 +13,7 @@ k = floor(msb(num) / 2) + 1, 0 when num = 0).
 * flush_drops_the_answer: a flush at the edge that samples req, during the division, at the divider's last edge and
   at the answer's own edge: no answer comes, busy falls, the previous answer stays, and the next request (sampled
   right after the flush) is answered normally. A reset in flight likewise drops the answer.
+* busy_until_the_answer: busy, clock by clock, from the sampling edge of a step to the answer's edge (24 requests).
 """
 
 from __future__ import annotations
@@ -321,6 +322,35 @@ async def flush_drops_the_answer(dut) -> None:
             held = known.answer()
     assert not failures, f"{SEED_ENV}={seed}:\n" + "\n".join(failures)
     assert cases == 40
+
+
+@cocotb.test(timeout_time=1, timeout_unit="ms")
+async def busy_until_the_answer(dut) -> None:
+    """busy is '1' in every cycle from the sampling edge of a step request to the edge that registers its answer,
+    and '0' from that edge on (with ans_valid): the port's contract, clock by clock, for 24 requests."""
+    seed = seed_from_env()
+    rng = random.Random(seed + 2)
+    await reset_unit(dut)
+    failures: list[str] = []
+    for i in range(24):
+        req = random_request(rng)
+        req = Request(False, req.decel, req.index, req.value, req.rem)
+        latency = req.answer().latency
+        await FallingEdge(dut.clk)
+        drive(dut, req)
+        dut.req.value = 1
+        await RisingEdge(dut.clk)  # the sampling edge e
+        await FallingEdge(dut.clk)
+        dut.req.value = 0
+        for c in range(latency + 1):  # the cycle after edge e + c
+            if (int(dut.busy.value), int(dut.ans_valid.value)) != (int(c < latency), int(c == latency)):
+                failures.append(
+                    f"{SEED_ENV}={seed} request {i} ({req}), answer at e + {latency}: in the cycle after e + {c}, "
+                    f"busy {dut.busy.value}, ans_valid {dut.ans_valid.value}"
+                )
+                break
+            await FallingEdge(dut.clk)
+    assert not failures, "\n".join(failures)
 
 
 def test_next_delay() -> None:

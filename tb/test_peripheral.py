@@ -60,13 +60,17 @@ async def reset_values_and_id(dut) -> None:
 
 async def ipif_data_and_first_access(tb: PeripheralTb) -> None:
     """IPIF (docs/stepramp_plb.md, "Bus timing"): ip2bus_data is 0 outside a read acknowledge (buses OR the slaves'
-    data), and an access whose bus2ip_cs rises with the release of reset is acknowledged one clock later, as any."""
+    data); one acknowledge per access, also when bus2ip_cs is still high at the edge after the acknowledge; an
+    access whose bus2ip_cs rises with the release of reset is acknowledged one clock later, as any."""
     dut, clk = tb.dut, tb.clk
-    await tb.bus.write(offset("STEPS"), 0xFFFF_FFFF)
-    for _ in range(6):  # idle cycles and a write: no data on the bus
-        await RisingEdge(clk)
+    await tb.bus.write(offset("STEPS"), 0xFFFF_FFFF)  # returns at the edge after the ack, CS still sampled high
+    for cycle in range(6):  # the cycles from there on: no data on the bus, no second acknowledge, no error
+        if cycle:
+            await RisingEdge(clk)
         await ReadOnly()
         assert int(dut.ip2bus_data.value) == 0, "ip2bus_data is not 0 outside a read acknowledge"
+        acks = (int(dut.ip2bus_rdack.value), int(dut.ip2bus_wrack.value), int(dut.ip2bus_error.value))
+        assert acks == (0, 0, 0), f"idle cycle {cycle} after a write: rdack, wrack, error = {acks}"
     await FallingEdge(clk)
     dut.rst.value = 1
     await ClockCycles(clk, 3)
