@@ -17,7 +17,7 @@ from tbutil import build_dir, cocotb, now_cycles, start_clock_and_reset
 async def record_ticks(dut, cycles: int, changes: dict[int, int] | None = None) -> tuple[int, list[int]]:
     """Pulse restart, then watch `cycles` edges; changes maps an edge offset to a new prescale value.
 
-    Returns the restart edge and the edges after which tick was '1'.
+    Returns the restart edge and the edges after which tick was '1' (the restart edge included).
     """
     changes = changes or {}
     await FallingEdge(dut.clk)
@@ -26,7 +26,8 @@ async def record_ticks(dut, cycles: int, changes: dict[int, int] | None = None) 
     restart_edge = now_cycles()
     await FallingEdge(dut.clk)
     dut.restart.value = 0
-    ticks: list[int] = []
+    # The restart edge itself is watched too: a restart is never a tick.
+    ticks: list[int] = [restart_edge] if int(dut.tick.value) == 1 else []
     for offset in range(1, cycles + 1):
         if offset in changes:
             dut.prescale.value = changes[offset]  # sampled from edge restart + offset on
