@@ -25,11 +25,13 @@ Survivors get a test, or a written reason why they are equivalent (docs/verifica
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import random
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import time
@@ -278,6 +280,25 @@ def _analyses(hdl: Path, work: Path) -> str | None:
     return None
 
 
+def _run_group(cmd: list[str], env: dict[str, str], timeout_s: float) -> tuple[int | None, str]:
+    """Run a mutant's suite in a process group of its own; (return code, stdout), return code None after a timeout.
+    Whatever the suite leaves running is killed with the group (a mutant can keep a simulator spinning in delta
+    cycles after pytest has given up on it; seed 2 left one running for 45 minutes)."""
+    proc = subprocess.Popen(
+        cmd, cwd=REPO, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True
+    )
+    try:
+        stdout, _ = proc.communicate(timeout=timeout_s)
+        returncode: int | None = proc.returncode
+    except subprocess.TimeoutExpired:
+        stdout, returncode = "", None
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+    return returncode, stdout
+
+
 def run_one(mutant: Mutant, index: int, timeout_s: float) -> Outcome:
     """Write, analyse and test one mutant in build/mutate/m<index>."""
     t0 = time.monotonic()
@@ -301,17 +322,15 @@ def run_one(mutant: Mutant, index: int, timeout_s: float) -> Outcome:
     }
     env.setdefault("GHDL_BACKEND", "llvm" if Path("/usr/bin/ghdl-llvm").exists() else "mcode")
     cmd = [sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", *SUITES[mutant.file]]
-    try:
-        result = subprocess.run(cmd, cwd=REPO, env=env, capture_output=True, text=True, check=False, timeout=timeout_s)
-    except subprocess.TimeoutExpired:
-        shutil.rmtree(root, ignore_errors=True)
-        return Outcome(mutant, "killed", f"suite over {timeout_s:.0f} s (a hang)", time.monotonic() - t0)
+    returncode, stdout = _run_group(cmd, env, timeout_s)
     shutil.rmtree(root, ignore_errors=True)
-    if result.returncode == 0:
+    if returncode is None:
+        return Outcome(mutant, "killed", f"suite over {timeout_s:.0f} s (a hang)", time.monotonic() - t0)
+    if returncode == 0:
         return Outcome(mutant, "survived", "", time.monotonic() - t0)
-    failed = re.findall(r"^FAILED (\S+)", result.stdout, re.M)
-    errors = re.findall(r"^ERROR (\S+)", result.stdout, re.M)
-    by = (failed or errors or [f"pytest exit {result.returncode}"])[0]
+    failed = re.findall(r"^FAILED (\S+)", stdout, re.M)
+    errors = re.findall(r"^ERROR (\S+)", stdout, re.M)
+    by = (failed or errors or [f"pytest exit {returncode}"])[0]
     return Outcome(mutant, "killed", by, time.monotonic() - t0)
 
 
