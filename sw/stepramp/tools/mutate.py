@@ -111,6 +111,16 @@ EQUIVALENT: dict[str, str] = {
         "it loads on a second START, which the engine ignores while busy (start_while_busy_is_ignored stages another "
         "plan before such STARTs and sees the running move unchanged)"
     ),
+    "prio_enc: if (n < width) then @6 rel -> <=": (
+        "n <= width also fills slot n = width of the level, from slots 2 width and 2 width + 1; the next level reads "
+        "slots 2 n and 2 n + 1 with n < width / 2, so at most slot width - 1, and the result is slot 0: the extra "
+        "slot is never read"
+    ),
+    "precompute: seed_wait   <= '0'; @15 bit -> '1'": (
+        "seed_wait set at begin_move: setup (edge 1) sets it anyway, finish clears it, and only DECIDE reads it, "
+        "which runs after setup; at edge 1 the answer clause may copy a stale answer into rec_val, which the seed's "
+        "own answer overwrites before DECIDE can run (DECIDE waits for it)"
+    ),
 }
 
 
