@@ -76,11 +76,13 @@ architecture rtl of stepramp_engine is
   constant C_PH_RUN   : std_logic_vector(1 downto 0) := "11";
 
   -- What a soft stop decided at the pulse ending the current interval does (stepramp_precompute's alt_kind).
+  -- L = N - 1 of a move of N = 0 (modulo 2^31).
+  constant C_L_OF_N0 : unsigned(30 downto 0) := (others => '1');
+
   constant C_ALT_END  : std_logic_vector(1 downto 0) := "01"; -- m = 0: the move ends with this pulse
   constant C_ALT_LOAD : std_logic_vector(1 downto 0) := "10"; -- m >= 1: the next interval is the alternative
 
   -- Latched move parameters (data: no reset): the active copy (the register file holds the staging copy).
-  signal p_steps      : unsigned(30 downto 0);
   signal p_l          : unsigned(30 downto 0); -- L = N - 1, the number of intervals
   signal p_prescale   : unsigned(G_PRESCALE_WIDTH - 1 downto 0);
   signal p_c_first    : unsigned(47 downto 0);
@@ -227,44 +229,56 @@ begin
   -- >= 1.0. Registered every clock; the sequencer reads it at edge 2 (the parameters are latched at edge 0).
   check_proc : process (clk) is
 
-    variable v_chk : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
+    variable v_chk   : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
+    variable v_sd_sa : unsigned(31 downto 0); -- sd - sa, bit 31 the borrow (sa > sd)
+    variable v_l_sd  : unsigned(31 downto 0); -- L - sd, bit 31 the borrow (sd > L)
+    variable v_n_one : boolean;
+    variable v_n_two : boolean;
 
   begin
 
     -- Only while busy: the latched parameters are undefined before the first start, and an idle engine should not
     -- compare them every clock (simulation speed; the result is only read at edge 2 of a move).
     if (rising_edge(clk) and busy_r = '1') then
+      -- Two subtractions give every relation of sa, sd and L the rules need. Once sa <= sd <= L holds (BOUNDS),
+      -- sa <= L follows, sa = L is sa = sd = L, and sa, sd >= 1 make "/= 1" a test of the upper bits.
+      v_sd_sa := ('0' & p_sd) - ('0' & p_sa);
+      v_l_sd  := ('0' & p_l) - ('0' & p_sd);
+      -- p_l = N - 1 modulo 2^31: all ones for N = 0, 0 for N = 1.
+      v_n_one := p_l = 0;
+      v_n_two := p_l /= 0 and p_l /= C_L_OF_N0;
+
       v_chk := C_ERR_NONE;
       if (p_prescale = 0) then
         v_chk := C_ERR_PRESCALE;
-      elsif (p_steps(30 downto 1) /= 0) then
+      elsif (v_n_two) then
         -- N >= 2
-        if (p_sa = 0 or p_sd = 0 or p_sa > p_l or p_sd > p_l or p_sa > p_sd) then
+        if (p_sa = 0 or p_sd = 0 or v_sd_sa(31) = '1' or v_l_sd(31) = '1') then
           v_chk := C_ERR_BOUNDS;
         elsif (p_c_first(47 downto 16) = 0) then
           v_chk := C_ERR_C_FIRST;
         elsif (p_l(30 downto 1) /= 0 and p_c_last(47 downto 16) = 0) then
           v_chk := C_ERR_C_LAST;
-        elsif (p_sa /= 1 and p_sa /= p_l and p_c_sa(47 downto 16) = 0) then
+        elsif (p_sa(30 downto 1) /= 0 and (v_sd_sa /= 0 or v_l_sd /= 0) and p_c_sa(47 downto 16) = 0) then
           v_chk := C_ERR_C_SA;
-        elsif (p_sd /= 1 and p_sd /= p_l and p_sd /= p_sa and p_c_sd(47 downto 16) = 0) then
+        elsif (p_sd(30 downto 1) /= 0 and v_l_sd /= 0 and v_sd_sa /= 0 and p_c_sd(47 downto 16) = 0) then
           v_chk := C_ERR_C_SD;
-        elsif (p_sd - p_sa >= 2 and p_cruise(63 downto 32) = 0) then
+        elsif (v_sd_sa(30 downto 1) /= 0 and p_cruise(63 downto 32) = 0) then
           v_chk := C_ERR_CRUISE;
-        elsif (p_sa >= 3 and p_accel_seed(47 downto 16) = 0) then
+        elsif ((p_sa(30 downto 2) /= 0 or p_sa(1 downto 0) = "11") and p_accel_seed(47 downto 16) = 0) then
           v_chk := C_ERR_ACCEL_SEED;
-        elsif (p_l - p_sd >= 2 and p_decel_seed(47 downto 16) = 0) then
+        elsif (v_l_sd(30 downto 1) /= 0 and p_decel_seed(47 downto 16) = 0) then
           v_chk := C_ERR_DECEL_SEED;
         end if;
       end if;
       chk_code <= v_chk;
 
-      if (p_steps = 0) then
+      if (not v_n_one and not v_n_two) then
         n_zero <= '1';
       else
         n_zero <= '0';
       end if;
-      if (p_steps = 1) then
+      if (v_n_one) then
         n_one <= '1';
       else
         n_one <= '0';
@@ -381,9 +395,13 @@ begin
              '0';
 
   seq_proc : process (clk) is
+
+    variable v_dir_all : unsigned(31 downto 0);
+
   begin
 
     if rising_edge(clk) then
+      v_dir_all := (others => dir_r);
       -- Strobes are low unless set below.
       step_r      <= '0';
       done_r      <= '0';
@@ -395,7 +413,6 @@ begin
         when C_PH_IDLE =>
 
           if (load = '1') then
-            p_steps      <= unsigned(steps);
             p_l          <= unsigned(steps) - 1;
             p_prescale   <= unsigned(prescale);
             p_c_first    <= unsigned(c_first);
@@ -454,13 +471,9 @@ begin
       if (d_pulse = '1') then
         step_r       <= '1';
         step_count_r <= step_count_r + 1;
-        if (dir_r = '0') then
-          position_r <= position_r + 1;
-          elec_pos_r <= elec_pos_r + 1;
-        else
-          position_r <= position_r - 1;
-          elec_pos_r <= elec_pos_r - 1;
-        end if;
+        -- +1 or -1 (all ones) through one adder each.
+        position_r <= position_r + (v_dir_all(31 downto 1) & '1');
+        elec_pos_r <= elec_pos_r + (v_dir_all(8 downto 1) & '1');
       end if;
 
       -- Pulse edge: the next interval starts; only register copies here.

@@ -103,10 +103,19 @@ architecture rtl of stepramp_precompute is
   signal nxt_last_r  : std_logic;
 
   -- pc_j is the index of the interval being prepared, pc_jm1 = pc_j - 1, pc_m = L - pc_j.
-  signal pc_state    : std_logic_vector(2 downto 0);
-  signal seed_wait   : std_logic; -- the accel seed load of this move is not answered yet
-  signal pc_j        : unsigned(30 downto 0);
-  signal pc_jm1      : unsigned(30 downto 0);
+  signal pc_state  : std_logic_vector(2 downto 0);
+  signal seed_wait : std_logic; -- the accel seed load of this move is not answered yet
+  signal pc_j      : unsigned(30 downto 0);
+  signal pc_jm1    : unsigned(30 downto 0);
+  -- Where pc_j stands against sa and sd, as flags (pc_j only ever grows by one, so no magnitude compare is needed):
+  -- le_sa = (pc_j <= sa) and le_sd = (pc_j <= sd) until the DECIDE of pc_j, (pc_j < sa) and (pc_j < sd) after it;
+  -- eq_sa and eq_sd are the equalities of pc_j, read in DECIDE.
+  signal le_sa       : std_logic;
+  signal le_sd       : std_logic;
+  signal eq_sa       : std_logic;
+  signal eq_sd       : std_logic;
+  signal lt_sa       : std_logic;
+  signal lt_sd       : std_logic;
   signal pc_m        : unsigned(30 downto 0);
   signal dec_started : std_logic;
   -- Recurrence state: A_{j-2} while accelerating, D_{L-j+1} while decelerating (never both in one move).
@@ -124,7 +133,10 @@ architecture rtl of stepramp_precompute is
   -- normal value. D is the normal value of interval c + 1 just prepared (A_c or c_sa in ACCEL, cruise in RUN),
   -- truncated to Q32.16.
   signal stop_mode_r : std_logic;
-  signal cur_prod    : unsigned(62 downto 0); -- c * stop_ratio, Q47.16, for the ACCEL interval c now counting
+  -- c * stop_ratio, Q47.16, for the ACCEL interval c now counting: its low 47 bits, and prod_big, set once it
+  -- reaches 2^47 (it only grows, so a sticky bit tells m >= 2^31 as well as the 16 upper bits did).
+  signal cur_prod    : unsigned(46 downto 0);
+  signal prod_big    : std_logic;
   signal prod_step   : std_logic;             -- pc_j <= sa: the next pulse adds stop_ratio to cur_prod
   signal first_pend  : std_logic;             -- pulse 0 has not loaded interval 1 yet (it adds stop_ratio too)
   signal alt_kind_r  : std_logic_vector(1 downto 0);
@@ -176,6 +188,13 @@ begin
   v_int_zero <= '1' when v_r(63 downto 32) = 0 else
                 '0';
 
+  eq_sa <= '1' when pc_j = p_sa else
+           '0';
+  eq_sd <= '1' when pc_j = p_sd else
+           '0';
+  lt_sa <= le_sa and not eq_sa;
+  lt_sd <= le_sd and not eq_sd;
+
   -- A seed load carries its seed; a recurrence step carries the running value (and its remainder); the first value
   -- of a soft stop's ramp is a step from D_m := D with remainder 0.
   nd_req_value <= std_logic_vector(p_accel_seed) when req_seed_r = '1' and req_decel_r = '0' else
@@ -213,6 +232,7 @@ begin
     variable v_zero : std_logic;
     variable v_m    : unsigned(30 downto 0);
     variable v_big  : std_logic;
+    variable v_prod : unsigned(47 downto 0);
 
   begin
 
@@ -231,13 +251,6 @@ begin
         v_sum := ('0' & v_r(63 downto 32)) & v_low(31 downto 0);
       end if;
       v_zero := v_int_zero and not v_low(32);
-
-      -- pc_j <= sa, registered off the pulse path (read at pulse edges after pulse 0 only).
-      if (pc_j <= p_sa) then
-        prod_step <= '1';
-      else
-        prod_step <= '0';
-      end if;
 
       -- Request handshake: the unit takes req at the first edge where it is not busy (always the first one in
       -- practice: it is flushed at start and serves at most one request per interval).
@@ -274,12 +287,8 @@ begin
             v_m   := p_run_m;
             v_big := '0';
           else
-            v_m := cur_prod(46 downto 16);
-            if (cur_prod(62 downto 47) /= 0) then
-              v_big := '1';
-            else
-              v_big := '0';
-            end if;
+            v_m   := cur_prod(46 downto 16);
+            v_big := prod_big;
           end if;
           alt_kind_r <= C_ALT_IGNORE;
           if (stop_mode_r = '0' and (state_r = C_ST_ACCEL or state_r = C_ST_RUN)) then
@@ -301,13 +310,18 @@ begin
         when C_PC_DECIDE =>
 
           if (seed_wait = '0') then
+            -- The flags move on to pc_j + 1; prod_step keeps pc_j <= sa for the pulse that loads interval pc_j.
+            le_sa     <= lt_sa;
+            le_sd     <= lt_sd;
+            prod_step <= le_sa;
+
             -- Ramp phase of interval j: ACCEL if j < sa, RUN if sa <= j < sd, DECEL if j >= sd (sa <= sd); all
             -- intervals of a soft stop are DECEL.
             if (stop_mode_r = '1') then
               nxt_state_r <= C_ST_DECEL;
-            elsif (pc_j < p_sa) then
+            elsif (lt_sa = '1') then
               nxt_state_r <= C_ST_ACCEL;
-            elsif (pc_j < p_sd) then
+            elsif (lt_sd = '1') then
               nxt_state_r <= C_ST_RUN;
             else
               nxt_state_r <= C_ST_DECEL;
@@ -333,20 +347,20 @@ begin
               req_decel_r <= '1';
               req_index_r <= pc_m;
               pc_state    <= C_PC_WAIT;
-            elsif (pc_j = p_sa) then
+            elsif (eq_sa = '1') then
               v_r      <= p_c_sa & C_Q16_PAD;
               pc_state <= C_PC_ADD;
-            elsif (pc_j = p_sd) then
+            elsif (eq_sd = '1') then
               v_r      <= p_c_sd & C_Q16_PAD;
               pc_state <= C_PC_ADD;
-            elsif (pc_j < p_sa) then
+            elsif (lt_sa = '1') then
               -- A_{j-1} from A_{j-2}.
               req_r       <= '1';
               req_seed_r  <= '0';
               req_decel_r <= '0';
               req_index_r <= pc_jm1;
               pc_state    <= C_PC_WAIT;
-            elsif (pc_j > p_sd) then
+            elsif (le_sd = '0') then
               -- D_{L-j}: the seed itself at j = sd + 1, else from D_{L-j+1}.
               req_r       <= '1';
               req_seed_r  <= not dec_started;
@@ -457,9 +471,9 @@ begin
         nxt_acc    <= p_c_first(15 downto 0) & C_Q16_PAD;
         nxt_code_r <= C_ERR_NONE;
         nxt_ok_r   <= '1';
-        if (p_sa > 1) then
+        if (p_sa(30 downto 1) /= 0) then
           nxt_state_r <= C_ST_ACCEL;
-        elsif (p_sd > 1) then
+        elsif (p_sd(30 downto 1) /= 0) then
           nxt_state_r <= C_ST_RUN;
         else
           nxt_state_r <= C_ST_DECEL;
@@ -470,7 +484,17 @@ begin
           nxt_last_r <= '0';
         end if;
 
-        pc_j        <= to_unsigned(1, 31);
+        pc_j <= to_unsigned(1, 31);
+        -- Interval 1 needs no DECIDE: the flags start as after it, (1 < sa) and (1 < sd).
+        le_sa <= '0';
+        le_sd <= '0';
+        if (p_sa(30 downto 1) /= 0) then
+          le_sa <= '1';
+        end if;
+        if (p_sd(30 downto 1) /= 0) then
+          le_sd <= '1';
+        end if;
+        prod_big    <= '0';
         pc_m        <= p_l - 1;
         p_run_m     <= p_l - p_sd + 1;
         dec_started <= '0';
@@ -501,10 +525,11 @@ begin
       if (advance = '1') then
         acc <= nxt_acc;
         -- The interval loaded is pc_j (<= sa: the running product follows it). pc_j is 1 at pulse 0 (sa >= 1 there,
-        -- the parameter check has passed), and stable for at least two clocks before any later pulse edge, so the
-        -- registered compare (prod_step) is current.
+        -- the parameter check has passed: first_pend); any later pulse loads an interval whose DECIDE set prod_step.
         if (first_pend = '1' or prod_step = '1') then
-          cur_prod <= cur_prod + p_stop_ratio;
+          v_prod   := ('0' & cur_prod) + p_stop_ratio;
+          cur_prod <= v_prod(46 downto 0);
+          prod_big <= prod_big or v_prod(47);
         end if;
         first_pend <= '0';
         if (nxt_last_r = '0') then
