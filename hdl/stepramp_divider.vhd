@@ -46,7 +46,9 @@ architecture rtl of stepramp_divider is
   signal rem_r  : unsigned(G_DEN_WIDTH - 1 downto 0);
   signal quo_r  : unsigned(G_WIDTH - 1 downto 0);
   -- One-hot: the bit pair this iteration takes (the last iteration takes pair 0).
-  signal sel_r    : std_logic_vector(C_PAIRS - 1 downto 0);
+  signal sel_r : std_logic_vector(C_PAIRS - 1 downto 0);
+  -- The selected bit pair, fetched one clock ahead so that the AND-OR that picks it is off the subtractors' path.
+  signal pair_r   : unsigned(1 downto 0);
   signal done_r   : std_logic;
   signal dz_r     : std_logic;
   signal num_msb  : std_logic_vector(C_IDX_W - 1 downto 0);
@@ -106,7 +108,10 @@ begin
           quo_r                                                <= (others => '0');
           sel_r                                                <= (others => '0');
           sel_r(to_integer(shift_right(unsigned(num_msb), 1))) <= '1';
-          den3_r                                               <= ('0' & den_r & '0') + ("00" & den_r);
+          -- The first pair: the one that holds the numerator's top bit.
+          pair_r(1) <= num_r(to_integer(unsigned(num_msb(C_IDX_W - 1 downto 1) & '1')));
+          pair_r(0) <= num_r(to_integer(unsigned(num_msb(C_IDX_W - 1 downto 1) & '0')));
+          den3_r    <= ('0' & den_r & '0') + ("00" & den_r);
           if (den_r = 0) then
             quo_r  <= (others => '1');
             rem_r  <= num_r(G_DEN_WIDTH - 1 downto 0);
@@ -123,14 +128,17 @@ begin
         when C_ITER =>
 
           -- One radix-4 step per clock, from the selected bit pair down to pair 0: the largest of 3 D, 2 D, D that
-          -- fits. The pair comes through an AND-OR of the one-hot select (a register), not a multiplexer decoded
-          -- from a counter.
-          for i in 0 to C_PAIRS - 1 loop
+          -- fits. The pair of the next step comes through an AND-OR of the one-hot select shifted by one (a
+          -- register), not a multiplexer decoded from a counter, and is registered in pair_r.
+          for i in 0 to C_PAIRS - 2 loop
 
-            hi_v(i) := sel_r(i) and num_r(2 * i + 1);
-            lo_v(i) := sel_r(i) and num_r(2 * i);
+            hi_v(i) := sel_r(i + 1) and num_r(2 * i + 1);
+            lo_v(i) := sel_r(i + 1) and num_r(2 * i);
 
           end loop;
+
+          hi_v(C_PAIRS - 1) := '0';
+          lo_v(C_PAIRS - 1) := '0';
 
           pair := "00";
           if (unsigned(hi_v) /= 0) then
@@ -139,8 +147,9 @@ begin
           if (unsigned(lo_v) /= 0) then
             pair(0) := '1';
           end if;
+          pair_r <= pair;
 
-          trial := '0' & rem_r & pair;
+          trial := '0' & rem_r & pair_r;
           d1    := trial - ("000" & den_r);
           d2    := trial - ("00" & den_r & '0');
           d3    := trial - ('0' & den3_r);

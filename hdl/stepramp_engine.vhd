@@ -84,6 +84,8 @@ architecture rtl of stepramp_engine is
 
   -- Latched move parameters (data: no reset): the active copy (the register file holds the staging copy).
   signal p_l          : unsigned(30 downto 0); -- L = N - 1, the number of intervals
+  signal p_sd_sa      : unsigned(31 downto 0); -- sd - sa, bit 31 the borrow (sa > sd); latched with the move
+  signal p_l_sd       : unsigned(31 downto 0); -- L - sd, bit 31 the borrow (sd > L); latched with the move
   signal p_prescale   : unsigned(G_PRESCALE_WIDTH - 1 downto 0);
   signal p_c_first    : unsigned(47 downto 0);
   signal p_c_last     : unsigned(47 downto 0);
@@ -230,8 +232,6 @@ begin
   check_proc : process (clk) is
 
     variable v_chk   : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
-    variable v_sd_sa : unsigned(31 downto 0); -- sd - sa, bit 31 the borrow (sa > sd)
-    variable v_l_sd  : unsigned(31 downto 0); -- L - sd, bit 31 the borrow (sd > L)
     variable v_n_one : boolean;
     variable v_n_two : boolean;
 
@@ -240,10 +240,9 @@ begin
     -- Only while busy: the latched parameters are undefined before the first start, and an idle engine should not
     -- compare them every clock (simulation speed; the result is only read at edge 2 of a move).
     if (rising_edge(clk) and busy_r = '1') then
-      -- Two subtractions give every relation of sa, sd and L the rules need. Once sa <= sd <= L holds (BOUNDS),
-      -- sa <= L follows, sa = L is sa = sd = L, and sa, sd >= 1 make "/= 1" a test of the upper bits.
-      v_sd_sa := ('0' & p_sd) - ('0' & p_sa);
-      v_l_sd  := ('0' & p_l) - ('0' & p_sd);
+      -- Two subtractions (p_sd_sa, p_l_sd, registered with the move) give every relation of sa, sd and L the rules
+      -- need. Once sa <= sd <= L holds (BOUNDS), sa <= L follows, sa = L is sa = sd = L, and sa, sd >= 1 make
+      -- "/= 1" a test of the upper bits.
       -- p_l = N - 1 modulo 2^31: all ones for N = 0, 0 for N = 1.
       v_n_one := p_l = 0;
       v_n_two := p_l /= 0 and p_l /= C_L_OF_N0;
@@ -253,21 +252,21 @@ begin
         v_chk := C_ERR_PRESCALE;
       elsif (v_n_two) then
         -- N >= 2
-        if (p_sa = 0 or p_sd = 0 or v_sd_sa(31) = '1' or v_l_sd(31) = '1') then
+        if (p_sa = 0 or p_sd = 0 or p_sd_sa(31) = '1' or p_l_sd(31) = '1') then
           v_chk := C_ERR_BOUNDS;
         elsif (p_c_first(47 downto 16) = 0) then
           v_chk := C_ERR_C_FIRST;
         elsif (p_l(30 downto 1) /= 0 and p_c_last(47 downto 16) = 0) then
           v_chk := C_ERR_C_LAST;
-        elsif (p_sa(30 downto 1) /= 0 and (v_sd_sa /= 0 or v_l_sd /= 0) and p_c_sa(47 downto 16) = 0) then
+        elsif (p_sa(30 downto 1) /= 0 and (p_sd_sa /= 0 or p_l_sd /= 0) and p_c_sa(47 downto 16) = 0) then
           v_chk := C_ERR_C_SA;
-        elsif (p_sd(30 downto 1) /= 0 and v_l_sd /= 0 and v_sd_sa /= 0 and p_c_sd(47 downto 16) = 0) then
+        elsif (p_sd(30 downto 1) /= 0 and p_l_sd /= 0 and p_sd_sa /= 0 and p_c_sd(47 downto 16) = 0) then
           v_chk := C_ERR_C_SD;
-        elsif (v_sd_sa(30 downto 1) /= 0 and p_cruise(63 downto 32) = 0) then
+        elsif (p_sd_sa(30 downto 1) /= 0 and p_cruise(63 downto 32) = 0) then
           v_chk := C_ERR_CRUISE;
         elsif ((p_sa(30 downto 2) /= 0 or p_sa(1 downto 0) = "11") and p_accel_seed(47 downto 16) = 0) then
           v_chk := C_ERR_ACCEL_SEED;
-        elsif (v_l_sd(30 downto 1) /= 0 and p_decel_seed(47 downto 16) = 0) then
+        elsif (p_l_sd(30 downto 1) /= 0 and p_decel_seed(47 downto 16) = 0) then
           v_chk := C_ERR_DECEL_SEED;
         end if;
       end if;
@@ -413,7 +412,10 @@ begin
         when C_PH_IDLE =>
 
           if (load = '1') then
-            p_l          <= unsigned(steps) - 1;
+            p_l <= unsigned(steps) - 1;
+            -- For the parameter check, off its path: sd - sa, and L - sd = N + not sd (= N - sd - 1).
+            p_sd_sa      <= ('0' & unsigned(sd)) - ('0' & unsigned(sa));
+            p_l_sd       <= ('0' & unsigned(steps)) + ('1' & not unsigned(sd));
             p_prescale   <= unsigned(prescale);
             p_c_first    <= unsigned(c_first);
             p_c_last     <= unsigned(c_last);

@@ -102,11 +102,10 @@ architecture rtl of stepramp_precompute is
   signal nxt_state_r : std_logic_vector(1 downto 0);
   signal nxt_last_r  : std_logic;
 
-  -- pc_j is the index of the interval being prepared, pc_jm1 = pc_j - 1, pc_m = L - pc_j.
+  -- pc_j is the index of the interval being prepared, pc_m = L - pc_j.
   signal pc_state  : std_logic_vector(2 downto 0);
   signal seed_wait : std_logic; -- the accel seed load of this move is not answered yet
   signal pc_j      : unsigned(30 downto 0);
-  signal pc_jm1    : unsigned(30 downto 0);
   -- Where pc_j stands against sa and sd, as flags (pc_j only ever grows by one, so no magnitude compare is needed):
   -- le_sa = (pc_j <= sa) and le_sd = (pc_j <= sd) until the DECIDE of pc_j, (pc_j < sa) and (pc_j < sd) after it;
   -- eq_sa and eq_sd are the equalities of pc_j, read in DECIDE.
@@ -131,7 +130,7 @@ architecture rtl of stepramp_precompute is
   -- is prepared after the normal next interval: alt_kind (what it does), and for m >= 1 the value of interval
   -- c + 1 in the stop (c_last when m = 1, else D_(m-1) from D_m := D), through the same accumulator step as a
   -- normal value. D is the normal value of interval c + 1 just prepared (A_c or c_sa in ACCEL, cruise in RUN),
-  -- truncated to Q32.16.
+  -- truncated to Q32.16: v_r still holds it when the unit takes the request.
   signal stop_mode_r : std_logic;
   -- c * stop_ratio, Q47.16, for the ACCEL interval c now counting: its low 47 bits, and prod_big, set once it
   -- reaches 2^47 (it only grows, so a sticky bit tells m >= 2^31 as well as the 16 upper bits did).
@@ -142,7 +141,6 @@ architecture rtl of stepramp_precompute is
   signal alt_kind_r  : std_logic_vector(1 downto 0);
   signal alt_one_r   : std_logic;             -- m = 1
   signal alt_mm1     : unsigned(30 downto 0); -- m - 1
-  signal alt_dval    : unsigned(47 downto 0); -- D: the Q32.16 value of interval c + 1 in the plan
   signal alt_ok_r    : std_logic;
   signal alt_d_r     : unsigned(32 downto 0);
   signal alt_acc     : unsigned(31 downto 0);
@@ -199,7 +197,7 @@ begin
   -- of a soft stop's ramp is a step from D_m := D with remainder 0.
   nd_req_value <= std_logic_vector(p_accel_seed) when req_seed_r = '1' and req_decel_r = '0' else
                   std_logic_vector(p_decel_seed) when req_seed_r = '1' else
-                  std_logic_vector(alt_dval) when req_alt_r = '1' else
+                  std_logic_vector(v_r(63 downto 16)) when req_alt_r = '1' else
                   std_logic_vector(rec_val);
   nd_req_rem   <= (others => '0') when req_alt_r = '1' else
                   std_logic_vector(rec_rem);
@@ -275,10 +273,12 @@ begin
 
         when C_PC_IDX =>
 
-          pc_jm1   <= pc_j;
-          pc_j     <= pc_j + 1;
-          pc_m     <= pc_m - 1;
-          pc_state <= C_PC_DECIDE;
+          -- The index of an accel step for interval pc_j + 1 (A_(pc_j) from A_(pc_j - 1)); DECIDE replaces it for
+          -- any other request. The unit is idle here (flushed at the pulse edge), and latches the index it takes.
+          req_index_r <= pc_j;
+          pc_j        <= pc_j + 1;
+          pc_m        <= pc_m - 1;
+          pc_state    <= C_PC_DECIDE;
 
           -- The soft stop decided at pulse c = pc_j (the end of the interval now counting, L - c = pc_m):
           -- m = floor(c * stop_ratio / 2^16) in ACCEL, L - sd + 1 in RUN; ignored in DECEL, after a stop, and
@@ -358,7 +358,6 @@ begin
               req_r       <= '1';
               req_seed_r  <= '0';
               req_decel_r <= '0';
-              req_index_r <= pc_jm1;
               pc_state    <= C_PC_WAIT;
             elsif (le_sd = '0') then
               -- D_{L-j}: the seed itself at j = sd + 1, else from D_{L-j+1}.
@@ -404,8 +403,7 @@ begin
 
           -- Then the soft-stop alternative of the same interval (the next-delay unit is free now). Its D is the
           -- value just added: the plan's interval c + 1 (A_c, c_sa or cruise), Q32.16.
-          v_code   <= C_ERR_NONE;
-          alt_dval <= v_r(63 downto 16);
+          v_code <= C_ERR_NONE;
           if (alt_kind_r = C_ALT_LOAD) then
             if (alt_one_r = '1') then
               v_r      <= p_c_last & C_Q16_PAD;

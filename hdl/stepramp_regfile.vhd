@@ -186,6 +186,47 @@ architecture rtl of stepramp_regfile is
 
   end function reset_value;
 
+  -- The address decode as tables, one flag per word (a few LUTs on the address bits instead of range compares
+  -- with carry chains on the bus's write path). Kind 0: storage, 1: configuration, 2: any mapped word.
+
+  type t_word_flags is array (0 to C_WORDS - 1) of std_logic;
+
+  function word_flags (
+    kind : natural
+  ) return t_word_flags is
+
+    variable res : t_word_flags;
+    variable hit : boolean;
+
+  begin
+
+    for w in 0 to C_WORDS - 1 loop
+
+      if (kind = 0) then
+        hit := is_storage(w);
+      elsif (kind = 1) then
+        hit := is_config(w);
+      else
+        hit := is_storage(w) or w = word(C_REG_ID) or w = word(C_REG_CTRL) or w = word(C_REG_STATUS) or
+               w = word(C_REG_POSITION) or w = word(C_REG_CUR_DELAY) or w = word(C_REG_STEP_COUNT);
+      end if;
+
+      if (hit) then
+        res(w) := '1';
+      else
+        res(w) := '0';
+      end if;
+
+    end loop;
+
+    return res;
+
+  end function word_flags;
+
+  constant C_STORAGE_WORDS : t_word_flags := word_flags(0);
+  constant C_CONFIG_WORDS  : t_word_flags := word_flags(1);
+  constant C_MAPPED_WORDS  : t_word_flags := word_flags(2);
+
   -- v when c, else 0 (the terms of an AND-OR multiplexer).
   function gate (
     v : std_logic_vector(31 downto 0);
@@ -223,9 +264,7 @@ begin
       soft_stop_r <= '0';
       hard_stop_r <= '0';
       pos_load_r  <= '0';
-      mapped      := is_storage(w) or w = word(C_REG_ID) or w = word(C_REG_CTRL) or
-                     w = word(C_REG_STATUS) or w = word(C_REG_POSITION) or w = word(C_REG_CUR_DELAY) or
-                     w = word(C_REG_STEP_COUNT);
+      mapped      := C_MAPPED_WORDS(w) = '1';
 
       -- Sticky flags: engine events (set) have priority over a W1C write in the same cycle (below).
       clr := (others => '0');
@@ -235,10 +274,10 @@ begin
 
         if (not mapped) then
           err_r <= '1';
-        elsif (is_config(w) and eng_busy = '1') then
+        elsif (C_CONFIG_WORDS(w) = '1' and eng_busy = '1') then
           error_flag <= '1';
           err_code_r <= C_ERR_CFG_BUSY;
-        elsif (is_storage(w)) then
+        elsif (C_STORAGE_WORDS(w) = '1') then
 
           for i in mem'range loop
 
@@ -313,7 +352,7 @@ begin
         stat_v(C_STATUS_DIR_FAULT_LSB)                           := dir_fault;
         stat_v(C_ERR_CODE_MSB downto C_STATUS_ERR_CODE_LSB)      := err_code_r;
 
-        rd_v := gate(reset_value(w), is_storage(w)) or gate(C_ID_VALUE, w = word(C_REG_ID)) or
+        rd_v := gate(reset_value(w), C_STORAGE_WORDS(w) = '1') or gate(C_ID_VALUE, w = word(C_REG_ID)) or
                 gate(ctrl_v, w = word(C_REG_CTRL)) or gate(stat_v, w = word(C_REG_STATUS)) or
                 gate(eng_position, w = word(C_REG_POSITION)) or gate(eng_cur_delay, w = word(C_REG_CUR_DELAY)) or
                 gate('0' & eng_step_count, w = word(C_REG_STEP_COUNT));
@@ -401,7 +440,7 @@ begin
     ram_wdata <= merge(reset_value(ram_addr), wdata, be) and storage_mask(ram_addr);
     ram_we    <= (others => '0');
 
-    if (wr = '1' and is_storage(ram_addr) and not (is_config(ram_addr) and eng_busy = '1')) then
+    if (wr = '1' and C_STORAGE_WORDS(ram_addr) = '1' and not (C_CONFIG_WORDS(ram_addr) = '1' and eng_busy = '1')) then
 
       for b in 0 to 3 loop
 

@@ -11,11 +11,12 @@ build/synth/report.json as
                "entities": {"<entity>": {"lut4", "ff", "carry", "fmax_mhz"}}}}
 and build/synth/report.md.
 
-    python -m stepramp.tools.synth [--out DIR] [--no-pnr] [--record] [TOP ...]
+    python -m stepramp.tools.synth [--out DIR] [--no-pnr] [--record] [--docs] [TOP ...]
 
 --record writes the iCE40 LUT4 / FF counts per entity (synth_ice40 -noflatten, with the entities below it) to
 scripts/synth_baseline.json, the figures the regression's size test (tb/test_synth_size.py) holds every entity of
-the PLB-like top to (it fails above +10 %).
+the PLB-like top to (it fails above +10 %). --docs rewrites the entity rows of the pages in docs/ (each page's
+Resources table) from the PLB-like top's figures.
 """
 
 from __future__ import annotations
@@ -322,11 +323,46 @@ def markdown(report: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
+#: An entity's row on its page: | `stepramp_x` | LUT4 | FF | carry | fmax |
+_DOC_ROW = re.compile(r"^\| `(stepramp_\w+)` \| [\d,]+ \| [\d,]+ \| [\d,]+ \| [^|]+ \|$", re.M)
+
+#: The pages whose entity rows --docs rewrites.
+DOC_PAGES = Path(__file__).resolve().parents[3] / "docs"
+
+
+def _thousands(n: int) -> str:
+    return f"{n:,}"
+
+
+def update_docs(report: dict[str, Any], top: str = "stepramp_plb", pages: Path = DOC_PAGES) -> list[Path]:
+    """Rewrite every entity row of the docs pages (`| stepramp_x | LUT4 | FF | carry | fmax |`, the name in
+    backquotes) with the figures of `top` in report; returns the pages changed. Entities missing from the report
+    keep their row."""
+    entities = report[top]["entities"]
+
+    def row(m: re.Match[str]) -> str:
+        e = entities.get(m.group(1))
+        if e is None:
+            return m.group(0)
+        f = "-" if e.get("fmax_mhz") is None else f"{e['fmax_mhz']:.2f}"
+        return f"| `{m.group(1)}` | {_thousands(e['lut4'])} | {_thousands(e['ff'])} | {_thousands(e['carry'])} | {f} |"
+
+    changed = []
+    for page in sorted(pages.glob("*.md")):
+        text = page.read_text()
+        new = _DOC_ROW.sub(row, text)
+        if new != text:
+            page.write_text(new)
+            changed.append(page)
+    return changed
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--out", type=Path, default=Path("build/synth"))
     parser.add_argument("--no-pnr", action="store_true", help="skip nextpnr (no fmax)")
     parser.add_argument("--record", action="store_true", help=f"record the iCE40 sizes in {BASELINE.name}")
+    parser.add_argument("--docs", action="store_true", help="rewrite the entity rows of docs/*.md from the report")
     parser.add_argument("tops", nargs="*", default=list(REPORT_TOPS))
     args = parser.parse_args(argv)
     missing = [t for t in ("yosys", *(() if args.no_pnr else ("nextpnr-ice40",))) if shutil.which(t) is None]
@@ -345,6 +381,9 @@ def main(argv: list[str] | None = None) -> int:
         }
         BASELINE.write_text(json.dumps(sizes, indent=2) + "\n")
         print(f"recorded: {BASELINE}")
+    if args.docs and "stepramp_plb" in report:
+        for page in update_docs(report):
+            print(f"updated: {page}")
     print(markdown(report), end="")
     print(f"written: {out / 'report.json'}, {out / 'report.md'}")
     return 0
