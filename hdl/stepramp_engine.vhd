@@ -125,7 +125,11 @@ architecture rtl of stepramp_engine is
 
   -- Interval now counting down. cnt is 33 bits: an interval lasts up to 2^32 ticks (integer part 2^32 - 1 plus a
   -- carry from the fraction).
-  signal cnt      : unsigned(32 downto 0);
+  signal cnt : unsigned(32 downto 0);
+  -- cnt = 1 and gap_left /= 0 as registered flags, set together with the counters, so that the decision of a
+  -- pulse edge starts from flip-flops.
+  signal cnt_one  : std_logic;
+  signal gap_nz   : std_logic;
   signal cur_last : std_logic;
 
   -- This edge's decisions (decide_proc).
@@ -288,7 +292,7 @@ begin
 
   -- What this edge does, from registered state and the strobes only (no arithmetic): read by seq_proc and by the
   -- precompute, so that both act at the same edge.
-  decide_proc : process (phase, chk_code, n_zero, n_one, sreq, tick, cnt, gap_left, alt_kind, alt_ok, alt_code,
+  decide_proc : process (phase, chk_code, n_zero, n_one, sreq, tick, cnt_one, gap_nz, alt_kind, alt_ok, alt_code,
                          cur_last, nxt_ok, nxt_code, hard_stop, busy_r, start) is
 
     variable v_pulse  : std_logic;
@@ -329,8 +333,8 @@ begin
       when C_PH_RUN =>
 
         -- The hot path: one compare per tick.
-        if (tick = '1' and cnt = 1) then
-          if (gap_left /= 0) then
+        if (tick = '1' and cnt_one = '1') then
+          if (gap_nz = '1') then
             -- Too close to the previous pulse: it would merge with it on the STEP pin.
             v_finish := '1';
             v_err    := C_ERR_STEP_SPACE;
@@ -453,8 +457,11 @@ begin
 
         when C_PH_RUN =>
 
-          if (tick = '1' and cnt /= 1) then
+          if (tick = '1' and cnt_one = '0') then
             cnt <= cnt - 1;
+            if (cnt = 2) then
+              cnt_one <= '1';
+            end if;
           end if;
 
         when others =>
@@ -466,8 +473,16 @@ begin
       -- Step spacing: gap_left is 0 once min_gap clocks have passed since the last pulse (none before pulse 0).
       if (d_pulse = '1' and unsigned(min_gap) /= 0) then
         gap_left <= unsigned(min_gap) - 1;
-      elsif (gap_left /= 0) then
+        if (unsigned(min_gap(16 downto 1)) /= 0) then
+          gap_nz <= '1';
+        else
+          gap_nz <= '0';
+        end if;
+      elsif (gap_nz = '1') then
         gap_left <= gap_left - 1;
+        if (gap_left = 1) then
+          gap_nz <= '0';
+        end if;
       end if;
 
       if (d_pulse = '1') then
@@ -480,7 +495,11 @@ begin
 
       -- Pulse edge: the next interval starts; only register copies here.
       if (d_load = '1') then
-        cnt         <= unsigned(nxt_d);
+        cnt     <= unsigned(nxt_d);
+        cnt_one <= '0';
+        if (unsigned(nxt_d) = 1) then
+          cnt_one <= '1';
+        end if;
         cur_last    <= nxt_last;
         state_r     <= nxt_state;
         cur_delay_r <= saturate(nxt_d);
@@ -488,7 +507,11 @@ begin
 
       -- Soft stop takes effect: interval p + 1 is the alternative (L' = p + m).
       if (d_alt = '1') then
-        cnt         <= unsigned(alt_d);
+        cnt     <= unsigned(alt_d);
+        cnt_one <= '0';
+        if (unsigned(alt_d) = 1) then
+          cnt_one <= '1';
+        end if;
         cur_last    <= alt_one;
         state_r     <= C_ST_DECEL;
         cur_delay_r <= saturate(alt_d);
@@ -528,6 +551,7 @@ begin
         done_r       <= '0';
         error_r      <= '0';
         gap_left     <= (others => '0');
+        gap_nz       <= '0';
         err_code_r   <= C_ERR_NONE;
         step_r       <= '0';
         dir_r        <= '0';
