@@ -108,10 +108,19 @@ begin
           quo_r                                                <= (others => '0');
           sel_r                                                <= (others => '0');
           sel_r(to_integer(shift_right(unsigned(num_msb), 1))) <= '1';
-          -- The first pair: the one that holds the numerator's top bit.
-          pair_r(1) <= num_r(to_integer(unsigned(num_msb(C_IDX_W - 1 downto 1) & '1')));
-          pair_r(0) <= num_r(to_integer(unsigned(num_msb(C_IDX_W - 1 downto 1) & '0')));
-          den3_r    <= ('0' & den_r & '0') + ("00" & den_r);
+          -- The first pair: the one that holds the numerator's top bit (an AND-OR over the pairs, like the steps').
+          pair := "00";
+
+          for i in 0 to C_PAIRS - 1 loop
+
+            if (to_unsigned(i, C_IDX_W - 1) = unsigned(num_msb(C_IDX_W - 1 downto 1))) then
+              pair := num_r(2 * i + 1 downto 2 * i);
+            end if;
+
+          end loop;
+
+          pair_r <= pair;
+          den3_r <= ('0' & den_r & '0') + ("00" & den_r);
           if (den_r = 0) then
             quo_r  <= (others => '1');
             rem_r  <= num_r(G_DEN_WIDTH - 1 downto 0);

@@ -55,6 +55,8 @@ architecture rtl of stepramp_next_delay is
   signal div_r     : std_logic_vector(C_DEN_W - 1 downto 0);
   -- value -/+ quotient, one bit wider than the divider so that a borrow or a carry out of 48 bits is visible.
   signal result : unsigned(C_W downto 0);
+  signal q_op   : unsigned(C_W downto 0);
+  signal sum_r1 : unsigned(C_W + 1 downto 0); -- result & the extra low bit
 
 begin
 
@@ -72,8 +74,11 @@ begin
   div_num <= std_logic_vector(resize(unsigned(req_value & '0'), C_W) + resize(unsigned(req_rem), C_W));
   div_den <= req_index & req_decel & '1';
 
-  result <= resize(value_r, C_W + 1) + resize(unsigned(div_q), C_W + 1) when decel_r = '1' else
-            resize(value_r, C_W + 1) - resize(unsigned(div_q), C_W + 1);
+  -- value + q (decel) or value - q = value + not q + 1 (accel), modulo 2^(C_W + 1), through one adder: the operand
+  -- is q inverted when accelerating, and the + 1 enters as the carry of an extra low bit ('1' + '1').
+  q_op   <= resize(unsigned(div_q), C_W + 1) xor (C_W downto 0 => not decel_r);
+  sum_r1 <= (resize(value_r, C_W + 1) & '1') + (q_op & not decel_r);
+  result <= sum_r1(C_W + 1 downto 1);
 
   divider_inst : entity work.stepramp_divider
     generic map (

@@ -134,19 +134,17 @@ architecture rtl of stepramp_precompute is
   signal stop_mode_r : std_logic;
   -- c * stop_ratio, Q47.16, for the ACCEL interval c now counting: its low 47 bits, and prod_big, set once it
   -- reaches 2^47 (it only grows, so a sticky bit tells m >= 2^31 as well as the 16 upper bits did).
-  signal cur_prod    : unsigned(46 downto 0);
-  signal prod_big    : std_logic;
-  signal prod_step   : std_logic;             -- pc_j <= sa: the next pulse adds stop_ratio to cur_prod
-  signal first_pend  : std_logic;             -- pulse 0 has not loaded interval 1 yet (it adds stop_ratio too)
-  signal alt_kind_r  : std_logic_vector(1 downto 0);
-  signal alt_one_r   : std_logic;             -- m = 1
-  signal alt_mm1     : unsigned(30 downto 0); -- m - 1
-  signal alt_ok_r    : std_logic;
-  signal alt_d_r     : unsigned(32 downto 0);
-  signal alt_acc     : unsigned(31 downto 0);
-  signal alt_code_r  : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
-  signal alt_rec_val : unsigned(47 downto 0); -- D_(m-1) and its remainder: the stop's recurrence state
-  signal alt_rec_rem : unsigned(32 downto 0);
+  signal cur_prod   : unsigned(46 downto 0);
+  signal prod_big   : std_logic;
+  signal prod_step  : std_logic;             -- pc_j <= sa: the next pulse adds stop_ratio to cur_prod
+  signal first_pend : std_logic;             -- pulse 0 has not loaded interval 1 yet (it adds stop_ratio too)
+  signal alt_kind_r : std_logic_vector(1 downto 0);
+  signal alt_one_r  : std_logic;             -- m = 1
+  signal alt_mm1    : unsigned(30 downto 0); -- m - 1
+  signal alt_ok_r   : std_logic;
+  signal alt_d_r    : unsigned(32 downto 0);
+  signal alt_acc    : unsigned(31 downto 0);
+  signal alt_code_r : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
 
   -- Next-delay unit.
   signal nd_flush     : std_logic;
@@ -226,7 +224,6 @@ begin
   pc_proc : process (clk) is
 
     variable v_sum  : unsigned(64 downto 0);
-    variable v_low  : unsigned(32 downto 0);
     variable v_zero : std_logic;
     variable v_m    : unsigned(30 downto 0);
     variable v_big  : std_logic;
@@ -238,17 +235,11 @@ begin
       nd_flush <= '0';
       v_m      := (others => '0');
       v_big    := '0';
-      -- The fractional-carry accumulator step of the value in v_r (used by C_PC_ADD and C_PC_ALT_ADD: one adder),
-      -- carry-select: the fraction's sum and the integer part + 1 are computed side by side and the fraction's carry
-      -- picks the integer part, so no carry ripples through all 65 bits. "s >> 32 = 0" (no ticks) follows from the
-      -- same carry and v_r's integer part.
-      v_low := ('0' & v_r(31 downto 0)) + ('0' & acc);
-      if (v_low(32) = '1') then
-        v_sum := (('0' & v_r(63 downto 32)) + 1) & v_low(31 downto 0);
-      else
-        v_sum := ('0' & v_r(63 downto 32)) & v_low(31 downto 0);
-      end if;
-      v_zero := v_int_zero and not v_low(32);
+      -- The fractional-carry accumulator step of the value in v_r (used by C_PC_ADD and C_PC_ALT_ADD: one adder,
+      -- one carry chain of 65 bits). "s >> 32 = 0" (no ticks): v_r's integer part is 0 and the fraction gave no
+      -- carry, which is then bit 32 of the sum.
+      v_sum  := ('0' & v_r) + resize(acc, 65);
+      v_zero := v_int_zero and not v_sum(32);
 
       -- Request handshake: the unit takes req at the first edge where it is not busy (always the first one in
       -- practice: it is flushed at start and serves at most one request per interval).
@@ -422,9 +413,7 @@ begin
         when C_PC_ALT_WAIT =>
 
           if (req_r = '0' and nd_valid = '1') then
-            alt_rec_val <= unsigned(nd_value);
-            alt_rec_rem <= unsigned(nd_rem);
-            v_r         <= unsigned(nd_value) & C_Q16_PAD;
+            v_r <= unsigned(nd_value) & C_Q16_PAD;
             if (nd_ovf = '1') then
               v_code <= C_ERR_RANGE;
             end if;
@@ -542,9 +531,11 @@ begin
       if (take_alt = '1') then
         acc         <= alt_acc;
         stop_mode_r <= '1';
-        rec_val     <= alt_rec_val;
-        rec_rem     <= alt_rec_rem;
-        pc_m        <= alt_mm1;
+        -- D_(m-1) and its remainder, the stop's recurrence state: still the unit's last answer (ALT_WAIT took it,
+        -- ALT_ADD set alt_ok, and nothing asks the unit between then and this edge).
+        rec_val <= unsigned(nd_value);
+        rec_rem <= unsigned(nd_rem);
+        pc_m    <= alt_mm1;
         if (alt_one_r = '0') then
           pc_state <= C_PC_IDX;
         else

@@ -79,3 +79,11 @@ def test_an_expression_default_raises() -> None:
     vhdl = VHDL.replace("'0' when others;", "x(3 downto 0) when others;")
     with pytest.raises(RuntimeError, match="cannot translate"):
         restore_case_defaults(VERILOG, vhdl)
+
+
+def test_an_unknown_default_stays_unknown() -> None:
+    # GHDL gives a multiplexer whose selector covers every value (a constant table) the default 'X'.
+    vhdl = VHDL.replace("'0' when others;", "'X' when others;").replace('"1010" when others;', '"10X1" when others;')
+    out = restore_case_defaults(VERILOG, vhdl)
+    assert "default: n5_o <= 1'bx;" in out
+    assert "default: n9_o <= 4'b10x1;" in out

@@ -54,13 +54,14 @@ _LHS = re.compile(r": (\w+) <=")
 
 
 def _verilog_value(vhdl: str, context: str) -> str:
-    """A VHDL netlist operand (a name, 'b' or "bits") as Verilog."""
+    """A VHDL netlist operand (a name, 'b' or "bits") as Verilog. An 'X' (GHDL's default of a multiplexer whose
+    selector covers every value, e.g. a constant table) stays unknown: x in Verilog."""
     if re.fullmatch(r"\w+", vhdl):
         return vhdl
-    if re.fullmatch(r"'[01]'", vhdl):
-        return f"1'b{vhdl[1]}"
-    if re.fullmatch(r'"[01]+"', vhdl):
-        return f"{len(vhdl) - 2}'b{vhdl[1:-1]}"
+    if re.fullmatch(r"'[01X]'", vhdl):
+        return f"1'b{vhdl[1].lower()}"
+    if re.fullmatch(r'"[01X]+"', vhdl):
+        return f"{len(vhdl) - 2}'b{vhdl[1:-1].lower()}"
     raise RuntimeError(f"{context}: cannot translate the multiplexer default {vhdl!r} to Verilog")
 
 
