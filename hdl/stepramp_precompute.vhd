@@ -108,7 +108,7 @@ architecture rtl of stepramp_precompute is
   signal pc_j      : unsigned(30 downto 0);
   -- Where pc_j stands against sa and sd, as flags (pc_j only ever grows by one, so no magnitude compare is needed):
   -- le_sa = (pc_j <= sa) and le_sd = (pc_j <= sd) until the DECIDE of pc_j, (pc_j < sa) and (pc_j < sd) after it;
-  -- eq_sa and eq_sd are the equalities of pc_j, read in DECIDE.
+  -- eq_sa and eq_sd are the equalities of pc_j, set in IDX and read in DECIDE.
   signal le_sa       : std_logic;
   signal le_sd       : std_logic;
   signal eq_sa       : std_logic;
@@ -138,6 +138,8 @@ architecture rtl of stepramp_precompute is
   signal prod_big   : std_logic;
   signal prod_step  : std_logic;             -- pc_j <= sa: the next pulse adds stop_ratio to cur_prod
   signal first_pend : std_logic;             -- pulse 0 has not loaded interval 1 yet (it adds stop_ratio too)
+  signal stop_m     : unsigned(30 downto 0); -- m of a soft stop decided at the next pulse (set in IDX)
+  signal stop_big   : std_logic;             -- m >= 2^31
   signal alt_kind_r : std_logic_vector(1 downto 0);
   signal alt_one_r  : std_logic;             -- m = 1
   signal alt_mm1    : unsigned(30 downto 0); -- m - 1
@@ -184,10 +186,6 @@ begin
   v_int_zero <= '1' when v_r(63 downto 32) = 0 else
                 '0';
 
-  eq_sa <= '1' when pc_j = p_sa else
-           '0';
-  eq_sd <= '1' when pc_j = p_sd else
-           '0';
   lt_sa <= le_sa and not eq_sa;
   lt_sd <= le_sd and not eq_sd;
 
@@ -225,16 +223,12 @@ begin
 
     variable v_sum  : unsigned(64 downto 0);
     variable v_zero : std_logic;
-    variable v_m    : unsigned(30 downto 0);
-    variable v_big  : std_logic;
     variable v_prod : unsigned(47 downto 0);
 
   begin
 
     if rising_edge(clk) then
       nd_flush <= '0';
-      v_m      := (others => '0');
-      v_big    := '0';
       -- The fractional-carry accumulator step of the value in v_r (used by C_PC_ADD and C_PC_ALT_ADD: one adder,
       -- one carry chain of 65 bits). "s >> 32 = 0" (no ticks): v_r's integer part is 0 and the fraction gave no
       -- carry, which is then bit 32 of the sum.
@@ -267,38 +261,50 @@ begin
           -- The index of an accel step for interval pc_j + 1 (A_(pc_j) from A_(pc_j - 1)); DECIDE replaces it for
           -- any other request. The unit is idle here (flushed at the pulse edge), and latches the index it takes.
           req_index_r <= pc_j;
-          pc_j        <= pc_j + 1;
-          pc_m        <= pc_m - 1;
-          pc_state    <= C_PC_DECIDE;
-
-          -- The soft stop decided at pulse c = pc_j (the end of the interval now counting, L - c = pc_m):
-          -- m = floor(c * stop_ratio / 2^16) in ACCEL, L - sd + 1 in RUN; ignored in DECEL, after a stop, and
-          -- when c + m >= L.
-          if (state_r = C_ST_RUN) then
-            v_m   := p_run_m;
-            v_big := '0';
-          else
-            v_m   := cur_prod(46 downto 16);
-            v_big := prod_big;
+          -- The equalities of the new pc_j, registered here so that DECIDE starts from flip-flops.
+          eq_sa <= '0';
+          eq_sd <= '0';
+          if (pc_j + 1 = p_sa) then
+            eq_sa <= '1';
           end if;
+          if (pc_j + 1 = p_sd) then
+            eq_sd <= '1';
+          end if;
+          pc_j     <= pc_j + 1;
+          pc_m     <= pc_m - 1;
+          pc_state <= C_PC_DECIDE;
+
+          -- The m of a soft stop decided at pulse c = pc_j (the end of the interval now counting):
+          -- floor(c * stop_ratio / 2^16) in ACCEL, L - sd + 1 in RUN. DECIDE compares it with L - c.
+          if (state_r = C_ST_RUN) then
+            stop_m   <= p_run_m;
+            stop_big <= '0';
+          else
+            stop_m   <= cur_prod(46 downto 16);
+            stop_big <= prod_big;
+          end if;
+
+        when C_PC_DECIDE =>
+
+          -- What that soft stop does: ignored in DECEL, after a stop, and when c + m >= L (pc_m = L - c - 1 here:
+          -- IDX has moved it on); m = 0 ends the move with pulse c, m >= 1 loads the alternative. (Repeated
+          -- unchanged while DECIDE waits.)
           alt_kind_r <= C_ALT_IGNORE;
           if (stop_mode_r = '0' and (state_r = C_ST_ACCEL or state_r = C_ST_RUN)) then
-            if (v_big = '1' or v_m >= pc_m) then
+            if (stop_big = '1' or stop_m > pc_m) then
               alt_kind_r <= C_ALT_IGNORE;
-            elsif (v_m = 0) then
+            elsif (stop_m = 0) then
               alt_kind_r <= C_ALT_END;
             else
               alt_kind_r <= C_ALT_LOAD;
             end if;
           end if;
-          alt_mm1 <= v_m - 1;
-          if (v_m = 1) then
+          alt_mm1 <= stop_m - 1;
+          if (stop_m = 1) then
             alt_one_r <= '1';
           else
             alt_one_r <= '0';
           end if;
-
-        when C_PC_DECIDE =>
 
           if (seed_wait = '0') then
             -- The flags move on to pc_j + 1; prod_step keeps pc_j <= sa for the pulse that loads interval pc_j.
