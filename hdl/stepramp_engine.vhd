@@ -75,12 +75,8 @@ architecture rtl of stepramp_engine is
   constant C_PH_FIRST : std_logic_vector(1 downto 0) := "10";
   constant C_PH_RUN   : std_logic_vector(1 downto 0) := "11";
 
-  -- What a soft stop decided at the pulse ending the current interval does (stepramp_precompute's alt_kind).
   -- L = N - 1 of a move of N = 0 (modulo 2^31).
   constant C_L_OF_N0 : unsigned(30 downto 0) := (others => '1');
-
-  constant C_ALT_END  : std_logic_vector(1 downto 0) := "01"; -- m = 0: the move ends with this pulse
-  constant C_ALT_LOAD : std_logic_vector(1 downto 0) := "10"; -- m >= 1: the next interval is the alternative
 
   -- Latched move parameters (data: no reset): the active copy (the register file holds the staging copy).
   signal p_l          : unsigned(30 downto 0); -- L = N - 1, the number of intervals
@@ -100,6 +96,7 @@ architecture rtl of stepramp_engine is
 
   -- Move sequencer and outputs.
   signal phase        : std_logic_vector(1 downto 0);
+  signal idle_r       : std_logic; -- phase = C_PH_IDLE
   signal busy_r       : std_logic;
   signal done_r       : std_logic;
   signal error_r      : std_logic;
@@ -293,7 +290,7 @@ begin
   -- What this edge does, from registered state and the strobes only (no arithmetic): read by seq_proc and by the
   -- precompute, so that both act at the same edge.
   decide_proc : process (phase, chk_code, n_zero, n_one, sreq, tick, cnt_one, gap_nz, alt_kind, alt_ok, alt_code,
-                         cur_last, nxt_ok, nxt_code, hard_stop, busy_r, start) is
+                         cur_last, nxt_ok, nxt_code, hard_stop, busy_r, idle_r, start) is
 
     variable v_pulse  : std_logic;
     variable v_load   : std_logic;
@@ -340,10 +337,11 @@ begin
             v_err    := C_ERR_STEP_SPACE;
           else
             v_pulse := '1';
-            if (sreq = '1' and alt_kind = C_ALT_END) then
+            -- alt_kind is one-hot: bit 0 END, bit 1 LOAD.
+            if (sreq = '1' and alt_kind(0) = '1') then
               -- Soft stop with m = 0: this pulse is the last.
               v_finish := '1';
-            elsif (sreq = '1' and alt_kind = C_ALT_LOAD) then
+            elsif (sreq = '1' and alt_kind(1) = '1') then
               -- Soft stop: the next interval is the alternative.
               if (alt_ok = '0') then
                 v_finish := '1';
@@ -376,7 +374,8 @@ begin
 
     -- Hard stop: sampled while busy (or with the start it would accept), it ends the move at this edge; a pulse
     -- due at this edge is not emitted. done without error.
-    if (hard_stop = '1' and (busy_r = '1' or (phase = C_PH_IDLE and start = '1'))) then
+    -- (idle_r is phase = C_PH_IDLE as a flip-flop: the hard stop's condition is one LUT deep.)
+    if (hard_stop = '1' and (busy_r = '1' or (idle_r = '1' and start = '1'))) then
       v_pulse  := '0';
       v_load   := '0';
       v_alt    := '0';
@@ -392,8 +391,7 @@ begin
 
   end process decide_proc;
 
-  d_begin <= '1' when phase = C_PH_IDLE and start = '1' else
-             '0';
+  d_begin <= idle_r and start;
   d_setup <= '1' when phase = C_PH_SETUP else
              '0';
 
@@ -441,6 +439,7 @@ begin
             tmr_restart  <= '1';
             sreq         <= '0';
             phase        <= C_PH_SETUP;
+            idle_r       <= '0';
           end if;
 
         when C_PH_SETUP =>
@@ -466,7 +465,8 @@ begin
 
         when others =>
 
-          phase <= C_PH_IDLE;
+          phase  <= C_PH_IDLE;
+          idle_r <= '1';
 
       end case;
 
@@ -532,6 +532,7 @@ begin
         state_r     <= C_ST_STOP;
         cur_delay_r <= (others => '0');
         phase       <= C_PH_IDLE;
+        idle_r      <= '1';
         sreq        <= '0';
         if (d_err /= C_ERR_NONE) then
           error_r    <= '1';
@@ -541,12 +542,13 @@ begin
 
       -- Position preset while stopped (a start at the same edge still sees the new position). The electrical
       -- position stays: a preset (homing) must not move the motor's field.
-      if (pos_load = '1' and phase = C_PH_IDLE) then
+      if (pos_load = '1' and idle_r = '1') then
         position_r <= unsigned(pos_value);
       end if;
 
       if (rst = '1') then
         phase        <= C_PH_IDLE;
+        idle_r       <= '1';
         busy_r       <= '0';
         done_r       <= '0';
         error_r      <= '0';

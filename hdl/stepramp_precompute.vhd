@@ -88,7 +88,6 @@ architecture rtl of stepramp_precompute is
   signal p_decel_seed : unsigned(47 downto 0);
   signal p_cruise     : unsigned(63 downto 0);
   signal p_stop_ratio : unsigned(31 downto 0);
-  signal p_run_m      : unsigned(30 downto 0); -- L - sd + 1: m of a soft stop in RUN (set at edge 1)
   signal state_r      : std_logic_vector(1 downto 0);
 
   -- The accumulator fraction after the interval now counting.
@@ -116,12 +115,13 @@ architecture rtl of stepramp_precompute is
   signal lt_sa       : std_logic;
   signal lt_sd       : std_logic;
   signal pc_m        : unsigned(30 downto 0);
+  signal pc_m_zero   : std_logic; -- pc_m = 0, set in IDX for DECIDE
   signal dec_started : std_logic;
   -- Recurrence state: A_{j-2} while accelerating, D_{L-j+1} while decelerating (never both in one move).
   signal rec_val : unsigned(47 downto 0);
   signal rec_rem : unsigned(32 downto 0);
   signal v_r     : unsigned(63 downto 0); -- Q32.32 value of interval pc_j (then of the alternative)
-  signal v_code  : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
+  signal v_range : std_logic;             -- v_r came from a recurrence value out of the Q32.16 range (code RANGE)
   -- The integer part of v_r is 0 (in parallel with the accumulator's carry chain).
   signal v_int_zero : std_logic;
 
@@ -142,7 +142,7 @@ architecture rtl of stepramp_precompute is
   signal stop_big   : std_logic;             -- m >= 2^31
   signal alt_kind_r : std_logic_vector(1 downto 0);
   signal alt_one_r  : std_logic;             -- m = 1
-  signal alt_mm1    : unsigned(30 downto 0); -- m - 1
+  signal stop_mm1   : unsigned(30 downto 0); -- m - 1 (stop_m is held from IDX to the next pulse)
   signal alt_ok_r   : std_logic;
   signal alt_d_r    : unsigned(32 downto 0);
   signal alt_acc    : unsigned(31 downto 0);
@@ -189,6 +189,8 @@ begin
   lt_sa <= le_sa and not eq_sa;
   lt_sd <= le_sd and not eq_sd;
 
+  stop_mm1 <= stop_m - 1;
+
   -- A seed load carries its seed; a recurrence step carries the running value (and its remainder); the first value
   -- of a soft stop's ramp is a step from D_m := D with remainder 0.
   nd_req_value <= std_logic_vector(p_accel_seed) when req_seed_r = '1' and req_decel_r = '0' else
@@ -222,6 +224,7 @@ begin
   pc_proc : process (clk) is
 
     variable v_sum  : unsigned(64 downto 0);
+    variable v_low  : unsigned(32 downto 0);
     variable v_zero : std_logic;
     variable v_prod : unsigned(47 downto 0);
 
@@ -229,11 +232,17 @@ begin
 
     if rising_edge(clk) then
       nd_flush <= '0';
-      -- The fractional-carry accumulator step of the value in v_r (used by C_PC_ADD and C_PC_ALT_ADD: one adder,
-      -- one carry chain of 65 bits). "s >> 32 = 0" (no ticks): v_r's integer part is 0 and the fraction gave no
-      -- carry, which is then bit 32 of the sum.
-      v_sum  := ('0' & v_r) + resize(acc, 65);
-      v_zero := v_int_zero and not v_sum(32);
+      -- The fractional-carry accumulator step of the value in v_r (used by C_PC_ADD and C_PC_ALT_ADD: one adder),
+      -- carry-select: the fraction's sum and the integer part + 1 are computed side by side and the fraction's carry
+      -- picks the integer part, so no carry ripples through all 65 bits. "s >> 32 = 0" (no ticks) follows from the
+      -- same carry and v_r's integer part.
+      v_low := ('0' & v_r(31 downto 0)) + ('0' & acc);
+      if (v_low(32) = '1') then
+        v_sum := (('0' & v_r(63 downto 32)) + 1) & v_low(31 downto 0);
+      else
+        v_sum := ('0' & v_r(63 downto 32)) & v_low(31 downto 0);
+      end if;
+      v_zero := v_int_zero and not v_low(32);
 
       -- Request handshake: the unit takes req at the first edge where it is not busy (always the first one in
       -- practice: it is flushed at start and serves at most one request per interval).
@@ -270,14 +279,19 @@ begin
           if (pc_j + 1 = p_sd) then
             eq_sd <= '1';
           end if;
-          pc_j     <= pc_j + 1;
-          pc_m     <= pc_m - 1;
+          pc_j <= pc_j + 1;
+          pc_m <= pc_m - 1;
+          -- pc_m = 0 after this step (j = L: the last interval), as a flip-flop for DECIDE.
+          pc_m_zero <= '0';
+          if (pc_m = 1) then
+            pc_m_zero <= '1';
+          end if;
           pc_state <= C_PC_DECIDE;
 
           -- The m of a soft stop decided at pulse c = pc_j (the end of the interval now counting):
           -- floor(c * stop_ratio / 2^16) in ACCEL, L - sd + 1 in RUN. DECIDE compares it with L - c.
           if (state_r = C_ST_RUN) then
-            stop_m   <= p_run_m;
+            stop_m   <= p_l - p_sd + 1;
             stop_big <= '0';
           else
             stop_m   <= cur_prod(46 downto 16);
@@ -299,7 +313,6 @@ begin
               alt_kind_r <= C_ALT_LOAD;
             end if;
           end if;
-          alt_mm1 <= stop_m - 1;
           if (stop_m = 1) then
             alt_one_r <= '1';
           else
@@ -324,18 +337,18 @@ begin
               nxt_state_r <= C_ST_DECEL;
             end if;
 
-            if (pc_m = 0) then
+            if (pc_m_zero = '1') then
               nxt_last_r <= '1';
             else
               nxt_last_r <= '0';
             end if;
 
-            v_code    <= C_ERR_NONE;
+            v_range   <= '0';
             req_alt_r <= '0';
 
             -- The spec's rule order (j >= 2 here, so rule 1 never applies). In a soft stop: c_last at L', before
             -- it the stop's decel ramp D_(L'-j) from D_(L'-j+1).
-            if (pc_m = 0) then
+            if (pc_m_zero = '1') then
               v_r      <= p_c_last & C_Q16_PAD;
               pc_state <= C_PC_ADD;
             elsif (stop_mode_r = '1') then
@@ -377,7 +390,7 @@ begin
             rec_rem <= unsigned(nd_rem);
             v_r     <= unsigned(nd_value) & C_Q16_PAD;
             if (nd_ovf = '1') then
-              v_code <= C_ERR_RANGE;
+              v_range <= '1';
             end if;
             pc_state <= C_PC_ADD;
           end if;
@@ -387,8 +400,8 @@ begin
           -- The fractional-carry accumulator: s = acc + v, the interval lasts s >> 32 ticks.
           nxt_d_r <= v_sum(64 downto 32);
           nxt_acc <= v_sum(31 downto 0);
-          if (v_code /= C_ERR_NONE) then
-            nxt_code_r <= v_code;
+          if (v_range = '1') then
+            nxt_code_r <= C_ERR_RANGE;
           elsif (v_zero = '1') then
             -- Two pulses on one tick cannot be emitted (only a recurrence value can get here).
             nxt_code_r <= C_ERR_ZERO_TICKS;
@@ -400,7 +413,7 @@ begin
 
           -- Then the soft-stop alternative of the same interval (the next-delay unit is free now). Its D is the
           -- value just added: the plan's interval c + 1 (A_c, c_sa or cruise), Q32.16.
-          v_code <= C_ERR_NONE;
+          v_range <= '0';
           if (alt_kind_r = C_ALT_LOAD) then
             if (alt_one_r = '1') then
               v_r      <= p_c_last & C_Q16_PAD;
@@ -411,7 +424,7 @@ begin
               req_seed_r  <= '0';
               req_decel_r <= '1';
               req_alt_r   <= '1';
-              req_index_r <= alt_mm1;
+              req_index_r <= stop_mm1;
               pc_state    <= C_PC_ALT_WAIT;
             end if;
           end if;
@@ -421,7 +434,7 @@ begin
           if (req_r = '0' and nd_valid = '1') then
             v_r <= unsigned(nd_value) & C_Q16_PAD;
             if (nd_ovf = '1') then
-              v_code <= C_ERR_RANGE;
+              v_range <= '1';
             end if;
             pc_state <= C_PC_ALT_ADD;
           end if;
@@ -430,8 +443,8 @@ begin
 
           alt_d_r <= v_sum(64 downto 32);
           alt_acc <= v_sum(31 downto 0);
-          if (v_code /= C_ERR_NONE) then
-            alt_code_r <= v_code;
+          if (v_range = '1') then
+            alt_code_r <= C_ERR_RANGE;
           elsif (v_zero = '1') then
             alt_code_r <= C_ERR_ZERO_TICKS;
           else
@@ -489,7 +502,6 @@ begin
         end if;
         prod_big    <= '0';
         pc_m        <= p_l - 1;
-        p_run_m     <= p_l - p_sd + 1;
         dec_started <= '0';
         cur_prod    <= (others => '0');
         first_pend  <= '1';
@@ -541,7 +553,7 @@ begin
         -- ALT_ADD set alt_ok, and nothing asks the unit between then and this edge).
         rec_val <= unsigned(nd_value);
         rec_rem <= unsigned(nd_rem);
-        pc_m    <= alt_mm1;
+        pc_m    <= stop_mm1;
         if (alt_one_r = '0') then
           pc_state <= C_PC_IDX;
         else

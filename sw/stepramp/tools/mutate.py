@@ -98,9 +98,6 @@ EQUIVALENT: dict[str, str] = {
     "pkg: if (n <= 2) then @6 rel -> <": (
         "clog2(2): n < 2 fails, log2_ceil(2) = 1 is returned, the same as the early return"
     ),
-    "precompute: v_big    := '0'; @12 bit -> '1'": (
-        "v_big's default: every path that reads v_big (the soft-stop decision) assigns it first"
-    ),
     'regs_pkg: 1      => x"00000000", @11 bit -> "00000001"': (
         "C_REG_RESET(1) is CTRL's: it goes into mem(1) at reset, but CTRL is not a storage word (it reads back from "
         "its own flip-flops, tb/test_peripheral.py reset_values_and_id) and nothing reads mem(1)"
