@@ -79,20 +79,20 @@ architecture rtl of stepramp_engine is
   constant C_L_OF_N0 : unsigned(30 downto 0) := (others => '1');
 
   -- Latched move parameters (data: no reset): the active copy (the register file holds the staging copy).
-  signal p_l          : unsigned(30 downto 0); -- L = N - 1, the number of intervals
-  signal p_sd_sa      : unsigned(31 downto 0); -- sd - sa, bit 31 the borrow (sa > sd); latched with the move
-  signal p_l_sd       : unsigned(31 downto 0); -- L - sd, bit 31 the borrow (sd > L); latched with the move
-  signal p_prescale   : unsigned(G_PRESCALE_WIDTH - 1 downto 0);
-  signal p_c_first    : unsigned(47 downto 0);
-  signal p_c_last     : unsigned(47 downto 0);
-  signal p_sa         : unsigned(30 downto 0);
-  signal p_c_sa       : unsigned(47 downto 0);
-  signal p_sd         : unsigned(30 downto 0);
-  signal p_c_sd       : unsigned(47 downto 0);
-  signal p_accel_seed : unsigned(47 downto 0);
-  signal p_decel_seed : unsigned(47 downto 0);
-  signal p_cruise     : unsigned(63 downto 0);
-  signal p_stop_ratio : unsigned(31 downto 0); -- accel / decel, Q16.16
+  signal p_l           : unsigned(30 downto 0); -- L = N - 1, the number of intervals
+  signal p_sd_sa       : unsigned(31 downto 0); -- sd - sa, bit 31 the borrow (sa > sd); latched with the move
+  signal p_l_sd        : unsigned(31 downto 0); -- L - sd, bit 31 the borrow (sd > L); latched with the move
+  signal p_prescale    : unsigned(G_PRESCALE_WIDTH - 1 downto 0);
+  signal p_c_first0    : std_logic;             -- integer part of c_first = 0 (c_first itself is latched by the precompute)
+  signal p_c_last      : unsigned(47 downto 0);
+  signal p_sa          : unsigned(30 downto 0);
+  signal p_c_sa        : unsigned(47 downto 0);
+  signal p_sd          : unsigned(30 downto 0);
+  signal p_c_sd        : unsigned(47 downto 0);
+  signal p_accel_seed0 : std_logic;             -- integer part of accel_seed = 0 (the seed is latched by the precompute)
+  signal p_decel_seed  : unsigned(47 downto 0);
+  signal p_cruise      : unsigned(63 downto 0);
+  signal p_stop_ratio  : unsigned(31 downto 0); -- accel / decel, Q16.16
 
   -- Move sequencer and outputs.
   signal phase        : std_logic_vector(1 downto 0);
@@ -130,8 +130,12 @@ architecture rtl of stepramp_engine is
   signal cur_last : std_logic;
 
   -- This edge's decisions (decide_proc).
-  signal d_begin  : std_logic; -- an accepted start: edge 0
-  signal d_setup  : std_logic; -- edge 1
+  signal d_begin : std_logic; -- an accepted start: edge 0
+  signal d_setup : std_logic; -- edge 1
+  -- The move inputs are latched (here and, c_first and accel_seed, in the precompute): load while idle, or a start
+  -- while idle without a load since the previous start (the values a move consumes are not kept for a rerun).
+  signal d_latch  : std_logic;
+  signal loaded   : std_logic; -- a latch since the last accepted start
   signal d_pulse  : std_logic; -- a pulse
   signal d_load   : std_logic; -- the next interval (nxt_*) starts
   signal d_alt    : std_logic; -- a soft stop takes effect: the alternative (alt_*) starts
@@ -207,11 +211,12 @@ begin
       l          => std_logic_vector(p_l),
       sa         => std_logic_vector(p_sa),
       sd         => std_logic_vector(p_sd),
-      c_first    => std_logic_vector(p_c_first),
+      latch      => d_latch,
+      c_first    => c_first,
       c_last     => std_logic_vector(p_c_last),
       c_sa       => std_logic_vector(p_c_sa),
       c_sd       => std_logic_vector(p_c_sd),
-      accel_seed => std_logic_vector(p_accel_seed),
+      accel_seed => accel_seed,
       decel_seed => std_logic_vector(p_decel_seed),
       cruise     => std_logic_vector(p_cruise),
       stop_ratio => std_logic_vector(p_stop_ratio),
@@ -255,7 +260,7 @@ begin
         -- N >= 2
         if (p_sa = 0 or p_sd = 0 or p_sd_sa(31) = '1' or p_l_sd(31) = '1') then
           v_chk := C_ERR_BOUNDS;
-        elsif (p_c_first(47 downto 16) = 0) then
+        elsif (p_c_first0 = '1') then
           v_chk := C_ERR_C_FIRST;
         elsif (p_l(30 downto 1) /= 0 and p_c_last(47 downto 16) = 0) then
           v_chk := C_ERR_C_LAST;
@@ -265,7 +270,7 @@ begin
           v_chk := C_ERR_C_SD;
         elsif (p_sd_sa(30 downto 1) /= 0 and p_cruise(63 downto 32) = 0) then
           v_chk := C_ERR_CRUISE;
-        elsif ((p_sa(30 downto 2) /= 0 or p_sa(1 downto 0) = "11") and p_accel_seed(47 downto 16) = 0) then
+        elsif ((p_sa(30 downto 2) /= 0 or p_sa(1 downto 0) = "11") and p_accel_seed0 = '1') then
           v_chk := C_ERR_ACCEL_SEED;
         elsif (p_l_sd(30 downto 1) /= 0 and p_decel_seed(47 downto 16) = 0) then
           v_chk := C_ERR_DECEL_SEED;
@@ -392,6 +397,7 @@ begin
   end process decide_proc;
 
   d_begin <= idle_r and start;
+  d_latch <= idle_r and (load or (start and not loaded));
   d_setup <= '1' when phase = C_PH_SETUP else
              '0';
 
@@ -413,19 +419,26 @@ begin
 
         when C_PH_IDLE =>
 
-          if (load = '1') then
-            p_l <= unsigned(steps) - 1;
+          if (d_latch = '1') then
+            loaded <= '1';
+            p_l    <= unsigned(steps) - 1;
             -- For the parameter check, off its path: sd - sa, and L - sd = N + not sd (= N - sd - 1).
-            p_sd_sa      <= ('0' & unsigned(sd)) - ('0' & unsigned(sa));
-            p_l_sd       <= ('0' & unsigned(steps)) + ('1' & not unsigned(sd));
-            p_prescale   <= unsigned(prescale);
-            p_c_first    <= unsigned(c_first);
-            p_c_last     <= unsigned(c_last);
-            p_sa         <= unsigned(sa);
-            p_c_sa       <= unsigned(c_sa);
-            p_sd         <= unsigned(sd);
-            p_c_sd       <= unsigned(c_sd);
-            p_accel_seed <= unsigned(accel_seed);
+            p_sd_sa    <= ('0' & unsigned(sd)) - ('0' & unsigned(sa));
+            p_l_sd     <= ('0' & unsigned(steps)) + ('1' & not unsigned(sd));
+            p_prescale <= unsigned(prescale);
+            p_c_first0 <= '0';
+            if (unsigned(c_first(47 downto 16)) = 0) then
+              p_c_first0 <= '1';
+            end if;
+            p_c_last      <= unsigned(c_last);
+            p_sa          <= unsigned(sa);
+            p_c_sa        <= unsigned(c_sa);
+            p_sd          <= unsigned(sd);
+            p_c_sd        <= unsigned(c_sd);
+            p_accel_seed0 <= '0';
+            if (unsigned(accel_seed(47 downto 16)) = 0) then
+              p_accel_seed0 <= '1';
+            end if;
             p_decel_seed <= unsigned(decel_seed);
             p_cruise     <= unsigned(cruise);
             p_stop_ratio <= unsigned(stop_ratio);
@@ -440,6 +453,7 @@ begin
             sreq         <= '0';
             phase        <= C_PH_SETUP;
             idle_r       <= '0';
+            loaded       <= '0';
           end if;
 
         when C_PH_SETUP =>
@@ -549,6 +563,7 @@ begin
       if (rst = '1') then
         phase        <= C_PH_IDLE;
         idle_r       <= '1';
+        loaded       <= '0';
         busy_r       <= '0';
         done_r       <= '0';
         error_r      <= '0';

@@ -18,6 +18,7 @@ entity stepramp_precompute is
     clk : in    std_logic;
     rst : in    std_logic;
     -- Control strobes from the sequencer.
+    latch      : in    std_logic;
     begin_move : in    std_logic;
     setup      : in    std_logic;
     advance    : in    std_logic;
@@ -80,11 +81,9 @@ architecture rtl of stepramp_precompute is
   signal p_l          : unsigned(30 downto 0);
   signal p_sa         : unsigned(30 downto 0);
   signal p_sd         : unsigned(30 downto 0);
-  signal p_c_first    : unsigned(47 downto 0);
   signal p_c_last     : unsigned(47 downto 0);
   signal p_c_sa       : unsigned(47 downto 0);
   signal p_c_sd       : unsigned(47 downto 0);
-  signal p_accel_seed : unsigned(47 downto 0);
   signal p_decel_seed : unsigned(47 downto 0);
   signal p_cruise     : unsigned(63 downto 0);
   signal p_stop_ratio : unsigned(31 downto 0);
@@ -97,7 +96,8 @@ architecture rtl of stepramp_precompute is
   signal nxt_ok_r    : std_logic;
   signal nxt_d_r     : unsigned(32 downto 0);
   signal nxt_acc     : unsigned(31 downto 0);
-  signal nxt_code_r  : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
+  signal nxt_range   : std_logic; -- nxt_code RANGE
+  signal nxt_zero    : std_logic; -- nxt_code ZERO_TICKS (when not RANGE)
   signal nxt_state_r : std_logic_vector(1 downto 0);
   signal nxt_last_r  : std_logic;
 
@@ -146,7 +146,8 @@ architecture rtl of stepramp_precompute is
   signal alt_ok_r   : std_logic;
   signal alt_d_r    : unsigned(32 downto 0);
   signal alt_acc    : unsigned(31 downto 0);
-  signal alt_code_r : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
+  signal alt_range  : std_logic;             -- alt_code RANGE
+  signal alt_zero   : std_logic;             -- alt_code ZERO_TICKS (when not RANGE)
 
   -- Next-delay unit.
   signal nd_flush     : std_logic;
@@ -173,11 +174,9 @@ begin
   p_l          <= unsigned(l);
   p_sa         <= unsigned(sa);
   p_sd         <= unsigned(sd);
-  p_c_first    <= unsigned(c_first);
   p_c_last     <= unsigned(c_last);
   p_c_sa       <= unsigned(c_sa);
   p_c_sd       <= unsigned(c_sd);
-  p_accel_seed <= unsigned(accel_seed);
   p_decel_seed <= unsigned(decel_seed);
   p_cruise     <= unsigned(cruise);
   p_stop_ratio <= unsigned(stop_ratio);
@@ -191,10 +190,10 @@ begin
 
   stop_mm1 <= stop_m - 1;
 
-  -- A seed load carries its seed; a recurrence step carries the running value (and its remainder); the first value
-  -- of a soft stop's ramp is a step from D_m := D with remainder 0.
-  nd_req_value <= std_logic_vector(p_accel_seed) when req_seed_r = '1' and req_decel_r = '0' else
-                  std_logic_vector(p_decel_seed) when req_seed_r = '1' else
+  -- A seed load carries its seed (the accel seed is already the running value, from latch); a recurrence step
+  -- carries the running value (and its remainder); the first value of a soft stop's ramp is a step from D_m := D
+  -- with remainder 0.
+  nd_req_value <= std_logic_vector(p_decel_seed) when req_seed_r = '1' and req_decel_r = '1' else
                   std_logic_vector(v_r(63 downto 16)) when req_alt_r = '1' else
                   std_logic_vector(rec_val);
   nd_req_rem   <= (others => '0') when req_alt_r = '1' else
@@ -400,16 +399,12 @@ begin
           -- The fractional-carry accumulator: s = acc + v, the interval lasts s >> 32 ticks.
           nxt_d_r <= v_sum(64 downto 32);
           nxt_acc <= v_sum(31 downto 0);
-          if (v_range = '1') then
-            nxt_code_r <= C_ERR_RANGE;
-          elsif (v_zero = '1') then
-            -- Two pulses on one tick cannot be emitted (only a recurrence value can get here).
-            nxt_code_r <= C_ERR_ZERO_TICKS;
-          else
-            nxt_code_r <= C_ERR_NONE;
-          end if;
-          nxt_ok_r <= '1';
-          pc_state <= C_PC_IDLE;
+          -- The error it would cause, as two flags (nxt_code below): out of range, or 0 ticks (two pulses on one
+          -- tick cannot be emitted; only a recurrence value can get here). One LUT after the carry.
+          nxt_range <= v_range;
+          nxt_zero  <= v_zero;
+          nxt_ok_r  <= '1';
+          pc_state  <= C_PC_IDLE;
 
           -- Then the soft-stop alternative of the same interval (the next-delay unit is free now). Its D is the
           -- value just added: the plan's interval c + 1 (A_c, c_sa or cruise), Q32.16.
@@ -441,17 +436,12 @@ begin
 
         when C_PC_ALT_ADD =>
 
-          alt_d_r <= v_sum(64 downto 32);
-          alt_acc <= v_sum(31 downto 0);
-          if (v_range = '1') then
-            alt_code_r <= C_ERR_RANGE;
-          elsif (v_zero = '1') then
-            alt_code_r <= C_ERR_ZERO_TICKS;
-          else
-            alt_code_r <= C_ERR_NONE;
-          end if;
-          alt_ok_r <= '1';
-          pc_state <= C_PC_IDLE;
+          alt_d_r   <= v_sum(64 downto 32);
+          alt_acc   <= v_sum(31 downto 0);
+          alt_range <= v_range;
+          alt_zero  <= v_zero;
+          alt_ok_r  <= '1';
+          pc_state  <= C_PC_IDLE;
 
         when others =>
 
@@ -460,6 +450,15 @@ begin
       end case;
 
       -- The sequencer's decisions of this edge (after the case: they win over it).
+      -- The move is latched (its first values are taken here; the others are inputs held by the sequencer): interval
+      -- 1 is c_first, with acc = 0 its ticks and fraction are plain slices, and the running value is A_0.
+      if (latch = '1') then
+        nxt_d_r <= resize(unsigned(c_first(47 downto 16)), 33);
+        nxt_acc <= unsigned(c_first(15 downto 0)) & C_Q16_PAD;
+        rec_val <= unsigned(accel_seed);
+        rec_rem <= (others => '0');
+      end if;
+
       if (begin_move = '1') then
         nd_flush    <= '1';
         pc_state    <= C_PC_IDLE;
@@ -472,11 +471,10 @@ begin
       end if;
 
       if (setup = '1') then
-        -- Interval 1 is c_first; with acc = 0 its ticks and fraction are plain slices.
-        nxt_d_r    <= resize(p_c_first(47 downto 16), 33);
-        nxt_acc    <= p_c_first(15 downto 0) & C_Q16_PAD;
-        nxt_code_r <= C_ERR_NONE;
-        nxt_ok_r   <= '1';
+        -- Interval 1 is c_first (in nxt_d and nxt_acc since latch).
+        nxt_range <= '0';
+        nxt_zero  <= '0';
+        nxt_ok_r  <= '1';
         if (p_sa(30 downto 1) /= 0) then
           nxt_state_r <= C_ST_ACCEL;
         elsif (p_sd(30 downto 1) /= 0) then
@@ -586,12 +584,16 @@ begin
   nxt_d     <= std_logic_vector(nxt_d_r);
   nxt_state <= nxt_state_r;
   nxt_last  <= nxt_last_r;
-  nxt_code  <= nxt_code_r;
+  nxt_code  <= C_ERR_RANGE when nxt_range = '1' else
+               C_ERR_ZERO_TICKS when nxt_zero = '1' else
+               C_ERR_NONE;
   alt_ok    <= alt_ok_r;
   alt_kind  <= alt_kind_r;
   alt_d     <= std_logic_vector(alt_d_r);
   alt_one   <= alt_one_r;
-  alt_code  <= alt_code_r;
+  alt_code  <= C_ERR_RANGE when alt_range = '1' else
+               C_ERR_ZERO_TICKS when alt_zero = '1' else
+               C_ERR_NONE;
   stop_mode <= stop_mode_r;
 
 end architecture rtl;

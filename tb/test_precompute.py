@@ -3,14 +3,14 @@
 every pulse edge, the next interval and the soft-stop alternative the precompute offers against stepramp.models.engine.
 
 The sequencer's side, with the timing of docs/stepramp_engine.md ("Timing", "Theory of operation"): the move inputs
-(l = N - 1, sa, ... stop_ratio from a Plan) are held from before edge 0; begin_move at edge 0, setup at edge 1, pulse
-0 at edge 2 and pulse k at every following pulse edge: advance (take_alt when a soft stop is taken there, finish at
-the last pulse, or at a pulse whose soft stop ends the move), cur_state set with the edge to the phase of the
-interval that starts (what the engine's state register then holds: nxt_state, DECEL after take_alt, STOP after
-finish). Pulse edges are min(max(P * ticks, 64), 80) clocks apart: the engine's own distance P * ticks (a plan's
-interval lasts at least MIN_INTERVAL_CLKS = 64 clocks), capped at 80 clocks, more than any budget of "Latency
-budget" needs for the plans used here (a recurrence step 8 + k <= 56, the alternative at most 45 + 2 log2(ticks)
-< 80 below 2^17 ticks), so that a move of a few hundred intervals simulates in a few tens of thousands of clocks.
+(l = N - 1, sa, ... stop_ratio from a Plan) are held from before edge 0; begin_move and latch at edge 0, setup at
+edge 1, pulse 0 at edge 2 and pulse k at every following pulse edge: advance (take_alt when a soft stop is taken
+there, finish at the last pulse, or at a pulse whose soft stop ends the move), cur_state set with the edge to the
+phase of the interval that starts (what the engine's state register then holds: nxt_state, DECEL after take_alt,
+STOP after finish). Pulse edges are min(max(P * ticks, 64), 80) clocks apart: the engine's own distance P * ticks (a
+plan's interval lasts at least MIN_INTERVAL_CLKS = 64 clocks), capped at 80 clocks, more than any budget of "Latency
+budget" needs for the plans used here (a recurrence step 8 + k <= 56, the alternative at most 45 + 2 log2(ticks) <
+80 below 2^17 ticks), so that a move of a few hundred intervals simulates in a few tens of thousands of clocks.
 
 Checked just before each pulse edge p (the interval now counting is p; pulse 0 ends none), from the model only:
 
@@ -360,19 +360,22 @@ class Sequencer:
 
     async def init(self) -> None:
         dut = self.dut
-        for port in ("begin_move", "setup", "advance", "take_alt", "finish"):
+        for port in ("latch", "begin_move", "setup", "advance", "take_alt", "finish"):
             getattr(dut, port).value = 0
         dut.cur_state.value = STOP_STATE
         drive_move(dut, plan_move(**PROFILES_BY_NAME["steps_0"].args()))
         await start_clock_and_reset(dut.clk, dut.rst)
         await FallingEdge(dut.clk)
 
-    async def strobe(self, port: str, state: int | None = None) -> None:
-        """port '1' at the next rising edge (called at a falling edge; returns at the falling edge after it), and
-        cur_state changed with that edge."""
-        getattr(self.dut, port).value = 1
+    async def strobe(self, port: str, state: int | None = None, also: str | None = None) -> None:
+        """port (and also) '1' at the next rising edge (called at a falling edge; returns at the falling edge after
+        it), and cur_state changed with that edge."""
+        ports = (port,) if also is None else (port, also)
+        for name in ports:
+            getattr(self.dut, name).value = 1
         await FallingEdge(self.dut.clk)
-        getattr(self.dut, port).value = 0
+        for name in ports:
+            getattr(self.dut, name).value = 0
         if state is not None:
             self.dut.cur_state.value = state
 
@@ -428,7 +431,7 @@ class Sequencer:
         drive_move(dut, plan)
         if move.idle:
             await ClockCycles(dut.clk, move.idle, rising=False)
-        await self.strobe("begin_move")  # edge 0
+        await self.strobe("begin_move", also="latch")  # edge 0: the sequencer latches the move as it starts it
         self.check_idle(f"{move.name}: after begin_move")
         await self.strobe("setup")  # edge 1
         self.stats["moves"] += 1
