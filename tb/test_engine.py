@@ -355,6 +355,26 @@ def test_engine_runs_the_loaded_move() -> None:
     assert not problems, "\n".join(problems)
 
 
+def test_engine_start_without_load() -> None:
+    """A start without a load since the previous start latches the inputs as a load would (docs/stepramp_engine.md,
+    Ports): each move below is started alone, with its own registers on the inputs, after a move that was loaded and
+    ran, so interval 1 (c_first) and the accel seed, which the precompute latches, and the checks must be this
+    move's."""
+    trap = plan_move(**PROFILES_BY_NAME["trap_basic"].args())
+    tri = plan_move(**PROFILES_BY_NAME["triangle_asym"].args())
+    bad_first = dataclasses.replace(trap, c_first=0)
+    # (move, started without load, expected error code)
+    cases = [(trap, False, 0), (tri, True, 0), (trap, True, 0), (bad_first, True, ERR["C_FIRST"]), (tri, True, 0)]
+    extras = [{"start_only": True} if alone else {} for _, alone, _ in cases]
+    results = simulate([c[0] for c in cases], build_dir("engine_start_only"), extras=extras)
+    assert len(results) == len(cases)
+    problems = []
+    for i, ((plan, _, code), res) in enumerate(zip(cases, results, strict=True)):
+        expected = [] if code else model_edges(plan)
+        problems += [f"move {i}: {p}" for p in move_problems(res, expected, code=code)]
+    assert not problems, "\n".join(problems)
+
+
 def spacing_cases() -> list[tuple[Plan, int, int]]:
     """(plan, step_width, step_space): 1-, 2- and 3-tick intervals (first, cruise with a fraction, last) at
     PRESCALE 1, 4, 5 and 8 against min_gap = max(W, 1) + max(S, 1) from 2 to 25 clocks, on both sides of it."""

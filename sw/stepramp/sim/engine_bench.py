@@ -23,6 +23,8 @@ Optional keys for the control inputs (none of them changes a move that does not 
   observation there: the result's "reset" holds the outputs in the cycle after that edge and "stray", the first
   rising edge of step, done or busy seen in the "reset_watch_cycles" (default 100) that follow (None: none).
 * "inputs_after_start": registers put on the inputs after the start edge (as "after_load" after a load).
+* "start_only": true: start without load (the engine latches the inputs itself when no load came since the previous
+  start).
 * "start_held": true: the move's start is not given by itself: start and load stay '1' from the previous move's
   start edge on, with this move's registers on the inputs, so that the engine takes them in the previous move's done
   cycle. Its timestamps count from the edge after the previous move's done cycle, where the docs say it is accepted.
@@ -172,7 +174,7 @@ async def _play(dut: Any, move: dict[str, Any], next_move: dict[str, Any] | None
         dut.rst.value = 0
     before = _snapshot(dut)
     dut.start.value = 1
-    dut.load.value = int(lead == 0)
+    dut.load.value = int(lead == 0 and not move.get("start_only"))
     for port, at_cycle in requests:
         if at_cycle == 0:
             getattr(dut, port).value = 1
