@@ -336,9 +336,10 @@ def _thousands(n: int) -> str:
 
 def update_docs(report: dict[str, Any], top: str = "stepramp_plb", pages: Path = DOC_PAGES) -> list[Path]:
     """Rewrite every entity row of the docs pages (`| stepramp_x | LUT4 | FF | carry | fmax |`, the name in
-    backquotes) with the figures of `top` in report; returns the pages changed. Entities missing from the report
-    keep their row."""
-    entities = report[top]["entities"]
+    backquotes) with the figures of `top` in report (an entity only another top has, such as that top itself, from
+    that top); returns the pages changed. Entities missing from the report keep their row."""
+    entities = {name: e for other in report.values() for name, e in other.get("entities", {}).items()}
+    entities.update(report[top]["entities"])  # the PLB-like top's figures first; the other tops add their own
 
     def row(m: re.Match[str]) -> str:
         e = entities.get(m.group(1))
