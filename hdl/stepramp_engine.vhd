@@ -169,6 +169,21 @@ architecture rtl of stepramp_engine is
 
   end function saturate;
 
+  -- '1' when the integer part of a Q32.16 value is 0.
+
+  function int_zero (
+    v : std_logic_vector(47 downto 0)
+  ) return std_logic is
+  begin
+
+    if (unsigned(v(47 downto 16)) = 0) then
+      return '1';
+    end if;
+
+    return '0';
+
+  end function int_zero;
+
 begin
 
   state_name <= t_state_name'val(to_integer(unsigned(state_r)));
@@ -423,25 +438,19 @@ begin
             loaded <= '1';
             p_l    <= unsigned(steps) - 1;
             -- For the parameter check, off its path: sd - sa, and L - sd = N + not sd (= N - sd - 1).
-            p_sd_sa    <= ('0' & unsigned(sd)) - ('0' & unsigned(sa));
-            p_l_sd     <= ('0' & unsigned(steps)) + ('1' & not unsigned(sd));
-            p_prescale <= unsigned(prescale);
-            p_c_first0 <= '0';
-            if (unsigned(c_first(47 downto 16)) = 0) then
-              p_c_first0 <= '1';
-            end if;
+            p_sd_sa       <= ('0' & unsigned(sd)) - ('0' & unsigned(sa));
+            p_l_sd        <= ('0' & unsigned(steps)) + ('1' & not unsigned(sd));
+            p_prescale    <= unsigned(prescale);
+            p_c_first0    <= int_zero(c_first);
             p_c_last      <= unsigned(c_last);
             p_sa          <= unsigned(sa);
             p_c_sa        <= unsigned(c_sa);
             p_sd          <= unsigned(sd);
             p_c_sd        <= unsigned(c_sd);
-            p_accel_seed0 <= '0';
-            if (unsigned(accel_seed(47 downto 16)) = 0) then
-              p_accel_seed0 <= '1';
-            end if;
-            p_decel_seed <= unsigned(decel_seed);
-            p_cruise     <= unsigned(cruise);
-            p_stop_ratio <= unsigned(stop_ratio);
+            p_accel_seed0 <= int_zero(accel_seed);
+            p_decel_seed  <= unsigned(decel_seed);
+            p_cruise      <= unsigned(cruise);
+            p_stop_ratio  <= unsigned(stop_ratio);
           end if;
 
           if (start = '1') then
