@@ -141,6 +141,12 @@ architecture rtl of stepramp_engine is
   signal d_alt    : std_logic; -- a soft stop takes effect: the alternative (alt_*) starts
   signal d_finish : std_logic; -- the move ends (done), with error code d_err if not C_ERR_NONE
   signal d_err    : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
+  -- d_load and d_alt, registered: the precompute acts on a pulse edge's outcome one clock later, so that the pulse
+  -- decision (a few LUTs on flip-flops) fans out only to the sequencer's own registers. In that clock the precompute
+  -- still shows what the pulse consumed (nxt_ok, the alternative, stop_mode not yet set): the decision masks it.
+  signal adv_r   : std_logic;
+  signal alt_r   : std_logic;
+  signal taken_r : std_logic; -- adv_r or alt_r
 
   -- From the precompute.
   signal nxt_ok    : std_logic;
@@ -154,6 +160,10 @@ architecture rtl of stepramp_engine is
   signal alt_one   : std_logic;
   signal alt_code  : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
   signal stop_mode : std_logic;
+  -- The precompute's answers as the decision may read them (masked in the clock after a pulse edge).
+  signal nxt_ok_m    : std_logic;
+  signal alt_kind_m  : std_logic_vector(1 downto 0);
+  signal stop_mode_m : std_logic;
 
   -- 33-bit ticks shown in 32 bits (cur_delay), saturated.
   function saturate (
@@ -219,8 +229,8 @@ begin
       rst        => rst,
       begin_move => d_begin,
       setup      => d_setup,
-      advance    => d_load,
-      take_alt   => d_alt,
+      advance    => adv_r,
+      take_alt   => alt_r,
       finish     => d_finish,
       cur_state  => state_r,
       l          => std_logic_vector(p_l),
@@ -247,6 +257,11 @@ begin
       alt_code   => alt_code,
       stop_mode  => stop_mode
     );
+
+  nxt_ok_m    <= nxt_ok and not taken_r;
+  alt_kind_m  <= alt_kind when taken_r = '0' else
+                 "00";
+  stop_mode_m <= stop_mode or alt_r;
 
   -- Parameter check of the latched move: only values the move will really use (rule order of the spec) must be
   -- >= 1.0. Registered every clock; the sequencer reads it at edge 2 (the parameters are latched at edge 0).
@@ -309,8 +324,8 @@ begin
 
   -- What this edge does, from registered state and the strobes only (no arithmetic): read by seq_proc and by the
   -- precompute, so that both act at the same edge.
-  decide_proc : process (phase, chk_code, n_zero, n_one, sreq, tick, cnt_one, gap_nz, alt_kind, alt_ok, alt_code,
-                         cur_last, nxt_ok, nxt_code, hard_stop, busy_r, idle_r, start) is
+  decide_proc : process (phase, chk_code, n_zero, n_one, sreq, tick, cnt_one, gap_nz, alt_kind_m, alt_ok, alt_code,
+                         cur_last, nxt_ok_m, nxt_code, hard_stop, busy_r, idle_r, start) is
 
     variable v_pulse  : std_logic;
     variable v_load   : std_logic;
@@ -358,10 +373,10 @@ begin
           else
             v_pulse := '1';
             -- alt_kind is one-hot: bit 0 END, bit 1 LOAD.
-            if (sreq = '1' and alt_kind(0) = '1') then
+            if (sreq = '1' and alt_kind_m(0) = '1') then
               -- Soft stop with m = 0: this pulse is the last.
               v_finish := '1';
-            elsif (sreq = '1' and alt_kind(1) = '1') then
+            elsif (sreq = '1' and alt_kind_m(1) = '1') then
               -- Soft stop: the next interval is the alternative.
               if (alt_ok = '0') then
                 v_finish := '1';
@@ -374,7 +389,7 @@ begin
               end if;
             elsif (cur_last = '1') then
               v_finish := '1';
-            elsif (nxt_ok = '0') then
+            elsif (nxt_ok_m = '0') then
               v_finish := '1';
               v_err    := C_ERR_LATE;
             elsif (nxt_code /= C_ERR_NONE) then
@@ -429,6 +444,9 @@ begin
       done_r      <= '0';
       error_r     <= '0';
       tmr_restart <= '0';
+      adv_r       <= d_load;
+      alt_r       <= d_alt;
+      taken_r     <= d_load or d_alt;
 
       case phase is
 
@@ -545,7 +563,7 @@ begin
       if (d_pulse = '1') then
         sreq <= '0';
       end if;
-      if (soft_stop = '1' and busy_r = '1' and stop_mode = '0' and d_alt = '0') then
+      if (soft_stop = '1' and busy_r = '1' and stop_mode_m = '0' and d_alt = '0') then
         sreq <= '1';
       end if;
 
@@ -587,6 +605,9 @@ begin
         step_count_r <= (others => '0');
         cur_delay_r  <= (others => '0');
         tmr_restart  <= '0';
+        adv_r        <= '0';
+        alt_r        <= '0';
+        taken_r      <= '0';
         sreq         <= '0';
         -- Not state, but it feeds the timer, which then runs defined (as P = 1) from reset on.
         p_prescale <= (others => '0');

@@ -20,7 +20,8 @@ entity stepramp_next_delay is
     req_decel : in    std_logic;
     req_index : in    std_logic_vector(30 downto 0);
     req_value : in    std_logic_vector(47 downto 0);
-    req_rem   : in    std_logic_vector(32 downto 0);
+    -- The numerator 2 * req_value + remainder, formed by the requester (from registers, off this unit's path).
+    req_num   : in    std_logic_vector(G_DIV_WIDTH - 1 downto 0);
     busy      : out   std_logic;
     ans_valid : out   std_logic;
     ans_value : out   std_logic_vector(47 downto 0);
@@ -54,12 +55,9 @@ architecture rtl of stepramp_next_delay is
   signal div_q     : std_logic_vector(C_W - 1 downto 0);
   signal div_r     : std_logic_vector(C_DEN_W - 1 downto 0);
   -- value -/+ quotient, one bit wider than the divider so that a borrow or a carry out of 48 bits is visible.
-  signal result  : unsigned(C_W downto 0);
-  signal q_op    : unsigned(C_W downto 0);
-  signal num_lo  : unsigned(C_DEN_W + 1 downto 0);       -- 2 * value + rem, low C_DEN_W + 1 bits and the carry
-  signal num_hi0 : unsigned(C_W - C_DEN_W - 2 downto 0); -- the bits above: 2 * value's
-  signal num_hi1 : unsigned(C_W - C_DEN_W - 2 downto 0); -- and + 1
-  signal sum_r1  : unsigned(C_W + 1 downto 0);           -- result & the extra low bit
+  signal result : unsigned(C_W downto 0);
+  signal q_op   : unsigned(C_W downto 0);
+  signal sum_r1 : unsigned(C_W + 1 downto 0);           -- result & the extra low bit
 
 begin
 
@@ -73,15 +71,9 @@ begin
   -- flush resets the divider too: a division in flight is simply dropped.
   div_rst <= rst or flush;
 
-  -- num = 2 * value + remainder; den = 4 * index + 1 (accel) or 4 * index + 3 (decel): just wiring.
-  -- Carry-select: the remainder (C_DEN_W bits) only reaches bit C_DEN_W of 2 * value, so the low C_DEN_W + 1 bits
-  -- are one adder and the bits above are 2 * value's or those + 1, picked by the low adder's carry (a carry chain of
-  -- C_DEN_W + 2 instead of C_W bits on the path into the divider).
-  num_lo  <= ('0' & unsigned(req_value(C_DEN_W - 1 downto 0)) & '0') + ("00" & unsigned(req_rem));
-  num_hi0 <= resize(unsigned(req_value(47 downto C_DEN_W)), C_W - C_DEN_W - 1);
-  num_hi1 <= num_hi0 + 1;
-  div_num <= std_logic_vector(num_hi1 & num_lo(C_DEN_W downto 0)) when num_lo(C_DEN_W + 1) = '1' else
-             std_logic_vector(num_hi0 & num_lo(C_DEN_W downto 0));
+  -- num = 2 * value + remainder comes with the request (req_num); den = 4 * index + 1 (accel) or 4 * index + 3
+  -- (decel): just wiring.
+  div_num <= req_num;
   div_den <= req_index & req_decel & '1';
 
   -- value + q (decel) or value - q = value + not q + 1 (accel), modulo 2^(C_W + 1), through one adder: the operand

@@ -62,7 +62,6 @@ architecture rtl of stepramp_precompute is
 
   -- Precompute of the next interval (constants, not an enum, so that GHDL's VPI shows a plain vector).
   constant C_PC_IDLE   : std_logic_vector(2 downto 0) := "000";
-  constant C_PC_IDX    : std_logic_vector(2 downto 0) := "001";
   constant C_PC_DECIDE : std_logic_vector(2 downto 0) := "010";
   constant C_PC_WAIT   : std_logic_vector(2 downto 0) := "011";
   constant C_PC_ADD    : std_logic_vector(2 downto 0) := "100";
@@ -157,12 +156,15 @@ architecture rtl of stepramp_precompute is
   signal req_index_r  : unsigned(30 downto 0);
   signal req_alt_r    : std_logic; -- the request is the soft-stop alternative: value D, remainder 0
   signal nd_req_value : std_logic_vector(47 downto 0);
-  signal nd_req_rem   : std_logic_vector(32 downto 0);
-  signal nd_busy      : std_logic;
-  signal nd_valid     : std_logic;
-  signal nd_value     : std_logic_vector(47 downto 0);
-  signal nd_rem       : std_logic_vector(32 downto 0);
-  signal nd_ovf       : std_logic;
+  signal nd_req_num   : std_logic_vector(G_DIV_WIDTH - 1 downto 0);
+  -- 2 * rec_val + rec_rem, the numerator of the next recurrence step, registered every clock (rec_val and rec_rem
+  -- are set at least one clock before the request that reads it), so that the divider loads a flip-flop.
+  signal rec_num  : unsigned(G_DIV_WIDTH - 1 downto 0);
+  signal nd_busy  : std_logic;
+  signal nd_valid : std_logic;
+  signal nd_value : std_logic_vector(47 downto 0);
+  signal nd_rem   : std_logic_vector(32 downto 0);
+  signal nd_ovf   : std_logic;
 
 begin
 
@@ -196,8 +198,8 @@ begin
   nd_req_value <= std_logic_vector(p_decel_seed) when req_seed_r = '1' and req_decel_r = '1' else
                   std_logic_vector(v_r(63 downto 16)) when req_alt_r = '1' else
                   std_logic_vector(rec_val);
-  nd_req_rem   <= (others => '0') when req_alt_r = '1' else
-                  std_logic_vector(rec_rem);
+  nd_req_num   <= std_logic_vector(resize(v_r(63 downto 16) & '0', G_DIV_WIDTH)) when req_alt_r = '1' else
+                  std_logic_vector(rec_num);
 
   next_delay_inst : entity work.stepramp_next_delay
     generic map (
@@ -212,7 +214,7 @@ begin
       req_decel => req_decel_r,
       req_index => std_logic_vector(req_index_r),
       req_value => nd_req_value,
-      req_rem   => nd_req_rem,
+      req_num   => nd_req_num,
       busy      => nd_busy,
       ans_valid => nd_valid,
       ans_value => nd_value,
@@ -226,11 +228,21 @@ begin
     variable v_low  : unsigned(32 downto 0);
     variable v_zero : std_logic;
     variable v_prod : unsigned(47 downto 0);
+    -- The index step of a pulse edge (advance or take_alt): the interval after the one that starts is prepared.
+    variable v_idx      : boolean;
+    variable v_pcm      : unsigned(30 downto 0); -- pc_m before the step
+    variable v_cur_prod : unsigned(46 downto 0); -- cur_prod after this edge
+    variable v_prod_big : std_logic;
 
   begin
 
     if rising_edge(clk) then
-      nd_flush <= '0';
+      nd_flush   <= '0';
+      rec_num    <= resize(rec_val & '0', G_DIV_WIDTH) + rec_rem;
+      v_idx      := false;
+      v_pcm      := pc_m;
+      v_cur_prod := cur_prod;
+      v_prod_big := prod_big;
       -- The fractional-carry accumulator step of the value in v_r (used by C_PC_ADD and C_PC_ALT_ADD: one adder),
       -- carry-select: the fraction's sum and the integer part + 1 are computed side by side and the fraction's carry
       -- picks the integer part, so no carry ripples through all 65 bits. "s >> 32 = 0" (no ticks) follows from the
@@ -263,39 +275,6 @@ begin
         when C_PC_IDLE =>
 
           null;
-
-        when C_PC_IDX =>
-
-          -- The index of an accel step for interval pc_j + 1 (A_(pc_j) from A_(pc_j - 1)); DECIDE replaces it for
-          -- any other request. The unit is idle here (flushed at the pulse edge), and latches the index it takes.
-          req_index_r <= pc_j;
-          -- The equalities of the new pc_j, registered here so that DECIDE starts from flip-flops.
-          eq_sa <= '0';
-          eq_sd <= '0';
-          if (pc_j + 1 = p_sa) then
-            eq_sa <= '1';
-          end if;
-          if (pc_j + 1 = p_sd) then
-            eq_sd <= '1';
-          end if;
-          pc_j <= pc_j + 1;
-          pc_m <= pc_m - 1;
-          -- pc_m = 0 after this step (j = L: the last interval), as a flip-flop for DECIDE.
-          pc_m_zero <= '0';
-          if (pc_m = 1) then
-            pc_m_zero <= '1';
-          end if;
-          pc_state <= C_PC_DECIDE;
-
-          -- The m of a soft stop decided at pulse c = pc_j (the end of the interval now counting):
-          -- floor(c * stop_ratio / 2^16) in ACCEL, L - sd + 1 in RUN. DECIDE compares it with L - c.
-          if (state_r = C_ST_RUN) then
-            stop_m   <= p_l - p_sd + 1;
-            stop_big <= '0';
-          else
-            stop_m   <= cur_prod(46 downto 16);
-            stop_big <= prod_big;
-          end if;
 
         when C_PC_DECIDE =>
 
@@ -530,13 +509,15 @@ begin
         -- The interval loaded is pc_j (<= sa: the running product follows it). pc_j is 1 at pulse 0 (sa >= 1 there,
         -- the parameter check has passed: first_pend); any later pulse loads an interval whose DECIDE set prod_step.
         if (first_pend = '1' or prod_step = '1') then
-          v_prod   := ('0' & cur_prod) + p_stop_ratio;
-          cur_prod <= v_prod(46 downto 0);
-          prod_big <= prod_big or v_prod(47);
+          v_prod     := ('0' & cur_prod) + p_stop_ratio;
+          v_cur_prod := v_prod(46 downto 0);
+          v_prod_big := prod_big or v_prod(47);
         end if;
+        cur_prod   <= v_cur_prod;
+        prod_big   <= v_prod_big;
         first_pend <= '0';
         if (nxt_last_r = '0') then
-          pc_state <= C_PC_IDX;
+          v_idx := true;
         else
           pc_state <= C_PC_IDLE;
         end if;
@@ -551,11 +532,47 @@ begin
         -- ALT_ADD set alt_ok, and nothing asks the unit between then and this edge).
         rec_val <= unsigned(nd_value);
         rec_rem <= unsigned(nd_rem);
+        v_pcm   := stop_mm1;
         pc_m    <= stop_mm1;
         if (alt_one_r = '0') then
-          pc_state <= C_PC_IDX;
+          v_idx := true;
         else
           pc_state <= C_PC_IDLE;
+        end if;
+      end if;
+
+      -- The index step, at the pulse edge's strobe itself (advance and take_alt are registered by the sequencer, so
+      -- this is one clock after the pulse edge): pc_j moves on to the interval after the one that starts.
+      if (v_idx) then
+        -- The index of an accel step for interval pc_j + 1 (A_(pc_j) from A_(pc_j - 1)); DECIDE replaces it for
+        -- any other request. The unit is idle here (flushed at the pulse edge), and latches the index it takes.
+        req_index_r <= pc_j;
+        -- The equalities of the new pc_j, registered here so that DECIDE starts from flip-flops.
+        eq_sa <= '0';
+        eq_sd <= '0';
+        if (pc_j + 1 = p_sa) then
+          eq_sa <= '1';
+        end if;
+        if (pc_j + 1 = p_sd) then
+          eq_sd <= '1';
+        end if;
+        pc_j <= pc_j + 1;
+        pc_m <= v_pcm - 1;
+        -- pc_m = 0 after this step (j = L: the last interval), as a flip-flop for DECIDE.
+        pc_m_zero <= '0';
+        if (v_pcm = 1) then
+          pc_m_zero <= '1';
+        end if;
+        pc_state <= C_PC_DECIDE;
+
+        -- The m of a soft stop decided at pulse c = pc_j (the end of the interval now counting):
+        -- floor(c * stop_ratio / 2^16) in ACCEL, L - sd + 1 in RUN. DECIDE compares it with L - c.
+        if (state_r = C_ST_RUN) then
+          stop_m   <= p_l - p_sd + 1;
+          stop_big <= '0';
+        else
+          stop_m   <= v_cur_prod(46 downto 16);
+          stop_big <= v_prod_big;
         end if;
       end if;
 

@@ -33,6 +33,7 @@ SEED_ENV = "NEXT_DELAY_SEED"
 INDEX_BITS = 31
 VALUE_BITS = 48
 REM_BITS = 33
+NUM_BITS = 50  # the numerator 2 * value + remainder (req_num)
 #: More than the longest answer (2 + 25 edges).
 ANSWER_LIMIT_CYCLES = 64
 
@@ -80,7 +81,7 @@ def drive(dut: Any, req: Request) -> None:
     dut.req_decel.value = int(req.decel)
     dut.req_index.value = req.index
     dut.req_value.value = req.value
-    dut.req_rem.value = req.rem
+    dut.req_num.value = 2 * req.value + req.rem  # the requester forms the numerator
 
 
 def drive_garbage(dut: Any, rng: random.Random) -> None:
@@ -89,7 +90,7 @@ def drive_garbage(dut: Any, rng: random.Random) -> None:
     dut.req_decel.value = rng.getrandbits(1)
     dut.req_index.value = rng.getrandbits(INDEX_BITS)
     dut.req_value.value = rng.getrandbits(VALUE_BITS)
-    dut.req_rem.value = rng.getrandbits(REM_BITS)
+    dut.req_num.value = rng.getrandbits(NUM_BITS)
 
 
 def compare(req: Request, got: tuple[int, int, bool], latency: int) -> str | None:

@@ -4,8 +4,9 @@ every pulse edge, the next interval and the soft-stop alternative the precompute
 
 The sequencer's side, with the timing of docs/stepramp_engine.md ("Timing", "Theory of operation"): the move inputs
 (l = N - 1, sa, ... stop_ratio from a Plan) are held from before edge 0; begin_move and latch at edge 0, setup at
-edge 1, pulse 0 at edge 2 and pulse k at every following pulse edge: advance (take_alt when a soft stop is taken
-there, finish at the last pulse, or at a pulse whose soft stop ends the move), cur_state set with the edge to the
+edge 1, pulse 0 at edge 2 and pulse k at every following pulse edge E: advance at E + 1 (the sequencer registers
+it; take_alt when a soft stop is taken there; finish at E itself at the last pulse, or at a pulse whose soft stop
+ends the move), cur_state set with the edge E to the
 phase of the interval that starts (what the engine's state register then holds: nxt_state, DECEL after take_alt,
 STOP after finish). Pulse edges are min(max(P * ticks, 64), 80) clocks apart: the engine's own distance P * ticks (a
 plan's interval lasts at least MIN_INTERVAL_CLKS = 64 clocks), capped at 80 clocks, more than any budget of "Latency
@@ -472,15 +473,22 @@ class Sequencer:
                 self.stats[f"soft stop {phase} m {'= 1' if alt.one else '>= 2'}"] += 1
                 seq, stopped = exp.stop_intervals(k), True
                 assert len(seq) == k + alt.m
-                await self.strobe("take_alt", STATE[DECEL])
+                port, state = "take_alt", STATE[DECEL]
             else:
-                await self.strobe("advance", seq[k].state)
+                port, state = "advance", seq[k].state
             gap = gap_after(plan, seq[k])
+            offset = None if abort is None else min(abort[2], gap - 1)
+            # the pulse edge E sets cur_state; the sequencer's registered strobe follows at E + 1 (with an abort
+            # one clock after the pulse edge)
+            await FallingEdge(dut.clk)
+            dut.cur_state.value = state
+            await self.strobe(port, STOP_STATE if offset == 1 else None, also=abort[0] if offset == 1 else None)
             if abort is not None:
-                offset = min(abort[2], gap - 1)
+                assert offset is not None
                 if offset > 1:
-                    await ClockCycles(dut.clk, offset - 1, rising=False)
-                await self.strobe(abort[0], STOP_STATE)
+                    if offset > 2:
+                        await ClockCycles(dut.clk, offset - 2, rising=False)
+                    await self.strobe(abort[0], STOP_STATE)
                 self.stats[f"abort {abort[0]}"] += 1
                 self.stats[f"abort {abort[0]} during a soft stop"] += stopped
                 break
@@ -489,7 +497,8 @@ class Sequencer:
             if early:
                 # The sequencer's earliest pulse: the edge after the one at which nxt_ok rises (and alt_ok, where the
                 # soft stop is to be taken), which must be exactly the edge "Latency budget" gives.
-                edge = get_sim_time("ns") - CLK_PERIOD_NS // 2  # E: the pulse edge just passed
+                # E: the pulse edge (the registered strobe's edge E + 1 just passed)
+                edge = get_sim_time("ns") - 3 * CLK_PERIOD_NS // 2
                 ready = seq[k].ready
                 assert ready is not None
                 await self.when_ready(f"{move.name}: pulse {k}: interval {k + 1}", "nxt_ok", ready, edge)
@@ -498,7 +507,7 @@ class Sequencer:
                     await self.when_ready(f"{move.name}: pulse {k}: alternative", "alt_ok", nalt.ready, edge)
                 await FallingEdge(dut.clk)
             else:
-                await ClockCycles(dut.clk, gap - 1, rising=False)
+                await ClockCycles(dut.clk, gap - 2, rising=False)
         if move.abort is not None and move.abort[0] == "rst":
             self.check_idle(f"{move.name}: after the reset")
         else:
