@@ -133,20 +133,24 @@ architecture rtl of stepramp_precompute is
   signal stop_mode_r : std_logic;
   -- c * stop_ratio, Q47.16, for the ACCEL interval c now counting: its low 47 bits, and prod_big, set once it
   -- reaches 2^47 (it only grows, so a sticky bit tells m >= 2^31 as well as the 16 upper bits did).
-  signal cur_prod   : unsigned(46 downto 0);
-  signal prod_big   : std_logic;
-  signal prod_step  : std_logic;             -- pc_j <= sa: the next pulse adds stop_ratio to cur_prod
-  signal first_pend : std_logic;             -- pulse 0 has not loaded interval 1 yet (it adds stop_ratio too)
-  signal stop_m     : unsigned(30 downto 0); -- m of a soft stop decided at the next pulse (set in IDX)
-  signal stop_big   : std_logic;             -- m >= 2^31
-  signal alt_kind_r : std_logic_vector(1 downto 0);
-  signal alt_one_r  : std_logic;             -- m = 1
-  signal stop_mm1   : unsigned(30 downto 0); -- m - 1 (stop_m is held from IDX to the next pulse)
-  signal alt_ok_r   : std_logic;
-  signal alt_d_r    : unsigned(32 downto 0);
-  signal alt_acc    : unsigned(31 downto 0);
-  signal alt_range  : std_logic;             -- alt_code RANGE
-  signal alt_zero   : std_logic;             -- alt_code ZERO_TICKS (when not RANGE)
+  signal cur_prod : unsigned(46 downto 0);
+  signal prod_big : std_logic;
+  -- cur_prod + stop_ratio and its sticky bit, registered every clock (cur_prod changes only at advance, and the next
+  -- advance is at least four clocks later), so that advance copies a register instead of waiting for the adder.
+  signal prod_next     : unsigned(46 downto 0);
+  signal prod_next_big : std_logic;
+  signal prod_step     : std_logic;             -- pc_j <= sa: the next pulse adds stop_ratio to cur_prod
+  signal first_pend    : std_logic;             -- pulse 0 has not loaded interval 1 yet (it adds stop_ratio too)
+  signal stop_m        : unsigned(30 downto 0); -- m of a soft stop decided at the next pulse (set in IDX)
+  signal stop_big      : std_logic;             -- m >= 2^31
+  signal alt_kind_r    : std_logic_vector(1 downto 0);
+  signal alt_one_r     : std_logic;             -- m = 1
+  signal stop_mm1      : unsigned(30 downto 0); -- m - 1 (stop_m is held from IDX to the next pulse)
+  signal alt_ok_r      : std_logic;
+  signal alt_d_r       : unsigned(32 downto 0);
+  signal alt_acc       : unsigned(31 downto 0);
+  signal alt_range     : std_logic;             -- alt_code RANGE
+  signal alt_zero      : std_logic;             -- alt_code ZERO_TICKS (when not RANGE)
 
   -- Next-delay unit.
   signal nd_flush     : std_logic;
@@ -237,12 +241,15 @@ begin
   begin
 
     if rising_edge(clk) then
-      nd_flush   <= '0';
-      rec_num    <= resize(rec_val & '0', G_DIV_WIDTH) + rec_rem;
-      v_idx      := false;
-      v_pcm      := pc_m;
-      v_cur_prod := cur_prod;
-      v_prod_big := prod_big;
+      nd_flush      <= '0';
+      rec_num       <= resize(rec_val & '0', G_DIV_WIDTH) + rec_rem;
+      v_idx         := false;
+      v_pcm         := pc_m;
+      v_cur_prod    := cur_prod;
+      v_prod_big    := prod_big;
+      v_prod        := ('0' & cur_prod) + p_stop_ratio;
+      prod_next     <= v_prod(46 downto 0);
+      prod_next_big <= prod_big or v_prod(47);
       -- The fractional-carry accumulator step of the value in v_r (used by C_PC_ADD and C_PC_ALT_ADD: one adder),
       -- carry-select: the fraction's sum and the integer part + 1 are computed side by side and the fraction's carry
       -- picks the integer part, so no carry ripples through all 65 bits. "s >> 32 = 0" (no ticks) follows from the
@@ -509,9 +516,8 @@ begin
         -- The interval loaded is pc_j (<= sa: the running product follows it). pc_j is 1 at pulse 0 (sa >= 1 there,
         -- the parameter check has passed: first_pend); any later pulse loads an interval whose DECIDE set prod_step.
         if (first_pend = '1' or prod_step = '1') then
-          v_prod     := ('0' & cur_prod) + p_stop_ratio;
-          v_cur_prod := v_prod(46 downto 0);
-          v_prod_big := prod_big or v_prod(47);
+          v_cur_prod := prod_next;
+          v_prod_big := prod_next_big;
         end if;
         cur_prod   <= v_cur_prod;
         prod_big   <= v_prod_big;
