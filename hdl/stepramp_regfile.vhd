@@ -110,6 +110,9 @@ architecture rtl of stepramp_regfile is
   signal hard_stop_r  : std_logic;
   signal pos_load_r   : std_logic;
   signal pos_value_r  : std_logic_vector(31 downto 0);
+  -- STEPS holds -2^31 (a START is then rejected), registered as STEPS is written, so that the START path reads a
+  -- flip-flop instead of a 32-bit compare (the clock, issue 12).
+  signal steps_bad : std_logic;
 
   -- Word index of a byte offset.
   function word (
@@ -284,6 +287,12 @@ begin
             if (i = w) then
               mem(i)     <= merge(mem(i), wdata, be) and storage_mask(i);
               written(i) <= '1';
+              if (i = word(C_REG_STEPS)) then
+                steps_bad <= '0';
+                if ((merge(mem(i), wdata, be) and storage_mask(i)) = x"80000000") then
+                  steps_bad <= '1';
+                end if;
+              end if;
             end if;
 
           end loop;
@@ -370,7 +379,7 @@ begin
 
       -- STEPS = -2^31 has no 31-bit magnitude: reject the start here, the engine never sees it.
       if (wr = '1' and mapped and w = word(C_REG_CTRL) and merge(x"00000000", wdata, be)(C_CTRL_START_LSB) = '1' and
-          eng_busy = '0' and mem(word(C_REG_STEPS)) = x"80000000") then
+          eng_busy = '0' and steps_bad = '1') then
         start_r    <= '0';
         done_flag  <= '1';
         error_flag <= '1';
@@ -405,6 +414,10 @@ begin
         rdata_r      <= (others => '0');
         ram_sel_r    <= '0';
         written      <= (others => '0');
+        steps_bad    <= '0';
+        if (C_REG_RESET(word(C_REG_STEPS)) = x"80000000") then
+          steps_bad <= '1';
+        end if;
 
         for i in mem'range loop
 
