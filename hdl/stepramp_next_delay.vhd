@@ -57,7 +57,15 @@ architecture rtl of stepramp_next_delay is
   -- value -/+ quotient, one bit wider than the divider so that a borrow or a carry out of 48 bits is visible.
   signal result : unsigned(C_W downto 0);
   signal q_op   : unsigned(C_W downto 0);
-  signal sum_r1 : unsigned(C_W + 1 downto 0);           -- result & the extra low bit
+  -- value -/+ quotient as a carry-select adder (the divider's last quotient digit -> the answer register and its
+  -- range flag is a top path of the clock): the low C_SPLIT bits with the carry in, the bits above with and without
+  -- the low part's carry, picked by it.
+  constant C_SPLIT : positive := (C_W + 1) / 2;
+
+  signal value_x : unsigned(C_W downto 0);           -- the value, as wide as the sum
+  signal sum_lo  : unsigned(C_SPLIT + 1 downto 0);   -- the low bits & the extra low bit, and the carry out
+  signal sum_hi0 : unsigned(C_W - C_SPLIT downto 0); -- the bits above without a carry from below
+  signal sum_hi1 : unsigned(C_W - C_SPLIT downto 0); -- and with one
 
 begin
 
@@ -76,11 +84,16 @@ begin
   div_num <= req_num;
   div_den <= req_index & req_decel & '1';
 
-  -- value + q (decel) or value - q = value + not q + 1 (accel), modulo 2^(C_W + 1), through one adder: the operand
-  -- is q inverted when accelerating, and the + 1 enters as the carry of an extra low bit ('1' + '1').
-  q_op   <= resize(unsigned(div_q), C_W + 1) xor (C_W downto 0 => not decel_r);
-  sum_r1 <= (resize(value_r, C_W + 1) & '1') + (q_op & not decel_r);
-  result <= sum_r1(C_W + 1 downto 1);
+  -- value + q (decel) or value - q = value + not q + 1 (accel), modulo 2^(C_W + 1), through one carry-select adder:
+  -- the operand is q inverted when accelerating, and the + 1 enters as the carry of an extra low bit ('1' + '1').
+  q_op <= resize(unsigned(div_q), C_W + 1) xor (C_W downto 0 => not decel_r);
+  -- value + q_op + (not decel_r): the carry in rides on an extra low bit ('1' + carry in).
+  value_x <= resize(value_r, C_W + 1);
+  sum_lo  <= ('0' & value_x(C_SPLIT - 1 downto 0) & '1') + ('0' & q_op(C_SPLIT - 1 downto 0) & not decel_r);
+  sum_hi0 <= value_x(C_W downto C_SPLIT) + q_op(C_W downto C_SPLIT);
+  sum_hi1 <= value_x(C_W downto C_SPLIT) + q_op(C_W downto C_SPLIT) + 1;
+  result  <= sum_hi1 & sum_lo(C_SPLIT downto 1) when sum_lo(C_SPLIT + 1) = '1' else
+             sum_hi0 & sum_lo(C_SPLIT downto 1);
 
   divider_inst : entity work.stepramp_divider
     generic map (
