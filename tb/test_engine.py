@@ -776,6 +776,33 @@ def test_engine_latency_budget() -> None:
     assert sum(late is not None for *_, late in cases) == len(cases) // 2
 
 
+def test_engine_pulse_one_clock_after_a_load() -> None:
+    """A pulse due one clock after the pulse edge that loaded its interval (a 1-tick interval at PRESCALE 1) finds no
+    next interval: the move ends with LATE at that pulse (emitted), as the latency budget says (a register is ready
+    4 clocks after its pulse edge). The precompute sees the load one clock late (the sequencer registers advance and
+    take_alt), so in that clock it still shows what the load consumed (nxt_ok, and the soft-stop alternative of the
+    previous pulse): the decision must not take them. Cases: interval 1 of 1 tick; and interval 2 of 1 tick with a
+    soft stop sampled at pulse 1's edge (so decided at pulse 2) while pulse 1's alternative was "end" (m = 0). The
+    step spacing is off (min_gap 1), so that the 1-clock gap is the engine's own case."""
+    first = hand_plan(3, c_first=1 * Q16)
+    second = hand_plan(4, sa=2, sd=2, c_sa=1 * Q16, stop_ratio=0)
+    pulse1 = model_edges(second)[1]
+    cases = [("interval 1 of 1 tick", first, None), ("interval 2 of 1 tick, soft stop at pulse 1", second, pulse1)]
+    stops = [None if at is None else Stop("soft", at) for _, _, at in cases]
+    # min_gap 1: no step spacing (the real core's is at least 2, which would stop these moves with STEP_SPACE)
+    extras = [{"min_gap": 1} for _ in cases]
+    results = simulate([c[1] for c in cases], build_dir("engine_pulse_after_load"), stops=stops, extras=extras)
+    assert len(results) == len(cases)
+    problems: list[str] = []
+    for (label, plan, _), res, late in zip(cases, results, (1, 2), strict=True):
+        expected = model_edges(plan)[: late + 1]
+        assert expected[late] - expected[late - 1] == 1, f"{label}: the case needs a 1-clock interval"
+        problems += [f"{label}: {p}" for p in move_problems(res, expected, code=ERR["LATE"])]
+        if res.done_edge != expected[-1]:
+            problems.append(f"{label}: done at edge {res.done_edge}, expected {expected[-1]}")
+    assert not problems, "\n".join(problems)
+
+
 #: Profiles whose step_count and cur_delay are checked at every pulse: trapezoids (m0 = 1, sa = 2, a fractional
 #: period, two cruise intervals), triangles, sa = 1, sd = L, PRESCALE 3 and 5, both directions, N = 1, 2, 3.
 COUNTER_PROFILES = (
