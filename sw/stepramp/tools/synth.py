@@ -5,7 +5,8 @@ For each top: `ghdl synth` to Verilog, then yosys `synth_ice40` (iCE40 LUT4 / FF
 for HX8K and UP5K (maximum clock frequency; a top's HX8K figure is the median of nextpnr seeds 1, 2 and 3, each
 listed as "fmax_seeds"), and yosys `synth_xilinx -family xc7` (LUT / FF counts; no Xilinx timing here). Every
 entity is reported too, as the top instantiates it (its generics): yosys `synth_ice40 -noflatten` on the top's
-netlist gives each module's cells, counted with the entities below it, and nextpnr-ice40 (seed 1) gives the fmax of each entity that has a clock (wrapped like the top, see pnr_wrapper). Writes
+netlist gives each module's cells, counted with the entities below it, and nextpnr-ice40 (seed 1) gives the fmax
+of each entity that has a clock (wrapped like the top, see pnr_wrapper). Writes
 build/synth/report.json as
     {"<top>": {"ice40_hx8k": {"lut4", "ff", "carry", "fmax_mhz", "fmax_seeds"}, "ice40_up5k": {...}, "xc7": {...},
                "entities": {"<entity>": {"lut4", "ff", "carry", "fmax_mhz"}}}}
