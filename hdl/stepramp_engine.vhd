@@ -234,7 +234,6 @@ begin
       finish     => d_finish,
       cur_state  => state_r,
       l          => std_logic_vector(p_l),
-      l_sd       => std_logic_vector(p_l_sd(30 downto 0)),
       sa         => std_logic_vector(p_sa),
       sd         => std_logic_vector(p_sd),
       latch      => d_latch,

@@ -26,9 +26,7 @@ entity stepramp_precompute is
     finish     : in    std_logic;
     cur_state  : in    std_logic_vector(1 downto 0);
     -- The move (the engine's active copy).
-    l : in    std_logic_vector(30 downto 0);
-    -- L - sd (the engine's, latched with the move): m - 1 of a soft stop decided in RUN.
-    l_sd       : in    std_logic_vector(30 downto 0);
+    l          : in    std_logic_vector(30 downto 0);
     sa         : in    std_logic_vector(30 downto 0);
     sd         : in    std_logic_vector(30 downto 0);
     c_first    : in    std_logic_vector(47 downto 0);
@@ -133,32 +131,26 @@ architecture rtl of stepramp_precompute is
   -- normal value. D is the normal value of interval c + 1 just prepared (A_c or c_sa in ACCEL, cruise in RUN),
   -- truncated to Q32.16: v_r still holds it when the unit takes the request.
   signal stop_mode_r : std_logic;
-  -- c * stop_ratio - 1.0 (Q47.16) for the ACCEL interval c now counting, so that its integer part is m - 1: the
-  -- low 47 bits; prod_neg while it is negative (m = 0: it starts at -1.0 and its first carry out of 47 bits is the
-  -- crossing of 0); then prod_big, set at a carry out (it only grows, so a sticky bit tells a huge m: m - 1 >= 2^31,
-  -- and from 2^31 - 1 on m > L - c anyway).
+  -- c * stop_ratio, Q47.16, for the ACCEL interval c now counting: its low 47 bits, and prod_big, set once it
+  -- reaches 2^47 (it only grows, so a sticky bit tells m >= 2^31 as well as the 16 upper bits did).
   signal cur_prod : unsigned(46 downto 0);
-  signal prod_neg : std_logic;
   signal prod_big : std_logic;
-  -- cur_prod + stop_ratio and its flags, registered every clock (cur_prod changes only at advance, and the next
+  -- cur_prod + stop_ratio and its sticky bit, registered every clock (cur_prod changes only at advance, and the next
   -- advance is at least four clocks later), so that advance copies a register instead of waiting for the adder.
   signal prod_next     : unsigned(46 downto 0);
-  signal prod_next_neg : std_logic;
   signal prod_next_big : std_logic;
-  signal prod_step     : std_logic; -- pc_j <= sa: the next pulse adds stop_ratio to cur_prod
-  signal first_pend    : std_logic; -- pulse 0 has not loaded interval 1 yet (it adds stop_ratio too)
-  -- m of a soft stop decided at the next pulse (set in IDX), as m - 1 and m = 0 (stop_mm1 is then not used), so
-  -- that the request index m - 1 and L - sd in RUN need no adder.
-  signal stop_mm1   : unsigned(30 downto 0);
-  signal stop_zero  : std_logic; -- m = 0
-  signal stop_big   : std_logic; -- m - 1 >= 2^31
-  signal alt_kind_r : std_logic_vector(1 downto 0);
-  signal alt_one_r  : std_logic; -- m = 1
-  signal alt_ok_r   : std_logic;
-  signal alt_d_r    : unsigned(32 downto 0);
-  signal alt_acc    : unsigned(31 downto 0);
-  signal alt_range  : std_logic; -- alt_code RANGE
-  signal alt_zero   : std_logic; -- alt_code ZERO_TICKS (when not RANGE)
+  signal prod_step     : std_logic;             -- pc_j <= sa: the next pulse adds stop_ratio to cur_prod
+  signal first_pend    : std_logic;             -- pulse 0 has not loaded interval 1 yet (it adds stop_ratio too)
+  signal stop_m        : unsigned(30 downto 0); -- m of a soft stop decided at the next pulse (set in IDX)
+  signal stop_big      : std_logic;             -- m >= 2^31
+  signal alt_kind_r    : std_logic_vector(1 downto 0);
+  signal alt_one_r     : std_logic;             -- m = 1
+  signal stop_mm1      : unsigned(30 downto 0); -- m - 1 (stop_m is held from IDX to the next pulse)
+  signal alt_ok_r      : std_logic;
+  signal alt_d_r       : unsigned(32 downto 0);
+  signal alt_acc       : unsigned(31 downto 0);
+  signal alt_range     : std_logic;             -- alt_code RANGE
+  signal alt_zero      : std_logic;             -- alt_code ZERO_TICKS (when not RANGE)
 
   -- Next-delay unit.
   signal nd_flush     : std_logic;
@@ -202,6 +194,8 @@ begin
   lt_sa <= le_sa and not eq_sa;
   lt_sd <= le_sd and not eq_sd;
 
+  stop_mm1 <= stop_m - 1;
+
   -- A seed load carries its seed (the accel seed is already the running value, from latch); a recurrence step
   -- carries the running value (and its remainder); the first value of a soft stop's ramp is a step from D_m := D
   -- with remainder 0.
@@ -242,7 +236,6 @@ begin
     variable v_idx      : boolean;
     variable v_pcm      : unsigned(30 downto 0); -- pc_m before the step
     variable v_cur_prod : unsigned(46 downto 0); -- cur_prod after this edge
-    variable v_prod_neg : std_logic;
     variable v_prod_big : std_logic;
 
   begin
@@ -253,12 +246,10 @@ begin
       v_idx         := false;
       v_pcm         := pc_m;
       v_cur_prod    := cur_prod;
-      v_prod_neg    := prod_neg;
       v_prod_big    := prod_big;
       v_prod        := ('0' & cur_prod) + p_stop_ratio;
       prod_next     <= v_prod(46 downto 0);
-      prod_next_neg <= prod_neg and not v_prod(47);
-      prod_next_big <= prod_big or (v_prod(47) and not prod_neg);
+      prod_next_big <= prod_big or v_prod(47);
       -- The fractional-carry accumulator step of the value in v_r (used by C_PC_ADD and C_PC_ALT_ADD: one adder),
       -- carry-select: the fraction's sum and the integer part + 1 are computed side by side and the fraction's carry
       -- picks the integer part, so no carry ripples through all 65 bits. "s >> 32 = 0" (no ticks) follows from the
@@ -294,18 +285,20 @@ begin
 
         when C_PC_DECIDE =>
 
-          -- What that soft stop does: ignored in DECEL, after a stop, and when c + m >= L, i.e. m - 1 >= pc_m
-          -- (pc_m = L - c - 1 here: IDX has moved it on); m = 0 ends the move with pulse c, m >= 1 loads the
-          -- alternative. (Repeated unchanged while DECIDE waits.)
+          -- What that soft stop does: ignored in DECEL, after a stop, and when c + m >= L (pc_m = L - c - 1 here:
+          -- IDX has moved it on); m = 0 ends the move with pulse c, m >= 1 loads the alternative. (Repeated
+          -- unchanged while DECIDE waits.)
           alt_kind_r <= C_ALT_IGNORE;
           if (stop_mode_r = '0' and (state_r = C_ST_ACCEL or state_r = C_ST_RUN)) then
-            if (stop_zero = '1') then
+            if (stop_big = '1' or stop_m > pc_m) then
+              alt_kind_r <= C_ALT_IGNORE;
+            elsif (stop_m = 0) then
               alt_kind_r <= C_ALT_END;
-            elsif (stop_big = '0' and stop_mm1 < pc_m) then
+            else
               alt_kind_r <= C_ALT_LOAD;
             end if;
           end if;
-          if (stop_zero = '0' and stop_mm1 = 0) then
+          if (stop_m = 1) then
             alt_one_r <= '1';
           else
             alt_one_r <= '0';
@@ -491,14 +484,11 @@ begin
         if (p_sd(30 downto 1) /= 0) then
           le_sd <= '1';
         end if;
-        prod_neg    <= '1';
         prod_big    <= '0';
         pc_m        <= p_l - 1;
         dec_started <= '0';
-        -- -1.0 in Q47.16 (modulo 2^47): the integer part of c * stop_ratio - 1.0 is m - 1.
-        cur_prod              <= (others => '1');
-        cur_prod(15 downto 0) <= (others => '0');
-        first_pend            <= '1';
+        cur_prod    <= (others => '0');
+        first_pend  <= '1';
         -- Load the accel seed A_0 through the unit (at index 0), like the decel seed later: the unit sees the
         -- start of every value sequence, so a closed-form mode can take its constants from the seeds.
         req_r       <= '1';
@@ -527,11 +517,9 @@ begin
         -- the parameter check has passed: first_pend); any later pulse loads an interval whose DECIDE set prod_step.
         if (first_pend = '1' or prod_step = '1') then
           v_cur_prod := prod_next;
-          v_prod_neg := prod_next_neg;
           v_prod_big := prod_next_big;
         end if;
         cur_prod   <= v_cur_prod;
-        prod_neg   <= v_prod_neg;
         prod_big   <= v_prod_big;
         first_pend <= '0';
         if (nxt_last_r = '0') then
@@ -584,16 +572,13 @@ begin
         pc_state <= C_PC_DECIDE;
 
         -- The m of a soft stop decided at pulse c = pc_j (the end of the interval now counting):
-        -- floor(c * stop_ratio / 2^16) in ACCEL, L - sd + 1 in RUN (never 0: sd <= L), as m - 1 and m = 0.
-        -- DECIDE compares it with L - c.
+        -- floor(c * stop_ratio / 2^16) in ACCEL, L - sd + 1 in RUN. DECIDE compares it with L - c.
         if (state_r = C_ST_RUN) then
-          stop_mm1  <= unsigned(l_sd);
-          stop_zero <= '0';
-          stop_big  <= '0';
+          stop_m   <= p_l - p_sd + 1;
+          stop_big <= '0';
         else
-          stop_mm1  <= v_cur_prod(46 downto 16);
-          stop_zero <= v_prod_neg;
-          stop_big  <= v_prod_big;
+          stop_m   <= v_cur_prod(46 downto 16);
+          stop_big <= v_prod_big;
         end if;
       end if;
 

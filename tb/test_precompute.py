@@ -333,7 +333,6 @@ MOVE_INPUTS = ("sa", "sd", "c_first", "c_last", "c_sa", "c_sd", "accel_seed", "d
 
 def drive_move(dut: Any, plan: Plan) -> None:
     dut.l.value = (plan.steps - 1) % (1 << 31)  # the engine's p_l = steps - 1 (all ones for N = 0)
-    dut.l_sd.value = (plan.steps - 1 - plan.sd) % (1 << 31)  # the engine's p_l_sd = L - sd
     for name in MOVE_INPUTS:
         getattr(dut, name).value = getattr(plan, name)
 
