@@ -56,10 +56,9 @@ ICE40_DEVICES = {"ice40_hx8k": ("--hx8k", "ct256"), "ice40_up5k": ("--up5k", "sg
 
 
 def _run(cmd: list[str], cwd: Path, log: Path) -> str:
-    """Run a tool in cwd. yosys reads its Verilog by name, relative to cwd (the output folder): the file name goes
-    into every cell's `src` attribute, and nextpnr's placement depends on those strings, so an absolute path would
-    make the figures depend on where the repository is checked out (measured: 71.3 against 81.5 MHz for one netlist
-    and one seed in two folders)."""
+    """Run a tool in cwd. yosys reads its Verilog by name, relative to cwd (the output folder): the name goes into
+    every cell's `src` attribute, so that the netlist nextpnr places does not depend on where the repository is
+    checked out."""
     res = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, check=False)
     log.write_text(res.stdout + res.stderr)
     if res.returncode != 0:
