@@ -52,6 +52,20 @@ architecture rtl of stepramp_axil is
   constant C_OKAY   : std_logic_vector(1 downto 0) := "00";
   constant C_SLVERR : std_logic_vector(1 downto 0) := "10";
 
+  -- The response of an access the core answered: SLVERR when it flagged an error (an unmapped offset).
+  function response (
+    flagged : std_logic
+  ) return std_logic_vector is
+  begin
+
+    if (flagged = '1') then
+      return C_SLVERR;
+    end if;
+
+    return C_OKAY;
+
+  end function response;
+
   signal rst : std_logic;
 
   -- Held requests.
@@ -138,11 +152,7 @@ begin
       -- The core answers the access of the previous clock.
       if (wr_pending = '1' and core_ack = '1') then
         bvalid <= '1';
-        bresp  <= C_OKAY;
-
-        if (core_err = '1') then
-          bresp <= C_SLVERR;
-        end if;
+        bresp  <= response(core_err);
       elsif (s_axil_bready = '1') then
         bvalid <= '0';
       end if;
@@ -150,11 +160,7 @@ begin
       if (rd_pending = '1' and core_ack = '1') then
         rvalid <= '1';
         rdata  <= core_rd;
-        rresp  <= C_OKAY;
-
-        if (core_err = '1') then
-          rresp <= C_SLVERR;
-        end if;
+        rresp  <= response(core_err);
       elsif (s_axil_rready = '1') then
         rvalid <= '0';
       end if;

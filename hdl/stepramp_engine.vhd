@@ -333,6 +333,30 @@ begin
     variable v_err    : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
     variable v_alt    : std_logic;
 
+    -- A pulse that starts a prepared interval (the next one, or the soft stop's alternative): taken when it is
+    -- ready (ok) and its check passed, else the move ends with LATE or with the interval's error code.
+
+    procedure start_if_ready (
+      ok            : std_logic;
+      code          : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
+      variable take : out std_logic
+    ) is
+    begin
+
+      take := '0';
+
+      if (ok = '0') then
+        v_finish := '1';
+        v_err    := C_ERR_LATE;
+      elsif (code /= C_ERR_NONE) then
+        v_finish := '1';
+        v_err    := code;
+      else
+        take := '1';
+      end if;
+
+    end procedure start_if_ready;
+
   begin
 
     v_pulse  := '0';
@@ -378,25 +402,11 @@ begin
               v_finish := '1';
             elsif (sreq = '1' and alt_kind_m(1) = '1') then
               -- Soft stop: the next interval is the alternative.
-              if (alt_ok = '0') then
-                v_finish := '1';
-                v_err    := C_ERR_LATE;
-              elsif (alt_code /= C_ERR_NONE) then
-                v_finish := '1';
-                v_err    := alt_code;
-              else
-                v_alt := '1';
-              end if;
+              start_if_ready(alt_ok, alt_code, v_alt);
             elsif (cur_last = '1') then
               v_finish := '1';
-            elsif (nxt_ok_m = '0') then
-              v_finish := '1';
-              v_err    := C_ERR_LATE;
-            elsif (nxt_code /= C_ERR_NONE) then
-              v_finish := '1';
-              v_err    := nxt_code;
             else
-              v_load := '1';
+              start_if_ready(nxt_ok_m, nxt_code, v_load);
             end if;
           end if;
         end if;
@@ -434,6 +444,28 @@ begin
   seq_proc : process (clk) is
 
     variable v_dir_all : unsigned(31 downto 0);
+
+    -- A pulse edge starts interval p + 1: its length in ticks, whether it is the last and its state.
+
+    procedure start_interval (
+      d          : std_logic_vector(32 downto 0);
+      last       : std_logic;
+      ramp_state : std_logic_vector(1 downto 0)
+    ) is
+    begin
+
+      cnt     <= unsigned(d);
+      cnt_one <= '0';
+
+      if (unsigned(d) = 1) then
+        cnt_one <= '1';
+      end if;
+
+      cur_last    <= last;
+      state_r     <= ramp_state;
+      cur_delay_r <= saturate(d);
+
+    end procedure start_interval;
 
   begin
 
@@ -536,26 +568,12 @@ begin
 
       -- Pulse edge: the next interval starts; only register copies here.
       if (d_load = '1') then
-        cnt     <= unsigned(nxt_d);
-        cnt_one <= '0';
-        if (unsigned(nxt_d) = 1) then
-          cnt_one <= '1';
-        end if;
-        cur_last    <= nxt_last;
-        state_r     <= nxt_state;
-        cur_delay_r <= saturate(nxt_d);
+        start_interval(nxt_d, nxt_last, nxt_state);
       end if;
 
       -- Soft stop takes effect: interval p + 1 is the alternative (L' = p + m).
       if (d_alt = '1') then
-        cnt     <= unsigned(alt_d);
-        cnt_one <= '0';
-        if (unsigned(alt_d) = 1) then
-          cnt_one <= '1';
-        end if;
-        cur_last    <= alt_one;
-        state_r     <= C_ST_DECEL;
-        cur_delay_r <= saturate(alt_d);
+        start_interval(alt_d, alt_one, C_ST_DECEL);
       end if;
 
       -- Soft stop request: taken while busy and no stop is in effect; a pulse consumes the request it decided on

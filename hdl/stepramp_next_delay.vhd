@@ -7,6 +7,9 @@ library ieee;
   use ieee.std_logic_1164.all;
   use ieee.numeric_std.all;
 
+library work;
+  use work.stepramp_pkg.all;
+
 entity stepramp_next_delay is
   generic (
     G_DIV_WIDTH : positive := 50
@@ -114,6 +117,23 @@ begin
     );
 
   ctrl_proc : process (clk) is
+
+    -- The answer, valid for one clock: a ramp value (Q32.16), its remainder and the out-of-range flag.
+
+    procedure answer (
+      value     : unsigned(47 downto 0);
+      remainder : unsigned(32 downto 0);
+      overflow  : std_logic
+    ) is
+    begin
+
+      valid_r     <= '1';
+      ans_value_r <= value;
+      ans_rem_r   <= remainder;
+      ovf_r       <= overflow;
+
+    end procedure answer;
+
   begin
 
     if rising_edge(clk) then
@@ -123,27 +143,17 @@ begin
         decel_r <= req_decel;
         value_r <= unsigned(req_value);
         if (req_seed = '1') then
-          valid_r     <= '1';
-          ans_value_r <= unsigned(req_value);
-          ans_rem_r   <= (others => '0');
-          ovf_r       <= '0';
+          answer(unsigned(req_value), (others => '0'), '0');
         else
           pending <= '1';
         end if;
       end if;
 
       if (pending = '1' and div_done = '1') then
-        pending     <= '0';
-        valid_r     <= '1';
-        ans_value_r <= result(47 downto 0);
-        -- The remainder is below den < 2^33.
-        ans_rem_r <= unsigned(div_r);
-        -- Out of the Q32.16 range (a borrow shows as the top bit): the engine stops with an error.
-        if (result(C_W downto 48) /= 0 or div_zero = '1') then
-          ovf_r <= '1';
-        else
-          ovf_r <= '0';
-        end if;
+        pending <= '0';
+        -- The remainder is below den < 2^33. Out of the Q32.16 range (a borrow shows as the top bit): the engine
+        -- stops with an error.
+        answer(result(47 downto 0), unsigned(div_r), to_sl(result(C_W downto 48) /= 0 or div_zero = '1'));
       end if;
 
       if (rst = '1' or flush = '1') then

@@ -1,5 +1,5 @@
 -- SPDX-License-Identifier: MIT
--- stepramp_pkg: helpers shared by the stepramp entities (log2_ceil, clog2); compiled first
+-- stepramp_pkg: helpers shared by the stepramp entities (log2_ceil, clog2, to_sl); compiled first
 -- (docs/integration.md, "Compile order").
 
 library ieee;
@@ -17,6 +17,11 @@ package stepramp_pkg is
   function clog2 (
     n : positive
   ) return positive;
+
+  -- '1' for true, '0' for false.
+  function to_sl (
+    b : boolean
+  ) return std_logic;
 
 end package stepramp_pkg;
 
@@ -54,5 +59,18 @@ package body stepramp_pkg is
     return log2_ceil(n);
 
   end function clog2;
+
+  function to_sl (
+    b : boolean
+  ) return std_logic is
+  begin
+
+    if (b) then
+      return '1';
+    end if;
+
+    return '0';
+
+  end function to_sl;
 
 end package body stepramp_pkg;

@@ -8,6 +8,7 @@ library ieee;
   use ieee.numeric_std.all;
 
 library work;
+  use work.stepramp_pkg.all;
   use work.stepramp_regs_pkg.all;
 
 entity stepramp_precompute is
@@ -238,6 +239,69 @@ begin
     variable v_cur_prod : unsigned(46 downto 0); -- cur_prod after this edge
     variable v_prod_big : std_logic;
 
+    -- The next-delay unit's answer becomes the value to add (Q32.16), with its range flag.
+
+    procedure take_answer is
+    begin
+
+      v_r <= unsigned(nd_value) & C_Q16_PAD;
+
+      if (nd_ovf = '1') then
+        v_range <= '1';
+      end if;
+
+    end procedure take_answer;
+
+    -- The accumulator step of v_r gives an interval: its ticks, the fraction carried on, and its error flags.
+
+    procedure keep_interval (
+      signal ticks    : out unsigned(32 downto 0);
+      signal fraction : out unsigned(31 downto 0);
+      signal range_f  : out std_logic;
+      signal zero_f   : out std_logic;
+      signal ok       : out std_logic
+    ) is
+    begin
+
+      ticks    <= v_sum(64 downto 32);
+      fraction <= v_sum(31 downto 0);
+      range_f  <= v_range;
+      zero_f   <= v_zero;
+      ok       <= '1';
+
+    end procedure keep_interval;
+
+    -- A request to the next-delay unit: the seed or a recurrence step, of the decel ramp at index n or the accel ramp.
+
+    procedure request (
+      seed  : std_logic;
+      decel : std_logic;
+      n     : unsigned(30 downto 0)
+    ) is
+    begin
+
+      req_r       <= '1';
+      req_seed_r  <= seed;
+      req_decel_r <= decel;
+      req_index_r <= n;
+
+    end procedure request;
+
+    -- At a pulse edge: the interval after the one that starts is prepared next, unless that one is the last.
+
+    procedure prepare_unless_last (
+      last : std_logic
+    ) is
+    begin
+
+      if (last = '0') then
+        v_idx := true;
+      else
+        pc_state <= C_PC_IDLE;
+      end if;
+
+    end procedure prepare_unless_last;
+
   begin
 
     if rising_edge(clk) then
@@ -298,11 +362,7 @@ begin
               alt_kind_r <= C_ALT_LOAD;
             end if;
           end if;
-          if (stop_m = 1) then
-            alt_one_r <= '1';
-          else
-            alt_one_r <= '0';
-          end if;
+          alt_one_r <= to_sl(stop_m = 1);
 
           if (seed_wait = '0') then
             -- The flags move on to pc_j + 1; prod_step keeps pc_j <= sa for the pulse that loads interval pc_j.
@@ -322,11 +382,7 @@ begin
               nxt_state_r <= C_ST_DECEL;
             end if;
 
-            if (pc_m_zero = '1') then
-              nxt_last_r <= '1';
-            else
-              nxt_last_r <= '0';
-            end if;
+            nxt_last_r <= pc_m_zero;
 
             v_range   <= '0';
             req_alt_r <= '0';
@@ -337,11 +393,8 @@ begin
               v_r      <= p_c_last & C_Q16_PAD;
               pc_state <= C_PC_ADD;
             elsif (stop_mode_r = '1') then
-              req_r       <= '1';
-              req_seed_r  <= '0';
-              req_decel_r <= '1';
-              req_index_r <= pc_m;
-              pc_state    <= C_PC_WAIT;
+              request('0', '1', pc_m);
+              pc_state <= C_PC_WAIT;
             elsif (eq_sa = '1') then
               v_r      <= p_c_sa & C_Q16_PAD;
               pc_state <= C_PC_ADD;
@@ -356,10 +409,7 @@ begin
               pc_state    <= C_PC_WAIT;
             elsif (le_sd = '0') then
               -- D_{L-j}: the seed itself at j = sd + 1, else from D_{L-j+1}.
-              req_r       <= '1';
-              req_seed_r  <= not dec_started;
-              req_decel_r <= '1';
-              req_index_r <= pc_m;
+              request(not dec_started, '1', pc_m);
               dec_started <= '1';
               pc_state    <= C_PC_WAIT;
             else
@@ -371,26 +421,19 @@ begin
         when C_PC_WAIT =>
 
           if (req_r = '0' and nd_valid = '1') then
-            rec_val <= unsigned(nd_value);
-            rec_rem <= unsigned(nd_rem);
-            v_r     <= unsigned(nd_value) & C_Q16_PAD;
-            if (nd_ovf = '1') then
-              v_range <= '1';
-            end if;
+            rec_val  <= unsigned(nd_value);
+            rec_rem  <= unsigned(nd_rem);
+            take_answer;
             pc_state <= C_PC_ADD;
           end if;
 
         when C_PC_ADD =>
 
           -- The fractional-carry accumulator: s = acc + v, the interval lasts s >> 32 ticks.
-          nxt_d_r <= v_sum(64 downto 32);
-          nxt_acc <= v_sum(31 downto 0);
           -- The error it would cause, as two flags (nxt_code below): out of range, or 0 ticks (two pulses on one
           -- tick cannot be emitted; only a recurrence value can get here). One LUT after the carry.
-          nxt_range <= v_range;
-          nxt_zero  <= v_zero;
-          nxt_ok_r  <= '1';
-          pc_state  <= C_PC_IDLE;
+          keep_interval(nxt_d_r, nxt_acc, nxt_range, nxt_zero, nxt_ok_r);
+          pc_state <= C_PC_IDLE;
 
           -- Then the soft-stop alternative of the same interval (the next-delay unit is free now). Its D is the
           -- value just added: the plan's interval c + 1 (A_c, c_sa or cruise), Q32.16.
@@ -401,33 +444,23 @@ begin
               pc_state <= C_PC_ALT_ADD;
             else
               -- D_(m-1) = D + (2 D) div (4 m - 1): the unit's decel step at index m - 1.
-              req_r       <= '1';
-              req_seed_r  <= '0';
-              req_decel_r <= '1';
-              req_alt_r   <= '1';
-              req_index_r <= stop_mm1;
-              pc_state    <= C_PC_ALT_WAIT;
+              request('0', '1', stop_mm1);
+              req_alt_r <= '1';
+              pc_state  <= C_PC_ALT_WAIT;
             end if;
           end if;
 
         when C_PC_ALT_WAIT =>
 
           if (req_r = '0' and nd_valid = '1') then
-            v_r <= unsigned(nd_value) & C_Q16_PAD;
-            if (nd_ovf = '1') then
-              v_range <= '1';
-            end if;
+            take_answer;
             pc_state <= C_PC_ALT_ADD;
           end if;
 
         when C_PC_ALT_ADD =>
 
-          alt_d_r   <= v_sum(64 downto 32);
-          alt_acc   <= v_sum(31 downto 0);
-          alt_range <= v_range;
-          alt_zero  <= v_zero;
-          alt_ok_r  <= '1';
-          pc_state  <= C_PC_IDLE;
+          keep_interval(alt_d_r, alt_acc, alt_range, alt_zero, alt_ok_r);
+          pc_state <= C_PC_IDLE;
 
         when others =>
 
@@ -468,11 +501,7 @@ begin
         else
           nxt_state_r <= C_ST_DECEL;
         end if;
-        if (p_l = 1) then
-          nxt_last_r <= '1';
-        else
-          nxt_last_r <= '0';
-        end if;
+        nxt_last_r <= to_sl(p_l = 1);
 
         pc_j <= to_unsigned(1, 31);
         -- Interval 1 needs no DECIDE: the flags start as after it, (1 < sa) and (1 < sd).
@@ -491,12 +520,9 @@ begin
         first_pend  <= '1';
         -- Load the accel seed A_0 through the unit (at index 0), like the decel seed later: the unit sees the
         -- start of every value sequence, so a closed-form mode can take its constants from the seeds.
-        req_r       <= '1';
-        req_seed_r  <= '1';
-        req_decel_r <= '0';
-        req_index_r <= (others => '0');
-        req_alt_r   <= '0';
-        seed_wait   <= '1';
+        request('1', '0', (others => '0'));
+        req_alt_r <= '0';
+        seed_wait <= '1';
       end if;
 
       -- Pulse edge: the next interval starts; an alternative still being prepared is dropped (the unit is flushed
@@ -522,11 +548,7 @@ begin
         cur_prod   <= v_cur_prod;
         prod_big   <= v_prod_big;
         first_pend <= '0';
-        if (nxt_last_r = '0') then
-          v_idx := true;
-        else
-          pc_state <= C_PC_IDLE;
-        end if;
+        prepare_unless_last(nxt_last_r);
       end if;
 
       -- Soft stop takes effect: interval p + 1 is the alternative, L' = p + m; the precompute continues the stop's
@@ -540,11 +562,7 @@ begin
         rec_rem <= unsigned(nd_rem);
         v_pcm   := stop_mm1;
         pc_m    <= stop_mm1;
-        if (alt_one_r = '0') then
-          v_idx := true;
-        else
-          pc_state <= C_PC_IDLE;
-        end if;
+        prepare_unless_last(alt_one_r);
       end if;
 
       -- The index step, at the pulse edge's strobe itself (advance and take_alt are registered by the sequencer, so

@@ -89,27 +89,31 @@ ENGINE_SOURCES = {
     ("STEP_COUNT", "VALUE"): "eng_step_count",
 }
 
-#: Outputs that carry one field: port -> (register, field).
-FIELD_PORTS = {
-    "prescale": ("PRESCALE", "VALUE"),
-    "sa": ("SA", "VALUE"),
-    "sd": ("SD", "VALUE"),
-    "stop_ratio": ("STOP_RATIO", "VALUE"),
-    "mode": ("DRIVE", "MODE"),
-    "ustep_log2": ("DRIVE", "USTEP_LOG2"),
-    "step_width": ("STEP_WIDTH", "VALUE"),
-    "dir_setup": ("DIR_TIMING", "SETUP"),
-    "dir_hold": ("DIR_TIMING", "HOLD"),
-    "pwm_period": ("PWM_PERIOD", "VALUE"),
-    "step_space": ("STEP_SPACE", "VALUE"),
-    "enable": ("CTRL", "ENABLE"),
-}
 #: Wide values assembled from NAME_LO (bits 31:0) and NAME_HI: port name -> (LO, HI) register names.
 WIDE_PORTS = {
     r.name[:-3].lower(): (r.name, r.name[:-3] + "_HI")
     for r in REGISTERS
     if r.name.endswith("_LO") and r.name[:-3] + "_HI" in REGISTERS_BY_NAME
 }
+
+
+def _field_ports() -> dict[str, tuple[str, str]]:
+    """Outputs that carry one field, port -> (register, field): every field of the storage registers but STEPS (the
+    steps and direction outputs) and the wide values' words, in map order, then CTRL.ENABLE. The port of a VALUE
+    field is named after its register, any other after the field (DIR_TIMING's with dir_ in front)."""
+    wide = {name for pair in WIDE_PORTS.values() for name in pair}
+    ports: dict[str, tuple[str, str]] = {}
+    for rname in STORAGE:
+        if rname == "STEPS" or rname in wide:
+            continue
+        for f in REGISTERS_BY_NAME[rname].fields:
+            port = rname if f.name == "VALUE" else f"DIR_{f.name}" if rname == "DIR_TIMING" else f.name
+            ports[port.lower()] = (rname, f.name)
+    return {**ports, "enable": ("CTRL", "ENABLE")}
+
+
+#: Outputs that carry one field: port -> (register, field).
+FIELD_PORTS = _field_ports()
 #: WS fields of CTRL and the strobe each drives.
 STROBES = {f.name: f.name.lower() for f in CTRL.fields if f.access == WS}
 #: W1C flags of STATUS and the CTRL enable that routes each to irq (DONE -> IRQ_DONE_EN).

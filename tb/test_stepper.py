@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import pytest
@@ -31,6 +31,7 @@ from monitors import (
     ShootThroughMonitor,
     StepWidthMonitor,
 )
+from stepramp.board.driver import MODES, Outputs
 from stepramp.models import stepping as sm
 from stepramp.sim import coverage
 from stepramp.sim.runner import run_cocotb
@@ -158,31 +159,26 @@ class FakeEngine:
         self.done.clear()
 
 
-@dataclass
-class Config:
-    mode: int = sm.MODE_HALF
-    ustep_log2: int = LG
-    step_width: int = 10
-    dir_setup: int = 20
-    dir_hold: int = 20
-    pwm_period: int = 64
-    enable: int = 1
-    step_space: int = 1
+#: The stepping outputs (the driver's configuration of DRIVE .. STEP_SPACE) where a test does not say otherwise.
+OUTPUTS = Outputs(mode="half", ustep_log2=LG, step_width=10, dir_setup=20, dir_hold=20, pwm_period=64)
 
 
-def apply(dut: Any, cfg: Config) -> None:
-    dut.mode.value = cfg.mode
+def apply(dut: Any, cfg: Outputs, enable: int = 1, mode: int | None = None) -> None:
+    """Drive the stepper's configuration inputs: the stepping outputs and CTRL.ENABLE. mode, when given, is a raw
+    DRIVE.MODE value in place of cfg.mode (the tests that step through mode values pass it, the reserved 5 .. 7 that
+    act as 0 included, which Outputs has no name for)."""
+    dut.mode.value = MODES[cfg.mode] if mode is None else mode
     dut.ustep_log2.value = cfg.ustep_log2
     dut.step_width.value = cfg.step_width
     dut.dir_setup.value = cfg.dir_setup
     dut.dir_hold.value = cfg.dir_hold
     dut.pwm_period.value = cfg.pwm_period
-    dut.ctrl_enable.value = cfg.enable
+    dut.ctrl_enable.value = enable
     dut.step_space.value = cfg.step_space
 
 
-async def setup(dut: Any, cfg: Config, position: int = 0) -> FakeEngine:
-    apply(dut, cfg)
+async def setup(dut: Any, cfg: Outputs, position: int = 0, enable: int = 1) -> FakeEngine:
+    apply(dut, cfg, enable)
     dut.start_req.value = 0
     dut.new_dir.value = 0
     dut.hard_stop.value = 0
@@ -258,11 +254,10 @@ class StepRecorder:
 async def windings_follow_steps(dut) -> None:
     """Modes 0 .. 3 (and 5 .. 7 = 0): the state after every step is the model's for position mod n, forwards,
     backwards and across reversals, starting from positive and negative positions."""
-    cfg = Config(step_width=8, dir_setup=12, dir_hold=9)
+    cfg = replace(OUTPUTS, step_width=8, dir_setup=12, dir_hold=9)
     eng = await setup(dut, cfg)
     for mode, start in ((1, 0), (2, 5), (3, -3), (0, 2), (3, 512 - 3), (6, 1)):
-        cfg.mode = mode
-        apply(dut, cfg)
+        apply(dut, cfg, mode=mode)
         eng.set_position(start)
         await ClockCycles(dut.clk, 3)
         mons = MotionMonitors(
@@ -333,11 +328,11 @@ PWM_DUTY_LIMIT_US = math.ceil(
 async def pwm_duty_per_position(dut) -> None:
     """Mode 4: on-clocks of each bridge input over a carrier period equal the model's duty and polarity (exactly)
     for several ustep_log2 and pwm_period values, positions around the whole cycle and negative ones."""
-    cfg = Config(mode=sm.MODE_PWM)
+    cfg = replace(OUTPUTS, mode="pwm")
     eng = await setup(dut, cfg)
     checked = 0
     for u, period, positions in pwm_cases():
-        cfg.ustep_log2, cfg.pwm_period = u, period
+        cfg = replace(cfg, ustep_log2=u, pwm_period=period)
         apply(dut, cfg)
         for pos in positions:
             eng.set_position(pos)
@@ -357,13 +352,13 @@ PWM_TABLE_LIMIT_US = math.ceil(4 * (2 * (4 << LG) * (PWM_LATENCY + 1) + 100) * C
 async def pwm_table_matches_model(dut) -> None:
     """The elaborated table (ieee.math_real) equals the model's for every electrical position: with
     pwm_period = 2^G_DUTY_BITS the duty register is the magnitude itself; with 65535 the multiplier's full range."""
-    cfg = Config(mode=sm.MODE_PWM, ustep_log2=LG)
+    cfg = replace(OUTPUTS, mode="pwm", ustep_log2=LG)
     eng = await setup(dut, cfg)
     table = sm.cos_table(MICROSTEPS, DUTY_BITS)
     assert len(table) == MICROSTEPS + 1
     unit = min(1 << DUTY_BITS, 1 << 15)  # pwm_period is 16 bits
     for period in (unit, 65535):
-        cfg.pwm_period = period
+        cfg = replace(cfg, pwm_period=period)
         apply(dut, cfg)
         for pos in range(4 << LG):
             eng.set_position(pos)
@@ -388,7 +383,7 @@ async def pwm_motion_with_monitors(dut) -> None:
     """Mode 4 moves in both directions with every monitor on (polarity at each step, duty now and then)."""
     eng: FakeEngine | None = None
     for u, period, interval in ((LG, 64, 150), (min(2, LG), 40, 100)):
-        cfg = Config(mode=sm.MODE_PWM, ustep_log2=u, pwm_period=period, step_width=5, dir_setup=7, dir_hold=7)
+        cfg = replace(OUTPUTS, mode="pwm", ustep_log2=u, pwm_period=period, step_width=5, dir_setup=7, dir_hold=7)
         if eng is None:
             eng = await setup(dut, cfg, position=-5)
         else:
@@ -425,13 +420,12 @@ async def pwm_motion_with_monitors(dut) -> None:
 async def mode_changes_while_stopped(dut) -> None:
     """Every mode value at several positions: the pins show the model's state one clock after the change (PWM:
     after its pipeline), and mode 0 / 5 .. 7 switch everything off."""
-    cfg = Config(pwm_period=50)
+    cfg = replace(OUTPUTS, pwm_period=50)
     eng = await setup(dut, cfg)
     for pos in (0, 1, 6, -3, 12345):
         eng.set_position(pos)
         for mode in (3, 0, 1, 4, 2, 5, 7, 3, 4, 6):
-            cfg.mode = mode
-            apply(dut, cfg)
+            apply(dut, cfg, mode=mode)
             await RisingEdge(dut.clk)
             await ReadOnly()
             if sm.effective_mode(mode) != sm.MODE_PWM:
@@ -448,12 +442,11 @@ async def mode_changes_while_stopped(dut) -> None:
 async def enable_gates_windings(dut) -> None:
     """enable is ctrl_enable one clock later; with ctrl_enable = 0 every winding input is 0 in every mode (PWM and
     pwm_period <= 1 too) while STEP/DIR keep working; switching back restores the state of the position."""
-    cfg = Config(mode=sm.MODE_HALF, enable=0)
-    eng = await setup(dut, cfg, position=1)
+    cfg = replace(OUTPUTS, mode="half")
+    eng = await setup(dut, cfg, position=1, enable=0)
     assert int(dut.enable.value) == 0
     for mode in (1, 2, 3, 4):
-        cfg.mode, cfg.enable = mode, 0
-        apply(dut, cfg)
+        apply(dut, cfg, enable=0, mode=mode)
         mons = MotionMonitors(
             dut,
             mode=mode,
@@ -491,10 +484,9 @@ async def enable_gates_windings(dut) -> None:
         assert int(dut.enable.value) == 0 and levels(dut) == (0, 0, 0, 0)
         await FallingEdge(dut.clk)
     # PWM with the carrier held off (pwm_period 0 and 1): outputs off although enabled
-    cfg.mode, cfg.enable = sm.MODE_PWM, 1
     for period in (0, 1):
-        cfg.pwm_period = period
-        apply(dut, cfg)
+        cfg = replace(cfg, mode="pwm", pwm_period=period)
+        apply(dut, cfg, enable=1)
         eng.set_position(0)  # A at full scale
         await ClockCycles(dut.clk, 4)
         assert await measure_duty(dut, 100) == (0, 0, 0, 0), f"pwm_period {period}"
@@ -506,10 +498,10 @@ async def enable_gates_windings(dut) -> None:
 @cocotb.test(timeout_time=80, timeout_unit="us")  # measured 17 us
 async def step_width_exact(dut) -> None:
     """step rises one clock after eng_step and stays high exactly max(step_width, 1) clocks."""
-    cfg = Config(mode=sm.MODE_FULL)
+    cfg = replace(OUTPUTS, mode="full")
     eng = await setup(dut, cfg)
     for width in (0, 1, 2, 5, 37, 63):
-        cfg.step_width = width
+        cfg = replace(cfg, step_width=width)
         apply(dut, cfg)
         mon = StepWidthMonitor(dut.step, width, exact=True).start()
         rises: list[int] = []
@@ -533,7 +525,7 @@ async def step_width_exact(dut) -> None:
 async def step_overlap_restarts_width(dut) -> None:
     """A pulse that comes while STEP is still high (step_width > interval: the driver never programs this)
     restarts the width: one STEP pulse, high until step_width clocks after the later pulse."""
-    cfg = Config(mode=sm.MODE_FULL, step_width=100)
+    cfg = replace(OUTPUTS, mode="full", step_width=100)
     eng = await setup(dut, cfg)
     mon = StepWidthMonitor(dut.step, 100).start()
     await run_move(dut, eng, 2, 0, 64)
@@ -581,7 +573,7 @@ async def start_gate_timing(dut) -> None:
     rising edge, eng_start for max(dir_setup, 5) clocks to the first STEP rising edge; either way the first STEP
     rising edge keeps STEP_WIDTH + STEP_SPACE from the last one: measured edge for edge against
     stepramp.models.stepping.gate_timing, with the DIR monitor on."""
-    cfg = Config(mode=sm.MODE_HALF, step_width=4)
+    cfg = replace(OUTPUTS, mode="half", step_width=4)
     eng = await setup(dut, cfg)
     cases = [
         # (dir_setup, dir_hold, new_dir, gap, step_width, step_space): gap = clocks between the last pulse's
@@ -615,7 +607,7 @@ async def start_gate_timing(dut) -> None:
         (5, 1, 1, 0, 1000, 5000),
     ]
     for setup_clks, hold, new_dir, gap, width, space in cases:
-        cfg.dir_setup, cfg.dir_hold, cfg.step_width, cfg.step_space = setup_clks, hold, width, space
+        cfg = replace(cfg, dir_setup=setup_clks, dir_hold=hold, step_width=width, step_space=space)
         apply(dut, cfg)
         # a previous move ends with a pulse at a known edge
         eng.moves.append(Move(3, 64))
@@ -682,7 +674,7 @@ async def start_gate_timing(dut) -> None:
 @cocotb.test(timeout_time=20, timeout_unit="us")  # measured 4.5 us
 async def start_dropped_while_busy(dut) -> None:
     """A start_req while the engine is busy or while the gate holds a start is dropped: no eng_start, no DIR change."""
-    cfg = Config(mode=sm.MODE_HALF, dir_setup=50, dir_hold=50)
+    cfg = replace(OUTPUTS, mode="half", dir_setup=50, dir_hold=50)
     eng = await setup(dut, cfg)
     rec = GateRecorder(dut)
     # engine busy: a request with the other direction in the middle of a move
@@ -713,7 +705,7 @@ async def hard_stop_cancels_a_held_start(dut) -> None:
     """hard_stop while the gate holds a start (DIR hold, DIR setup) or with the start_req it accepts: eng_start and
     eng_hard_stop together after that edge (the engine accepts and ends the move at once), no DIR change from then
     on."""
-    cfg = Config(mode=sm.MODE_HALF, dir_setup=200, dir_hold=100)
+    cfg = replace(OUTPUTS, mode="half", dir_setup=200, dir_hold=100)
     eng = await setup(dut, cfg)
     rec = GateRecorder(dut)
     stops: list[int] = []
@@ -796,7 +788,7 @@ async def hard_stop_cancels_a_held_start(dut) -> None:
 async def dir_fault_flags_engine_direction(dut) -> None:
     """An engine pulse whose direction differs from DIR (engine started around the gate) sets dir_fault until the
     next accepted start_req."""
-    cfg = Config(mode=sm.MODE_FULL)
+    cfg = replace(OUTPUTS, mode="full")
     eng = await setup(dut, cfg)
     eng.dir_override = 1
     await run_move(dut, eng, 2, 0)
@@ -828,7 +820,7 @@ async def monitors_fail_on_wrong_settings(dut) -> None:
     """Each monitor, told a setting other than the one programmed, reports violations (and passes with the right
     one on the same run): width + 1, exact width - 1, setup + 1, hold + 1, a position off by one, the wrong mode, the
     wrong ustep_log2 for the PWM duty, and a bridge whose inputs are both '1'."""
-    cfg = Config(mode=sm.MODE_HALF, step_width=9, dir_setup=30, dir_hold=25)
+    cfg = replace(OUTPUTS, mode="half", step_width=9, dir_setup=30, dir_hold=25)
     eng = await setup(dut, cfg)
     await run_move(dut, eng, 3, 0)
     w, s, h = cfg.step_width, cfg.dir_setup, cfg.dir_hold
@@ -869,7 +861,7 @@ async def monitors_fail_on_wrong_settings(dut) -> None:
     for what, m in wrong.items():
         assert_fails(dut, m, what)
     # PWM: the duty measured against a wrong ustep_log2 (same polarities at this position, other duties)
-    cfg.mode, cfg.pwm_period = sm.MODE_PWM, 60
+    cfg = replace(cfg, mode="pwm", pwm_period=60)
     apply(dut, cfg)
     eng.set_position(5)
     await ClockCycles(dut.clk, PWM_LATENCY + 1)

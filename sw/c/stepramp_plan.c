@@ -41,10 +41,22 @@ static double py_min(double a, double b)
     return (b < a) ? b : a;
 }
 
-/* plan._check_positive without the type checks: finite and > 0 (false for NaN). */
-static int is_positive(double x)
+/* a value that plan._check_positive (without the type checks) wants finite and > 0, and the error if it is not */
+typedef struct {
+    double value;
+    stepramp_err_t err;
+} positive_check_t;
+
+/* the first check in the table whose value is not finite and > 0 (NaN fails) gives its error; else STEPRAMP_OK */
+static stepramp_err_t check_positive(const positive_check_t *checks, size_t count)
 {
-    return isfinite(x) && x > 0.0;
+    size_t i;
+    for (i = 0; i < count; i++) {
+        if (!(isfinite(checks[i].value) && checks[i].value > 0.0)) {
+            return checks[i].err;
+        }
+    }
+    return STEPRAMP_OK;
 }
 
 double stepramp_decel_product(int64_t m)
@@ -191,21 +203,13 @@ stepramp_err_t stepramp_plan_move_info(stepramp_plan_t *plan, stepramp_info_t *i
     if (plan == NULL) {
         return STEPRAMP_ENULL;
     }
-    /* the argument checks, in plan_move_info's order */
-    if (!is_positive(accel)) {
-        return STEPRAMP_EACCEL;
+    { /* the argument checks, in plan_move_info's order */
+        const positive_check_t args[] = {{accel, STEPRAMP_EACCEL}, {decel, STEPRAMP_EDECEL}, {speed, STEPRAMP_ESPEED},
+                                         {spr, STEPRAMP_ESPR}, {fclk, STEPRAMP_EFCLK}};
+        err = check_positive(args, sizeof args / sizeof args[0]);
     }
-    if (!is_positive(decel)) {
-        return STEPRAMP_EDECEL;
-    }
-    if (!is_positive(speed)) {
-        return STEPRAMP_ESPEED;
-    }
-    if (!is_positive(spr)) {
-        return STEPRAMP_ESPR;
-    }
-    if (!is_positive(fclk)) {
-        return STEPRAMP_EFCLK;
+    if (err != STEPRAMP_OK) {
+        return err;
     }
     if (prescale < 1 || prescale > STEPRAMP_MAX_PRESCALE) {
         return STEPRAMP_EPRESCALE;
@@ -221,52 +225,19 @@ stepramp_err_t stepramp_plan_move_info(stepramp_plan_t *plan, stepramp_info_t *i
     a = accel / alpha;
     d = decel / alpha;
     v = speed / alpha;
-    if (!is_positive(a)) {
-        return STEPRAMP_EACCEL_UNITS;
+    { /* the same check on the values in steps units, in plan_move_info's order */
+        const positive_check_t units[] = {{a, STEPRAMP_EACCEL_UNITS}, {d, STEPRAMP_EDECEL_UNITS},
+                                          {v, STEPRAMP_ESPEED_UNITS}, {f_tick, STEPRAMP_EFTICK}};
+        err = check_positive(units, sizeof units / sizeof units[0]);
     }
-    if (!is_positive(d)) {
-        return STEPRAMP_EDECEL_UNITS;
-    }
-    if (!is_positive(v)) {
-        return STEPRAMP_ESPEED_UNITS;
-    }
-    if (!is_positive(f_tick)) {
-        return STEPRAMP_EFTICK;
+    if (err != STEPRAMP_OK) {
+        return err;
     }
 
-    out.steps = (uint32_t)n;
-    out.direction = (steps < 0) ? 1u : 0u;
-    out.prescale = prescale;
-    out.c_first = 0;
-    out.c_last = 0;
-    out.sa = 0;
-    out.c_sa = 0;
-    out.sd = 0;
-    out.c_sd = 0;
-    out.accel_seed = 0;
-    out.decel_seed = 0;
-    out.cruise = 0;
-    out.stop_ratio = 0;
-    inf.f_tick = f_tick;
-    inf.length = (length > 0) ? length : 0;
-    inf.a = a;
-    inf.d = d;
-    inf.v = v;
-    inf.x_a = 0.0;
-    inf.x_d = 0.0;
-    inf.v_peak = 0.0;
-    inf.triangle = 1;
-    inf.c0 = 0.0;
-    inf.cd0 = 0.0;
-    inf.m0 = 0;
-    inf.min_interval = (double)INFINITY;
-    inf.t_first = 0.0;
-    inf.t_last = 0.0;
-    inf.t_sa = 0.0;
-    inf.t_sd = 0.0;
-    inf.t_accel_seed = 0.0;
-    inf.t_decel_seed = 0.0;
-    inf.t_cruise = 0.0;
+    /* the Plan and MoveInfo of a move with no interval: every field not named here is 0 (0.0) */
+    out = (stepramp_plan_t){.steps = (uint32_t)n, .direction = (steps < 0) ? 1u : 0u, .prescale = prescale};
+    inf = (stepramp_info_t){.f_tick = f_tick, .length = (length > 0) ? length : 0, .a = a, .d = d, .v = v,
+                            .triangle = 1, .min_interval = (double)INFINITY};
     if (length < 1) { /* N = 0 or 1: no interval, nothing for the engine to compute */
         *plan = out;
         if (info != NULL) {

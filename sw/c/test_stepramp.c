@@ -617,6 +617,5 @@ int main(void)
     test_position();
     test_invalid_move_writes_nothing();
     test_error_texts();
-    printf("test_stepramp: %d checks, %d failed\n", g_checks, g_failures);
-    return g_failures == 0 ? 0 : 1;
+    return test_report("test_stepramp");
 }

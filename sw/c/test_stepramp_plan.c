@@ -463,6 +463,5 @@ int main(void)
     test_strerror();
     test_decel_product_and_constants();
     test_move_info();
-    printf("test_stepramp_plan: %d checks, %d failed\n", g_checks, g_failures);
-    return g_failures == 0 ? 0 : 1;
+    return test_report("test_stepramp_plan");
 }

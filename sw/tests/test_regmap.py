@@ -48,7 +48,7 @@ def test_generated_files_are_up_to_date() -> None:
 
 
 def test_files_made_from_the_rdl_are_up_to_date() -> None:
-    """regmap_data.py (what the driver reads) and the IP-XACT file equal a fresh compile of rdl/stepramp.rdl."""
+    """regmap.json (what the driver reads) and the IP-XACT file equal a fresh compile of rdl/stepramp.rdl."""
     for path, text in regmap_gen.rdl_outputs(regmap_gen.compile_rdl()).items():
         assert path.exists() and path.read_text() == text, (
             f"{path} is out of date: run python -m stepramp.tools.regmap_gen"

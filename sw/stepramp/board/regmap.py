@@ -2,10 +2,10 @@
 """The register map of the stepramp core, as Python objects for the driver, the models and the benches.
 
 The one source is the SystemRDL file rdl/stepramp.rdl. `python -m stepramp.tools.regmap_gen` compiles it
-(systemrdl-compiler) and writes the plain tables of stepramp.board.regmap_data that this module reads (so that the
-driver needs no compiler), the VHDL package (hdl/stepramp_regs_pkg.vhd, with the register file's masks and resets),
-the C header (sw/c/stepramp_regs.h), the Markdown table (docs/registers.md) and IP-XACT (rdl/stepramp.xml).
-sw/tests/test_regmap.py checks that every generated file is current.
+(systemrdl-compiler) and writes the plain tables of regmap.json (package data beside this module) that this module
+reads (so that the driver needs no compiler), the VHDL package (hdl/stepramp_regs_pkg.vhd, with the register file's
+masks and resets), the C header (sw/c/stepramp_regs.h), the Markdown table (docs/registers.md) and IP-XACT
+(rdl/stepramp.xml). sw/tests/test_regmap.py checks that every generated file is current.
 
 All registers are 32 bits wide, at byte offsets on a 32-bit bus. Motion registers (STEPS .. STOP_RATIO) may be
 written at any time: the core latches them at the edge that accepts START, so a write during a move (or while a
@@ -14,9 +14,9 @@ START is held back) prepares the next one (shadowing).
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field
-
-from stepramp.board import regmap_data
+from importlib import resources
 
 #: Access kinds of a field.
 RO = "RO"  # read only
@@ -66,12 +66,16 @@ class Register:
         raise KeyError(f"{self.name} has no field {name}")
 
 
+#: The generated tables, read as package data (so an installed package finds them as well as a source tree).
+_DATA = json.loads(resources.files("stepramp.board").joinpath("regmap.json").read_text(encoding="utf-8"))
+
 #: Engine error causes, as reported in STATUS.ERR_CODE (the lowest code wins when several apply): name -> (code,
 #: description), from the .rdl's enum.
-ERROR_CODES: dict[str, tuple[int, str]] = dict(regmap_data.ERROR_CODES)
+ERROR_CODES: dict[str, tuple[int, str]] = {e["name"]: (e["code"], e["description"]) for e in _DATA["error_codes"]}
 
 REGISTERS: tuple[Register, ...] = tuple(
-    Register(name, off, desc, tuple(Field(*f) for f in fields)) for name, off, desc, fields in regmap_data.REGISTERS
+    Register(r["name"], r["offset"], r["description"], tuple(Field(**f) for f in r["fields"]))
+    for r in _DATA["registers"]
 )
 
 REGISTERS_BY_NAME: dict[str, Register] = {r.name: r for r in REGISTERS}
@@ -83,7 +87,7 @@ VERSION_MAJOR = (ID_VALUE >> 8) & 0xFF
 VERSION_MINOR = ID_VALUE & 0xFF
 
 #: Address bits the core decodes: the register window rounded up to a power of two (128 bytes).
-ADDR_BITS = regmap_data.ADDR_BITS
+ADDR_BITS: int = _DATA["addr_bits"]
 
 
 def offset(name: str) -> int:

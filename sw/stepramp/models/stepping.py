@@ -25,6 +25,7 @@ import bisect
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 # Modes (the `mode` input).
 MODE_STEPDIR = 0
@@ -207,8 +208,7 @@ def cos_table(microsteps: int = DEFAULT_MICROSTEPS, bits: int = DEFAULT_DUTY_BIT
     return tuple(table)
 
 
-@dataclass(frozen=True)
-class Winding:
+class Winding(NamedTuple):
     """One winding in PWM mode: current direction (+1, -1, 0), magnitude (units of 2**-bits) and duty (counts)."""
 
     polarity: int
