@@ -18,6 +18,8 @@ if TYPE_CHECKING:  # numpy is imported where the lazy functions need it (the lis
     import numpy as np
     from numpy.typing import NDArray
 
+    from stepramp.board.change import Segment
+
 FIRST_PULSE_LATENCY = 2
 """Clock edges from the edge sampling start = '1' to the edge after which pulse 0 is high."""
 
@@ -440,3 +442,70 @@ def first_space_fault(move_edges: Iterable[int], gap: int) -> int | None:
             return k
         previous = edge
     return None
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Continuation segments (docs/algorithm.md, "Changes while moving"): the first `count` intervals of a segment
+# ---------------------------------------------------------------------------------------------------------------
+
+
+def segment_values(seg: Segment, count: int) -> list[int]:
+    """The Q32.32 values of the segment's intervals 1 .. count (at most its length), by the rules of the spec:
+    c_first, c_last, c_sa, c_sd, the head (up: A_(n0+i-1); down: D_(K-i)), the final decel D_(L-i), cruise."""
+    if seg.length is not None:
+        count = min(count, seg.length)
+    length = seg.length if seg.length is not None else -1  # -1: no interval is the last, none is past sd
+    sa, sd = seg.sa, (seg.sd if seg.length is not None else -1)
+    head_down = seg.head == "down"
+    head_n, head_val, head_r = seg.head_index, seg.accel_seed, 0  # up: A_n; down: D_(K-head_i)
+    head_i = 2
+    dec_m: int | None = None
+    dec_val, dec_r = seg.decel_seed, 0
+    out = []
+    for i in range(1, count + 1):
+        if i == 1:
+            value = seg.c_first
+        elif i == length:
+            value = seg.c_last
+        elif i == sa:
+            value = seg.c_sa
+        elif i == sd:
+            value = seg.c_sd
+        elif i < sa and not head_down:
+            while head_n < seg.head_index + i - 1:  # A_n from A_(n-1), den 4 n + 1 at the absolute index
+                head_n += 1
+                q, head_r = divmod(2 * head_val + head_r, 4 * head_n + 1)
+                head_val -= q
+            value = head_val
+        elif i < sa:
+            while head_i < i:  # D_(m-1) from D_m, m = K - head_i
+                q, head_r = divmod(2 * head_val + head_r, 4 * (seg.head_index - head_i) - 1)
+                head_val += q
+                head_i += 1
+            value = head_val
+        elif sd >= 0 and i > sd:
+            if dec_m is None:  # first decel value: D_(m0) = decel_seed, r = 0
+                dec_m = length - sd - 1
+            while dec_m > length - i:  # D_(m-1) from D_m
+                q, dec_r = divmod(2 * dec_val + dec_r, 4 * dec_m - 1)
+                dec_val += q
+                dec_m -= 1
+            value = dec_val
+        else:
+            out.append(seg.cruise)
+            continue
+        out.append(value << _SHIFT)
+    return out
+
+
+def segment_ticks(seg: Segment, count: int, acc: int = 0) -> list[int]:
+    """Tick times of the segment's pulses 0 .. count (pulse 0 is pulse P, at tick 0), through the fractional
+    accumulator that starts at `acc` (the fraction the running plan left at pulse P)."""
+    times = [0]
+    t = 0
+    for value in segment_values(seg, count):
+        s = acc + value
+        t += s >> FRAC_CRUISE
+        acc = s & _FRAC_MASK
+        times.append(t)
+    return times

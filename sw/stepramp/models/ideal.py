@@ -155,3 +155,47 @@ def peak_speed(steps: int, accel: float, decel: float, speed: float, spr: float)
     """Highest speed of the move in rad/s: the requested speed, or the triangle's peak."""
     move = ideal_move(steps, accel, decel, speed, spr, 1.0)
     return move.v_peak * step_angle(spr)
+
+
+@dataclass(frozen=True)
+class IdealSegment:
+    """The ideal motion after a change (docs/algorithm.md, "Changes while moving"): from speed u at position 0 (the
+    pulse of the change), to speed v (up at a, or down at d), then at v, then down at d to rest at ``length``, or
+    at v for ever (``length`` None). a, d, u, v in steps/s^2 and steps/s; times in ticks from the change.
+
+    Written plainly from the kinematics: the peak w of a move that cannot reach v solves
+    (w^2 - u^2) / (2 a) + w^2 / (2 d) = length; u must allow a stop at the target (u^2 <= 2 d length)."""
+
+    u: float
+    a: float
+    d: float
+    v: float
+    length: int | None
+    f_tick: float
+
+    @property
+    def peak(self) -> float:
+        """The cruise speed (steps/s): v, or lower when the distance does not allow it."""
+        if self.length is None or self.u >= self.v:
+            return self.v
+        w2 = (self.u * self.u / (2.0 * self.a) + self.length) / (1.0 / (2.0 * self.a) + 1.0 / (2.0 * self.d))
+        return min(self.v, math.sqrt(w2))
+
+    def time_at(self, x: float) -> float:
+        """Time (ticks) at which the motion reaches position x (0 <= x <= length)."""
+        u, w = self.u, self.peak
+        rate = self.a if w >= u else self.d  # the first ramp: up at a, or down at d
+        x1 = abs(w * w - u * u) / (2.0 * rate)
+        if x <= x1:
+            s = math.sqrt(u * u + 2.0 * rate * x) if w >= u else math.sqrt(u * u - 2.0 * rate * x)
+            return abs(s - u) / rate * self.f_tick
+        t1 = abs(w - u) / rate
+        x2 = self.length - w * w / (2.0 * self.d) if self.length is not None else math.inf
+        if x <= x2:
+            return (t1 + (x - x1) / w) * self.f_tick
+        t2 = t1 + (x2 - x1) / w
+        return (t2 + (w - math.sqrt(max(w * w - 2.0 * self.d * (x - x2), 0.0))) / self.d) * self.f_tick
+
+    def pulse_times(self, count: int) -> list[float]:
+        """Ideal times of the pulses 0 .. count (pulse 0 is the change's pulse, at 0)."""
+        return [self.time_at(float(k)) for k in range(count + 1)]

@@ -1,0 +1,309 @@
+# SPDX-License-Identifier: MIT
+"""Continuation segments: a change while moving as a new plan that takes over at a pulse.
+
+docs/algorithm.md, "Changes while moving". The driver side: from the speed at the pulse P where the change takes
+effect and the new accel, decel, speed and target, the segment's register values (the exact intervals and the
+seeds, in doubles, each rounded once, as plan.py does for a move from rest).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+
+from stepramp.board.plan import (
+    FRAC_RAMP,
+    MAX_PRESCALE,
+    MAX_STEPS,
+    MIN_INTERVAL_CLKS,
+    REG_WIDTHS,
+    SEED_FACTOR,
+    MoveInfo,
+    Plan,
+    _check_int,
+    _check_positive,
+    _cruise,
+    _stop_ratio,
+    _to_fixed,
+    decel_product,
+    plan_move,
+)
+
+UP = "up"
+DOWN = "down"
+
+_SEGMENT_WIDTHS = {name: REG_WIDTHS[name] for name in ("prescale", "c_first", "c_last", "sa", "c_sa", "sd", "c_sd")}
+_SEGMENT_WIDTHS |= {name: REG_WIDTHS[name] for name in ("accel_seed", "decel_seed", "cruise", "stop_ratio")}
+_SEGMENT_WIDTHS["head_index"] = 31
+
+
+@dataclass(frozen=True)
+class Segment:
+    """The engine's inputs for a continuation: a plan over the segment's own intervals 1 .. length, with a head ramp
+    that may start at speed (up: accel recurrence from index head_index; down: decel recurrence towards a virtual
+    rest at the end of interval head_index). length None: endless (jog)."""
+
+    length: int | None
+    prescale: int
+    c_first: int
+    c_last: int
+    sa: int
+    c_sa: int
+    sd: int
+    c_sd: int
+    accel_seed: int
+    decel_seed: int
+    cruise: int
+    stop_ratio: int
+    head: str
+    head_index: int
+
+    def __post_init__(self) -> None:
+        if self.length is not None and not 0 <= self.length <= MAX_STEPS:
+            raise ValueError(f"Segment.length = {self.length!r} is not in 0 .. 2^31 - 1 (or None: endless)")
+        if self.head not in (UP, DOWN):
+            raise ValueError(f"Segment.head = {self.head!r} is neither {UP!r} nor {DOWN!r}")
+        for f in fields(self):
+            if f.name in _SEGMENT_WIDTHS:
+                value, width = getattr(self, f.name), _SEGMENT_WIDTHS[f.name]
+                if not isinstance(value, int) or isinstance(value, bool) or not 0 <= value < 1 << width:
+                    raise ValueError(f"Segment.{f.name} = {value!r} does not fit an unsigned {width}-bit register")
+
+    @classmethod
+    def of_move(cls, plan: Plan) -> Segment:
+        """A move from rest as a segment (head up from index 0): its intervals 1 .. N - 1, the same values."""
+        return cls(
+            length=max(plan.steps - 1, 0),
+            prescale=plan.prescale,
+            c_first=plan.c_first,
+            c_last=plan.c_last,
+            sa=plan.sa,
+            c_sa=plan.c_sa,
+            sd=plan.sd,
+            c_sd=plan.c_sd,
+            accel_seed=plan.accel_seed,
+            decel_seed=plan.decel_seed,
+            cruise=plan.cruise,
+            stop_ratio=plan.stop_ratio,
+            head=UP,
+            head_index=0,
+        )
+
+
+@dataclass(frozen=True)
+class Change:
+    """What plan_change returns: the segment taken over at pulse P, the speed it starts at (steps/s, snapped to its
+    head ramp) and, when the target lies inside the stop distance, the move from rest back to it (signed steps
+    relative to the segment's direction: always negative), else None."""
+
+    segment: Segment
+    start_speed: float
+    back: Plan | None
+
+
+def speed_at_pulse(info: MoveInfo, p: int) -> float:
+    """Speed (steps/s) of a planned move's trapezoid at its pulse p (position p): the u of plan_change."""
+    if info.length <= 0 or p <= 0 or p >= info.length:
+        return 0.0
+    x = float(p)
+    if x <= info.x_a:
+        return math.sqrt(2.0 * info.a * x)
+    if x <= info.x_d:
+        return info.v_peak
+    return math.sqrt(2.0 * info.d * (info.length - x))
+
+
+def _sum_products(lo: int, hi: int) -> float:
+    """P(lo + 1) + .. + P(hi), P = decel_product: the sums telescope, S(n) = 2 (n + 3/4) P(n) - 3/2."""
+
+    def s(n: int) -> float:
+        return 2.0 * (n + 0.75) * decel_product(n) - 1.5
+
+    return s(hi) - s(lo)
+
+
+class _Profile:
+    """The segment's exact trajectory in pieces where the squared speed is linear in the position x (counted from
+    pulse P): s^2(x) = s0 + slope * x on [x_start, x_end]; interval i is the time from x = i - 1 to i."""
+
+    def __init__(self, f_tick: float) -> None:
+        self.f_tick = f_tick
+        self.pieces: list[tuple[float, float, float, float]] = []
+
+    def add(self, x_start: float, x_end: float, s0: float, slope: float) -> None:
+        if x_end > x_start:
+            self.pieces.append((x_start, x_end, s0, slope))
+
+    def interval(self, i: int) -> float:
+        """Exact interval i in ticks: 2 dx / (s(x1) + s(x2)) on each piece it overlaps (no cancellation)."""
+        t = 0.0
+        for x_start, x_end, s0, slope in self.pieces:
+            x1, x2 = max(x_start, i - 1.0), min(x_end, float(i))
+            if x2 > x1:
+                s1 = math.sqrt(max(s0 + slope * x1, 0.0))
+                s2 = math.sqrt(max(s0 + slope * x2, 0.0))
+                t += 2.0 * (x2 - x1) / (s1 + s2)
+        return t * self.f_tick
+
+
+def plan_change(
+    u: float,
+    remaining: int | None,
+    accel: float,
+    decel: float,
+    speed: float,
+    spr: float,
+    fclk: float,
+    prescale: int = 1,
+) -> Change:
+    """The continuation from speed u (steps/s, >= 0) at pulse P with new accel, decel (rad/s^2) and speed (rad/s):
+    to the target `remaining` steps ahead of P (>= 0), or endless (None: jog at `speed`). Raises ValueError with the
+    reason when the segment does not fit the engine."""
+    accel = _check_positive("accel", accel)
+    decel = _check_positive("decel", decel)
+    speed = _check_positive("speed", speed)
+    spr = _check_positive("spr", spr)
+    fclk = _check_positive("fclk", fclk)
+    prescale = _check_int("prescale", prescale)
+    if not 1 <= prescale <= MAX_PRESCALE:
+        raise ValueError(f"prescale must be an integer in 1 .. {MAX_PRESCALE}, got {prescale}")
+    if isinstance(u, bool) or not isinstance(u, (int, float)) or not (math.isfinite(u) and u >= 0.0):
+        raise ValueError(f"the speed at the change must be finite and >= 0, got {u!r}")
+    if remaining is not None:
+        remaining = _check_int("remaining", remaining)
+        if not 0 <= remaining <= MAX_STEPS:
+            raise ValueError(f"remaining must be in 0 .. 2^31 - 1 steps, got {remaining}")
+    f_tick = fclk / prescale
+    alpha = 2.0 * math.pi / spr
+    a, d, v = accel / alpha, decel / alpha, speed / alpha
+    ratio = _stop_ratio(accel, decel)
+    k = math.floor(u * u / (2.0 * d))  # the decel ramp's index at u: rest k steps ahead (floored)
+    if remaining is not None and remaining < k:
+        # The target is inside the stop distance (or behind the motor): to rest k steps ahead, then back from rest.
+        back = plan_move(-(k - remaining), accel, decel, speed, spr, fclk, prescale)
+        return Change(_stop_segment(k, d, f_tick, prescale, ratio), math.sqrt(2.0 * d * k), back)
+    if remaining == 0:
+        return Change(_stop_segment(0, d, f_tick, prescale, ratio), 0.0, None)
+
+    positioning = remaining is not None
+    end = float(remaining) if remaining is not None else math.inf
+    cap2 = 2.0 * d * end  # the fastest start that still stops at the target
+    profile = _Profile(f_tick)
+    head, index, x_h = UP, 0, 0.0
+    if u < v:
+        n0 = round(u * u / (2.0 * a))
+        if positioning:
+            n0 = min(n0, math.floor(cap2 / (2.0 * a)))
+        start2 = 2.0 * a * n0
+        peak2 = min(v * v, 2.0 * a * d * (end + n0) / (a + d)) if positioning else v * v
+        if start2 < peak2:  # the head: the accel ramp of a virtual move from rest n0 steps behind P
+            index, x_h = n0, (peak2 - start2) / (2.0 * a)
+            profile.add(0.0, x_h, start2, 2.0 * a)
+        else:  # the snap reaches the speed: cruise from interval 1
+            start2 = peak2 = min(v * v, cap2)
+    else:
+        start2, peak2 = 2.0 * d * k, v * v
+        if start2 > peak2:  # the head: the decel ramp towards a virtual rest k steps ahead, down to v
+            head, index, x_h = DOWN, k, (start2 - peak2) / (2.0 * d)
+            profile.add(0.0, x_h, start2, -2.0 * d)
+        else:  # the snap is at or below the speed: cruise at v from interval 1
+            start2 = peak2 = min(v * v, cap2)
+    x_c = end - peak2 / (2.0 * d)
+    profile.add(x_h, x_c, peak2, 0.0)
+    if positioning:
+        profile.add(x_c, end, cap2, -2.0 * d)
+    v_peak = math.sqrt(peak2)
+    _check_speed(f_tick, max(v_peak, math.sqrt(start2)), prescale)
+
+    last = remaining if remaining is not None else MAX_STEPS
+
+    def boundary(x: float) -> int:
+        return min(max(math.floor(x) + 1, 1), last)
+
+    sa = boundary(x_h)
+    sd = boundary(x_c) if positioning else 0
+    t_first = profile.interval(1)
+    n = sa - 2  # the head's recurrence intervals 2 .. sa - 1
+    if head == UP:
+        c0 = f_tick * math.sqrt(2.0 / a)
+        seed = SEED_FACTOR * c0 * decel_product(index)
+        if n >= 1:  # A_{n0+1} .. A_{n0+n} against the ideal from virtual position n0 + 1 to n0 + n + 1
+            unit = _sum_products(index, index + n) / decel_product(index)
+            half = (c0 * (math.sqrt(index + n + 1.0) - math.sqrt(index + 1.0)) - seed * unit) / 2.0
+            t_first, seed = t_first + half, seed + half / unit
+    else:
+        cd0 = f_tick * math.sqrt(2.0 / d)
+        seed = SEED_FACTOR * cd0 * decel_product(max(index - 2, 0))
+        if n >= 1:  # D_{K-2} .. D_{K-1-n} against the ideal from K - 1 to K - 1 - n steps before the virtual rest
+            unit = _sum_products(index - 2 - n, index - 2) / decel_product(index - 2)
+            half = (cd0 * (math.sqrt(index - 1.0) - math.sqrt(index - 1.0 - n)) - seed * unit) / 2.0
+            t_first, seed = t_first + half, seed + half / unit
+    return Change(
+        Segment(
+            length=remaining,
+            prescale=prescale,
+            sa=sa,
+            sd=sd,
+            accel_seed=_to_fixed("accel_seed", seed, FRAC_RAMP, REG_WIDTHS["accel_seed"]),
+            cruise=_cruise(f_tick, v_peak),
+            stop_ratio=ratio,
+            head=head,
+            head_index=index,
+            **_fields(profile, remaining, sa, sd, d, f_tick, t_first),
+        ),
+        math.sqrt(start2),
+        None,
+    )
+
+
+def _fields(
+    profile: _Profile, length: int | None, sa: int, sd: int, d: float, f_tick: float, t_first: float
+) -> dict[str, int]:
+    """c_first, c_last, c_sa, c_sd and decel_seed (the final ramp's, with half its deficit put back as in a move)."""
+    w48 = REG_WIDTHS["c_first"]
+    out = {"c_first": 0, "c_last": 0, "c_sa": 0, "c_sd": 0, "decel_seed": 0}
+    if length is not None and length < 1:
+        return out
+    out["c_first"] = _to_fixed("c_first", t_first, FRAC_RAMP, w48)
+    out["c_sa"] = _to_fixed("c_sa", profile.interval(sa), FRAC_RAMP, w48)
+    if length is None:
+        return out
+    out["c_last"] = _to_fixed("c_last", profile.interval(length), FRAC_RAMP, w48)
+    out["c_sd"] = _to_fixed("c_sd", profile.interval(sd), FRAC_RAMP, w48)
+    m0 = length - sd - 1
+    if m0 >= 1:
+        cd0 = f_tick * math.sqrt(2.0 / d)
+        seed_d = SEED_FACTOR * cd0 * decel_product(m0)
+        unit_d = 2.0 * (m0 + 0.75) - 1.5 / decel_product(m0)
+        seed_d += (cd0 * (math.sqrt(m0 + 1.0) - 1.0) - seed_d * unit_d) / 2.0 / unit_d
+        out["decel_seed"] = _to_fixed("decel_seed", seed_d, FRAC_RAMP, w48)
+    return out
+
+
+def _stop_segment(k: int, d: float, f_tick: float, prescale: int, ratio: int) -> Segment:
+    """A decel at d to rest k steps ahead: no head, the decel ramp of a move (sa = sd = 1)."""
+    profile = _Profile(f_tick)
+    profile.add(0.0, float(k), 2.0 * d * k, -2.0 * d)
+    seg = _fields(profile, k, 1, 1, d, f_tick, profile.interval(1) if k >= 1 else 0.0)
+    return Segment(
+        length=k,
+        prescale=prescale,
+        sa=1 if k >= 1 else 0,
+        sd=1 if k >= 1 else 0,
+        accel_seed=0,
+        cruise=0,
+        stop_ratio=ratio,
+        head=UP,
+        head_index=0,
+        **seg,
+    )
+
+
+def _check_speed(f_tick: float, fastest: float, prescale: int) -> None:
+    """The segment's shortest interval must leave the engine its MIN_INTERVAL_CLKS (as plan.py checks a move)."""
+    shortest = f_tick / fastest if fastest > 0.0 else math.inf
+    if not shortest >= 1.0 or math.floor(shortest) * prescale < MIN_INTERVAL_CLKS:
+        raise ValueError(
+            f"speed too high for the hardware to compute the next delay in time: shortest interval "
+            f"floor({shortest:.6g}) ticks * prescale {prescale} < {MIN_INTERVAL_CLKS} clocks"
+        )

@@ -1,0 +1,231 @@
+# SPDX-License-Identifier: MIT
+"""Continuation segments (docs/algorithm.md, "Changes while moving"): the driver's segments through the bit-exact
+model, judged by the ideal motion after the change (stepramp.models.ideal.IdealSegment), not by themselves.
+
+Random cases print their seed (STEPRAMP_SEED replays one); the bound is that of a move from rest.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import random
+from dataclasses import dataclass
+
+import pytest
+
+from stepramp.board.change import DOWN, UP, Change, Segment, plan_change, speed_at_pulse
+from stepramp.board.plan import FRAC_CRUISE, MIN_INTERVAL_CLKS, plan_move, plan_move_info
+from stepramp.models import ideal
+from stepramp.models.engine import interval_values, segment_ticks, segment_values
+from stepramp.sim.profiles import PROFILES
+
+BOUND_C0 = 0.008  # units of c0 of the slower ramp (a or d), as sw/tests/test_model.py holds a move
+BOUND_TICKS = 2.0
+SEED = int(os.environ.get("STEPRAMP_SEED", "20261126"))
+
+
+@dataclass(frozen=True)
+class Case:
+    """A change in physical units: speed u (steps/s) at the change, the new accel, decel, speed, the distance."""
+
+    u: float
+    remaining: int | None
+    accel: float
+    decel: float
+    speed: float
+    spr: float
+    fclk: float
+    prescale: int = 1
+
+    @property
+    def alpha(self) -> float:
+        return 2.0 * math.pi / self.spr
+
+    @property
+    def f_tick(self) -> float:
+        return self.fclk / self.prescale
+
+    def plan(self) -> Change:
+        return plan_change(
+            self.u, self.remaining, self.accel, self.decel, self.speed, self.spr, self.fclk, self.prescale
+        )
+
+
+def _kind(change: Change) -> str:
+    seg = change.segment
+    kind = "stop" if change.back is not None else seg.head
+    return kind if seg.length is not None else f"{kind}-jog"
+
+
+def _check(case: Case) -> tuple[str, float]:
+    """Every pulse of the segment within the bound of the ideal from the snapped start speed; returns (kind, worst
+    error in c0 of the slower ramp)."""
+    change = case.plan()
+    seg = change.segment
+    a, d, v = case.accel / case.alpha, case.decel / case.alpha, case.speed / case.alpha
+    count = seg.length if seg.length is not None else seg.sa + 400
+    ticks = segment_ticks(seg, count)
+    judge = ideal.IdealSegment(change.start_speed, a, d, v, seg.length, case.f_tick).pulse_times(count)
+    c0_slow = case.f_tick * math.sqrt(2.0 / min(a, d))
+    errors = [abs(t - x) for t, x in zip(ticks, judge, strict=True)]
+    worst = max(errors)
+    assert worst <= BOUND_C0 * c0_slow + BOUND_TICKS, (
+        f"{case}: pulse {errors.index(worst)} is {worst:.2f} ticks off the ideal ({worst / c0_slow:.5f} c0)"
+    )
+    return _kind(change), worst / c0_slow
+
+
+def _random_case(rng: random.Random) -> Case | None:
+    spr = rng.choice([200.0, 400.0, 1600.0, 3200.0])
+    fclk = rng.choice([1e6, 2e6, 10e6])
+    accel, decel = rng.uniform(5.0, 500.0), rng.uniform(5.0, 500.0)
+    speed = rng.uniform(2.0, 60.0)
+    alpha = 2.0 * math.pi / spr
+    v = speed / alpha
+    u = rng.uniform(0.0, 1.5) * v * rng.choice([0, 1, 1, 1])
+    if fclk / max(v, u) < 80.0:  # faster than the engine allows (64 clocks): not a case the driver plans
+        return None
+    return Case(u, rng.choice([None, rng.randint(0, 3000)]), accel, decel, speed, spr, fclk)
+
+
+def test_a_move_from_rest_is_the_segment_with_head_up_at_index_0() -> None:
+    # The segment's rules reduce to those of a move (sw/tests/test_model.py judges those against physics).
+    for profile in PROFILES[:16]:
+        plan = plan_move(**profile.args())
+        seg = Segment.of_move(plan)
+        assert segment_values(seg, seg.length or 0) == list(interval_values(plan)), profile.name
+
+
+def test_the_judge_from_rest_is_the_ideal_move() -> None:
+    # IdealSegment with u = 0 is the ideal trapezoid / triangle of stepramp.models.ideal, written differently.
+    for length, v in ((1000, 40.0), (1000, 400.0), (37, 5.0)):
+        move = ideal.IdealMove(length, 300.0, 120.0, v, 1e6, *_shape(length, 300.0, 120.0, v))
+        seg = ideal.IdealSegment(0.0, 300.0, 120.0, v, length, 1e6)
+        for k in range(length + 1):
+            assert seg.time_at(k) == pytest.approx(move.time_at(k), rel=1e-9, abs=1e-6)
+
+
+def _shape(length: int, a: float, d: float, v: float) -> tuple[float, float, float, bool]:
+    n_a, n_d = v * v / (2 * a), v * v / (2 * d)
+    if n_a + n_d <= length:
+        return n_a, length - n_d, v, False
+    x_p = length * d / (a + d)
+    return x_p, x_p, math.sqrt(2 * a * x_p), True
+
+
+def test_random_segments_against_physics() -> None:
+    rng = random.Random(SEED)
+    print(f"seed {SEED} (STEPRAMP_SEED={SEED} replays it)")
+    kinds: dict[str, int] = {}
+    worst = 0.0
+    checked = 0
+    while checked < 400:
+        case = _random_case(rng)
+        if case is None:
+            continue
+        kind, err = _check(case)
+        kinds[kind] = kinds.get(kind, 0) + 1
+        worst = max(worst, err)
+        checked += 1
+    print(f"400 segments, worst {worst:.5f} c0, kinds {sorted(kinds.items())}")
+    assert set(kinds) == {"up", "down", "stop", "up-jog", "down-jog"}, kinds
+
+
+@pytest.mark.parametrize("profile", [p for p in PROFILES if abs(p.steps) > 8][:24:3], ids=lambda p: p.name)
+def test_changes_from_every_phase_of_a_move(profile) -> None:  # type: ignore[no-untyped-def]
+    """From pulses in ACCEL, RUN and DECEL of a planned move: faster, slower, a nearer and a farther target, a target
+    behind the motor. The start is within one step of the new ramp of the speed at the pulse, the motion never
+    faster than the commanded speed or the speed at the change, and it ends exactly on the target."""
+    args = profile.args()
+    _, info = plan_move_info(**args)
+    alpha = 2.0 * math.pi / args["spr"]
+    checked = 0
+    for p in sorted({1, info.length // 5, info.length // 2, (4 * info.length) // 5, info.length - 2}):
+        u = speed_at_pulse(info, p)
+        left = info.length - p
+        for speed_factor, accel_factor, target in (
+            (1.5, 1.0, left),
+            (0.5, 2.0, left),
+            (1.0, 0.5, left + 500),
+            (0.8, 1.0, left // 3),
+            (1.0, 1.0, 0),
+        ):
+            new_speed = args["speed"] * speed_factor
+            if math.floor(args["fclk"] / args["prescale"] / (new_speed / alpha)) * args["prescale"] < MIN_INTERVAL_CLKS:
+                continue  # faster than the engine allows: plan_change refuses it (test_bad_changes_raise_...)
+            case = Case(
+                u, target, args["accel"] * accel_factor, args["decel"], new_speed, args["spr"], args["fclk"],
+                args["prescale"],
+            )  # fmt: skip
+            change = case.plan()
+            a, d = case.accel / alpha, case.decel / alpha
+            seg = change.segment
+            step2 = 2.0 * max(a, d)  # one step of a ramp, in squared speed
+            assert abs(change.start_speed**2 - u * u) <= step2 * (1 + 1e-9), (profile.name, p, change.start_speed, u)
+            _check(case)
+            fastest = max(new_speed / alpha, change.start_speed)
+            shortest = min(segment_values(seg, seg.length or 0), default=1 << 80) / (1 << FRAC_CRUISE)
+            assert shortest >= case.f_tick / fastest * (1 - 1e-3), (profile.name, p, shortest, case.f_tick / fastest)
+            back = 0 if change.back is None else change.back.steps
+            assert (seg.length or 0) - back == target, (profile.name, p, seg.length, back, target)
+            assert change.back is None or change.back.direction == 1
+            checked += 1
+    assert checked >= 10, f"{profile.name}: only {checked} changes fit the engine's speed limit"
+
+
+def test_named_changes() -> None:
+    """Speed up and slow down in RUN, a retarget inside the stop distance and one behind the motor, jog from rest."""
+    spr, fclk, accel, decel, speed = 400.0, 1e6, 100.0, 80.0, 20.0
+    alpha = 2.0 * math.pi / spr
+    v = speed / alpha
+    faster = Case(v, 4000, accel, decel, 2 * speed, spr, fclk).plan()
+    assert faster.segment.head == UP and faster.segment.head_index == round(v * v / (2 * accel / alpha))
+    slower = Case(v, 4000, accel, decel, speed / 2, spr, fclk).plan()
+    assert slower.segment.head == DOWN and slower.segment.head_index == math.floor(v * v / (2 * decel / alpha))
+    stop_distance = v * v / (2 * decel / alpha)
+    inside = Case(v, int(stop_distance) - 50, accel, decel, speed, spr, fclk).plan()
+    assert inside.back is not None and inside.segment.length == math.floor(stop_distance)
+    assert inside.segment.length - inside.back.steps == int(stop_distance) - 50
+    behind = Case(v, 0, accel, decel, speed, spr, fclk).plan()
+    assert behind.back is not None and behind.back.steps == behind.segment.length
+    jog = Case(0.0, None, accel, decel, speed, spr, fclk).plan()
+    assert jog.segment.length is None and jog.segment.head_index == 0 and jog.start_speed == 0.0
+    for case in (
+        Case(v, 4000, accel, decel, 2 * speed, spr, fclk),
+        Case(v, 4000, accel, decel, speed / 2, spr, fclk),
+        Case(v, int(stop_distance) - 50, accel, decel, speed, spr, fclk),
+        Case(0.0, None, accel, decel, speed, spr, fclk),
+        Case(v, None, accel, decel, speed / 4, spr, fclk),
+    ):
+        _check(case)
+
+
+def test_speed_at_pulse_is_the_trapezoid() -> None:
+    for profile in PROFILES[:12]:
+        args = profile.args()
+        _, info = plan_move_info(**args)
+        move = ideal.ideal_move(args["steps"], args["accel"], args["decel"], args["speed"], args["spr"], args["fclk"])
+        for p in range(0, info.length + 1, max(info.length // 17, 1)):
+            assert speed_at_pulse(info, p) == pytest.approx(move.speed_at(p), rel=1e-12, abs=1e-12), (profile.name, p)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "reason"),
+    [
+        ({"u": -1.0}, "speed at the change"),
+        ({"u": math.nan}, "speed at the change"),
+        ({"remaining": -1}, "remaining"),
+        ({"accel": 0.0}, "accel"),
+        ({"speed": 1e9, "remaining": None}, "too high"),
+        ({"prescale": 0}, "prescale"),
+    ],
+)
+def test_bad_changes_raise_with_the_reason(kwargs: dict[str, float | None], reason: str) -> None:
+    base: dict[str, float | int | None] = {
+        "u": 10.0, "remaining": 100, "accel": 50.0, "decel": 50.0, "speed": 10.0, "spr": 400.0, "fclk": 1e6,
+        "prescale": 1,
+    }  # fmt: skip
+    base.update(kwargs)
+    with pytest.raises(ValueError, match=reason):
+        plan_change(**base)  # type: ignore[arg-type]
