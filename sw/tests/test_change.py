@@ -17,11 +17,21 @@ import pytest
 from stepramp.board.change import DOWN, UP, Change, Segment, plan_change, speed_at_pulse
 from stepramp.board.plan import FRAC_CRUISE, MIN_INTERVAL_CLKS, plan_move, plan_move_info
 from stepramp.models import ideal
-from stepramp.models.engine import interval_values, segment_ticks, segment_values
+from stepramp.models.engine import (
+    interval_values,
+    segment_stop_length,
+    segment_stop_values,
+    segment_ticks,
+    segment_values,
+    soft_stop_values,
+)
 from stepramp.sim.profiles import PROFILES
 
 BOUND_C0 = 0.008  # units of c0 of the slower ramp (a or d), as sw/tests/test_model.py holds a move
 BOUND_TICKS = 2.0
+# A soft stop in a down head continues its recurrence to rest without the decel deficit put back (0.014 c0 near
+# rest, docs/algorithm.md "Recurrence deficit"); a soft stop in a move is not held to the pulse bound at all.
+STOP_BOUND_C0 = 0.016
 SEED = int(os.environ.get("STEPRAMP_SEED", "20261126"))
 
 
@@ -229,3 +239,85 @@ def test_bad_changes_raise_with_the_reason(kwargs: dict[str, float | None], reas
     base.update(kwargs)
     with pytest.raises(ValueError, match=reason):
         plan_change(**base)  # type: ignore[arg-type]
+
+
+def test_a_soft_stop_in_a_move_from_rest_is_as_in_the_move() -> None:
+    # The segment's stop rules reduce to those of a move (sw/tests/test_model_stop.py judges those against physics).
+    for profile in PROFILES[:12]:
+        plan = plan_move(**profile.args())
+        seg = Segment.of_move(plan)
+        for p in range(0, plan.steps + 1, max(plan.steps // 23, 1)):
+            assert segment_stop_values(seg, p) == soft_stop_values(plan, p), (profile.name, p)
+
+
+def _stop_cases(rng: random.Random, head: str) -> list[tuple[Case, Change]]:
+    out: list[tuple[Case, Change]] = []
+    while len(out) < 60:
+        case = _random_case(rng)
+        if case is None:
+            continue
+        change = case.plan()
+        if change.back is None and change.segment.head == head and change.segment.sa >= 3:
+            out.append((case, change))
+    return out
+
+
+def test_a_soft_stop_in_a_down_head_goes_on_to_its_rest() -> None:
+    """Down head: the stop is the head's own decel continued to the virtual rest K, within the pulse bound of the
+    ideal decel from the segment's start speed to rest K steps ahead."""
+    rng = random.Random(SEED + 1)
+    print(f"seed {SEED} (STEPRAMP_SEED={SEED} replays it)")
+    worst = 0.0
+    for case, change in _stop_cases(rng, DOWN):
+        seg = change.segment
+        a, d = case.accel / case.alpha, case.decel / case.alpha
+        k = seg.head_index
+        judge = ideal.IdealSegment(change.start_speed, a, d, change.start_speed, k, case.f_tick).pulse_times(k)
+        c0_slow = case.f_tick * math.sqrt(2.0 / min(a, d))
+        for p in sorted({1, seg.sa // 2, seg.sa - 1}):
+            values = segment_stop_values(seg, p)
+            if seg.length is not None and k >= seg.length:
+                assert values is None  # the segment's own decel ends no later
+                continue
+            assert values is not None and len(values) == k, (case, p)
+            ticks = _ticks(values)
+            err = max(abs(t - x) for t, x in zip(ticks, judge, strict=True))
+            assert err <= STOP_BOUND_C0 * c0_slow + BOUND_TICKS, (case, p, err / c0_slow)
+            worst = max(worst, err / c0_slow)
+    print(f"down-head stops: worst {worst:.5f} c0")
+
+
+@pytest.mark.parametrize("head", [UP, DOWN])
+def test_a_soft_stop_takes_the_stop_distance(head: str) -> None:
+    """In an up head and in the cruise (jog or positioning), m is v_p^2 / (2 d) from the ideal speed at pulse p, to
+    within a step and the Q16.16 ratio's rounding; the stop's first interval is never shorter than the segment's."""
+    rng = random.Random(SEED + 2)
+    print(f"seed {SEED} (STEPRAMP_SEED={SEED} replays it)")
+    for case, change in _stop_cases(rng, head):
+        seg = change.segment
+        a, d = case.accel / case.alpha, case.decel / case.alpha
+        peak2 = (case.f_tick * (1 << FRAC_CRUISE) / seg.cruise) ** 2  # the cruise speed, from its register
+        top = seg.sa + 5 if seg.length is None else seg.length
+        for p in sorted({1, seg.sa // 2, seg.sa - 1, seg.sa, seg.sa + 3, top - 1}):
+            if head == DOWN and p < seg.sa:
+                continue  # the previous test
+            m = segment_stop_length(seg, p)
+            if m is None:
+                continue
+            v2 = min(change.start_speed**2 + 2.0 * a * p, peak2) if p < seg.sa else peak2
+            want = v2 / (2.0 * d)
+            assert abs(m - want) <= 1.0 + want * 2.0**-16 / (case.accel / case.decel), (case, p, m, want)
+            values = segment_stop_values(seg, p)
+            assert values is not None and len(values) == p + m
+            if m >= 2:
+                assert values[p] >= segment_values(seg, p + 1)[p], (case, p)
+
+
+def _ticks(values: list[int]) -> list[int]:
+    times, t, acc = [0], 0, 0
+    for value in values:
+        s = acc + value
+        t += s >> FRAC_CRUISE
+        acc = s & ((1 << FRAC_CRUISE) - 1)
+        times.append(t)
+    return times

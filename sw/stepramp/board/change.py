@@ -35,13 +35,15 @@ DOWN = "down"
 _SEGMENT_WIDTHS = {name: REG_WIDTHS[name] for name in ("prescale", "c_first", "c_last", "sa", "c_sa", "sd", "c_sd")}
 _SEGMENT_WIDTHS |= {name: REG_WIDTHS[name] for name in ("accel_seed", "decel_seed", "cruise", "stop_ratio")}
 _SEGMENT_WIDTHS["head_index"] = 31
+_SEGMENT_WIDTHS["run_stop"] = 31
 
 
 @dataclass(frozen=True)
 class Segment:
     """The engine's inputs for a continuation: a plan over the segment's own intervals 1 .. length, with a head ramp
     that may start at speed (up: accel recurrence from index head_index; down: decel recurrence towards a virtual
-    rest at the end of interval head_index). length None: endless (jog)."""
+    rest at the end of interval head_index). length None: endless (jog); run_stop is then the length of a soft
+    stop decided in its cruise (a positioning segment takes L - sd + 1, as a move does)."""
 
     length: int | None
     prescale: int
@@ -57,6 +59,7 @@ class Segment:
     stop_ratio: int
     head: str
     head_index: int
+    run_stop: int = 0
 
     def __post_init__(self) -> None:
         if self.length is not None and not 0 <= self.length <= MAX_STEPS:
@@ -249,6 +252,8 @@ def plan_change(
             stop_ratio=ratio,
             head=head,
             head_index=index,
+            # a soft stop in the cruise of a jog: v^2 / (2 d) rounded up, the L - sd + 1 a move would take
+            run_stop=math.ceil(peak2 / (2.0 * d)) if remaining is None else 0,
             **_fields(profile, remaining, sa, sd, d, f_tick, t_first),
         ),
         math.sqrt(start2),
@@ -266,7 +271,8 @@ def _fields(
         return out
     out["c_first"] = _to_fixed("c_first", t_first, FRAC_RAMP, w48)
     out["c_sa"] = _to_fixed("c_sa", profile.interval(sa), FRAC_RAMP, w48)
-    if length is None:
+    if length is None:  # c_last: the last step of a soft stop, the exact last step of a decel at d (cd0)
+        out["c_last"] = _to_fixed("c_last", f_tick * math.sqrt(2.0 / d), FRAC_RAMP, w48)
         return out
     out["c_last"] = _to_fixed("c_last", profile.interval(length), FRAC_RAMP, w48)
     out["c_sd"] = _to_fixed("c_sd", profile.interval(sd), FRAC_RAMP, w48)

@@ -8,6 +8,7 @@ The RTL is compared edge for edge with :func:`edges`. The list functions are for
 from __future__ import annotations
 
 import bisect
+import dataclasses
 import itertools
 from collections.abc import Iterable, Iterator
 from typing import TYPE_CHECKING
@@ -509,3 +510,44 @@ def segment_ticks(seg: Segment, count: int, acc: int = 0) -> list[int]:
         acc = s & _FRAC_MASK
         times.append(t)
     return times
+
+
+def segment_stop_length(seg: Segment, p: int) -> int | None:
+    """m of a soft stop decided at the segment's pulse p (the intervals after it), None when it is ignored: at or
+    after the last pulse, in the final decel, or when p + m reaches the segment's own end. In an up head
+    m = floor((n0 + p) stop_ratio / 2^16) (the ACCEL rule at the virtual index); in a down head m = K - p (the head
+    goes on to its virtual rest); in the cruise L - sd + 1, or run_stop for an endless segment."""
+    length = seg.length
+    if length is not None and (p >= length or p >= seg.sd):
+        return None
+    if p < seg.sa:
+        m = seg.head_index - p if seg.head == "down" else (seg.head_index + p) * seg.stop_ratio >> STOP_RATIO_FRAC
+    else:
+        m = length - seg.sd + 1 if length is not None else seg.run_stop
+    if length is not None and p + m >= length:
+        return None
+    return m
+
+
+def segment_stop_values(seg: Segment, p: int) -> list[int] | None:
+    """Q32.32 values of the segment's intervals 1 .. p + m with a soft stop decided at its pulse p (None: ignored).
+
+    Down head: the head's recurrence goes on, interval K (= p + m) gets c_last. Otherwise as soft_stop_values: D
+    is the Q32.16 value of interval p + 1, and interval p + j gets D_(m-j) from D_m := D, remainder 0."""
+    m = segment_stop_length(seg, p)
+    if m is None:
+        return None
+    if m == 0:
+        return segment_values(seg, p)
+    if seg.head == "down" and p < seg.sa:
+        end = p + m
+        return segment_values(dataclasses.replace(seg, length=end, sa=end, sd=end), end)
+    values = segment_values(seg, p + 1)
+    d_val = values.pop() >> _SHIFT
+    rem = 0
+    for j in range(m, 1, -1):  # D_(j-1) from D_j
+        q, rem = divmod(2 * d_val + rem, 4 * j - 1)
+        d_val += q
+        values.append(d_val << _SHIFT)
+    values.append(seg.c_last << _SHIFT)
+    return values
