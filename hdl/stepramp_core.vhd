@@ -73,6 +73,11 @@ architecture rtl of stepramp_core is
   signal decel_seed    : std_logic_vector(47 downto 0);
   signal cruise        : std_logic_vector(63 downto 0);
   signal stop_ratio    : std_logic_vector(31 downto 0);
+  signal head_down     : std_logic;
+  signal endless       : std_logic;
+  signal head_index    : std_logic_vector(30 downto 0);
+  signal run_stop      : std_logic_vector(30 downto 0);
+  signal head_prod     : std_logic_vector(47 downto 0);
   signal pos_load      : std_logic;
   signal pos_value     : std_logic_vector(31 downto 0);
   signal busy          : std_logic;
@@ -117,6 +122,11 @@ begin
       decel_seed     => decel_seed,
       cruise         => cruise,
       stop_ratio     => stop_ratio,
+      head_down      => head_down,
+      endless        => endless,
+      head_index     => head_index,
+      run_stop       => run_stop,
+      head_prod      => head_prod,
       pos_load       => pos_load,
       pos_value      => pos_value,
       enable         => ctrl_enable,
@@ -209,6 +219,11 @@ begin
       decel_seed => decel_seed,
       cruise     => cruise,
       stop_ratio => stop_ratio,
+      head_down  => head_down,
+      endless    => endless,
+      head_index => head_index,
+      run_stop   => run_stop,
+      head_prod  => head_prod,
       min_gap    => min_gap,
       pos_load   => pos_load,
       pos_value  => pos_value,

@@ -36,6 +36,12 @@ entity stepramp_engine is
     decel_seed : in    std_logic_vector(47 downto 0);
     cruise     : in    std_logic_vector(63 downto 0);
     stop_ratio : in    std_logic_vector(31 downto 0);
+    -- The segment (docs/algorithm.md, "Changes while moving"): all 0 for a move from rest to rest.
+    head_down  : in    std_logic;
+    endless    : in    std_logic;
+    head_index : in    std_logic_vector(30 downto 0);
+    run_stop   : in    std_logic_vector(30 downto 0);
+    head_prod  : in    std_logic_vector(47 downto 0);
     min_gap    : in    std_logic_vector(16 downto 0);
     pos_load   : in    std_logic;
     pos_value  : in    std_logic_vector(31 downto 0);
@@ -93,6 +99,13 @@ architecture rtl of stepramp_engine is
   signal p_decel_seed  : unsigned(47 downto 0);
   signal p_cruise      : unsigned(63 downto 0);
   signal p_stop_ratio  : unsigned(31 downto 0); -- accel / decel, Q16.16
+  signal p_head_down   : std_logic;
+  signal p_endless     : std_logic;
+  signal p_run_stop    : unsigned(30 downto 0);
+  -- For the parameter check, latched with the move: K - sa (bit 31 the borrow: a down head ends after its rest) and
+  -- n0 + sa - 1 (bit 31: an up head's last index passes 2^31 - 1).
+  signal p_k_sa  : unsigned(31 downto 0);
+  signal p_n0_sa : unsigned(31 downto 0);
 
   -- Move sequencer and outputs.
   signal phase        : std_logic_vector(1 downto 0);
@@ -245,6 +258,11 @@ begin
       decel_seed => std_logic_vector(p_decel_seed),
       cruise     => std_logic_vector(p_cruise),
       stop_ratio => std_logic_vector(p_stop_ratio),
+      head_index => head_index,
+      head_prod  => head_prod,
+      head_down  => p_head_down,
+      endless    => p_endless,
+      run_stop   => std_logic_vector(p_run_stop),
       nxt_ok     => nxt_ok,
       nxt_d      => nxt_d,
       nxt_state  => nxt_state,
@@ -270,6 +288,7 @@ begin
     variable v_chk   : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
     variable v_n_one : boolean;
     variable v_n_two : boolean;
+    variable v_fin   : boolean;
 
   begin
 
@@ -280,30 +299,34 @@ begin
       -- need. Once sa <= sd <= L holds (BOUNDS), sa <= L follows, sa = L is sa = sd = L, and sa, sd >= 1 make
       -- "/= 1" a test of the upper bits.
       -- p_l = N - 1 modulo 2^31: all ones for N = 0, 0 for N = 1.
-      v_n_one := p_l = 0;
-      v_n_two := p_l /= 0 and p_l /= C_L_OF_N0;
+      v_n_one := p_l = 0 and p_endless = '0';
+      v_n_two := (p_l /= 0 and p_l /= C_L_OF_N0) or p_endless = '1';
+      -- An endless move has no last interval and no final decel: sd and L are not read (v_fin: they are).
+      v_fin := p_endless = '0';
 
       v_chk := C_ERR_NONE;
       if (p_prescale = 0) then
         v_chk := C_ERR_PRESCALE;
       elsif (v_n_two) then
         -- N >= 2
-        if (p_sa = 0 or p_sd = 0 or p_sd_sa(31) = '1' or p_l_sd(31) = '1') then
+        if (p_sa = 0 or (v_fin and (p_sd = 0 or p_sd_sa(31) = '1' or p_l_sd(31) = '1'))) then
           v_chk := C_ERR_BOUNDS;
         elsif (p_c_first0 = '1') then
           v_chk := C_ERR_C_FIRST;
-        elsif (p_l(30 downto 1) /= 0 and p_c_last(47 downto 16) = 0) then
+        elsif ((p_l(30 downto 1) /= 0 or not v_fin) and p_c_last(47 downto 16) = 0) then
           v_chk := C_ERR_C_LAST;
-        elsif (p_sa(30 downto 1) /= 0 and (p_sd_sa /= 0 or p_l_sd /= 0) and p_c_sa(47 downto 16) = 0) then
+        elsif (p_sa(30 downto 1) /= 0 and (p_sd_sa /= 0 or p_l_sd /= 0 or not v_fin) and p_c_sa(47 downto 16) = 0) then
           v_chk := C_ERR_C_SA;
-        elsif (p_sd(30 downto 1) /= 0 and p_l_sd /= 0 and p_sd_sa /= 0 and p_c_sd(47 downto 16) = 0) then
+        elsif (v_fin and p_sd(30 downto 1) /= 0 and p_l_sd /= 0 and p_sd_sa /= 0 and p_c_sd(47 downto 16) = 0) then
           v_chk := C_ERR_C_SD;
-        elsif (p_sd_sa(30 downto 1) /= 0 and p_cruise(63 downto 32) = 0) then
+        elsif ((p_sd_sa(30 downto 1) /= 0 or not v_fin) and p_cruise(63 downto 32) = 0) then
           v_chk := C_ERR_CRUISE;
         elsif ((p_sa(30 downto 2) /= 0 or p_sa(1 downto 0) = "11") and p_accel_seed0 = '1') then
           v_chk := C_ERR_ACCEL_SEED;
-        elsif (p_l_sd(30 downto 1) /= 0 and p_decel_seed(47 downto 16) = 0) then
+        elsif (v_fin and p_l_sd(30 downto 1) /= 0 and p_decel_seed(47 downto 16) = 0) then
           v_chk := C_ERR_DECEL_SEED;
+        elsif ((p_head_down = '1' and p_k_sa(31) = '1') or (p_head_down = '0' and p_n0_sa(31) = '1')) then
+          v_chk := C_ERR_SEGMENT;
         end if;
       end if;
       chk_code <= v_chk;
@@ -501,6 +524,12 @@ begin
             p_decel_seed  <= unsigned(decel_seed);
             p_cruise      <= unsigned(cruise);
             p_stop_ratio  <= unsigned(stop_ratio);
+            -- The segment (head_index and head_prod go to the precompute only), and its check's two sums.
+            p_k_sa      <= ('0' & unsigned(head_index)) - ('0' & unsigned(sa));
+            p_n0_sa     <= ('0' & unsigned(head_index)) + ('0' & unsigned(sa)) - 1;
+            p_head_down <= head_down;
+            p_endless   <= endless;
+            p_run_stop  <= unsigned(run_stop);
           end if;
 
           if (start = '1') then

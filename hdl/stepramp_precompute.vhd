@@ -35,9 +35,16 @@ entity stepramp_precompute is
     c_sa       : in    std_logic_vector(47 downto 0);
     c_sd       : in    std_logic_vector(47 downto 0);
     accel_seed : in    std_logic_vector(47 downto 0);
+    -- Taken at latch, like c_first and accel_seed (the segment's head: docs/algorithm.md, "Changes while moving").
+    head_index : in    std_logic_vector(30 downto 0);
+    head_prod  : in    std_logic_vector(47 downto 0);
     decel_seed : in    std_logic_vector(47 downto 0);
     cruise     : in    std_logic_vector(63 downto 0);
     stop_ratio : in    std_logic_vector(31 downto 0);
+    -- The rest of the segment: all 0 for a move from rest to rest.
+    head_down : in    std_logic;
+    endless   : in    std_logic;
+    run_stop  : in    std_logic_vector(30 downto 0);
     -- The next interval, ready to be copied at the pulse edge.
     nxt_ok    : out   std_logic;
     nxt_d     : out   std_logic_vector(32 downto 0);
@@ -76,6 +83,21 @@ architecture rtl of stepramp_precompute is
   constant C_ALT_END    : std_logic_vector(1 downto 0) := "01"; -- m = 0: the move ends with this pulse
 
   constant C_Q16_PAD : unsigned(15 downto 0) := (others => '0');
+
+  -- The head counter one interval on: + 1 in an up head (the accel index n0 + j), - 1 in a down head (K - j).
+  function step_head (
+    ctr  : unsigned(30 downto 0);
+    down : std_logic
+  ) return unsigned is
+  begin
+
+    if (down = '1') then
+      return ctr - 1;
+    end if;
+
+    return ctr + 1;
+
+  end function step_head;
 
   -- The move, as numbers.
   signal p_l          : unsigned(30 downto 0);
@@ -117,6 +139,17 @@ architecture rtl of stepramp_precompute is
   signal pc_m        : unsigned(30 downto 0);
   signal pc_m_zero   : std_logic; -- pc_m = 0, set in IDX for DECIDE
   signal dec_started : std_logic;
+  -- The head ramp (intervals before sa): head_ctr is the up head's accel index n0 + pc_j, or the down head's
+  -- K - pc_j (the decel index of interval pc_j's value, and the m of a soft stop decided at pulse pc_j).
+  -- head_started: the down head's first value (the seed itself, interval 2) has been prepared. nxt_head_r: the
+  -- interval prepared is a head interval; cur_head: the interval now counting is (a soft stop in a down head).
+  signal head_ctr     : unsigned(30 downto 0);
+  signal head_started : std_logic;
+  signal nxt_head_r   : std_logic;
+  signal cur_head     : std_logic;
+  -- The alternative prepared is the down head going on (alt_kind LOAD in a down head): the head's next value, or
+  -- where that is c_sa, the head's own step.
+  signal alt_cont : std_logic;
   -- Recurrence state: A_{j-2} while accelerating, D_{L-j+1} while decelerating (never both in one move).
   signal rec_val : unsigned(47 downto 0);
   signal rec_rem : unsigned(32 downto 0);
@@ -353,7 +386,8 @@ begin
           -- IDX has moved it on); m = 0 ends the move with pulse c, m >= 1 loads the alternative. (Repeated
           -- unchanged while DECIDE waits.)
           alt_kind_r <= C_ALT_IGNORE;
-          if (stop_mode_r = '0' and (state_r = C_ST_ACCEL or state_r = C_ST_RUN)) then
+          alt_cont   <= head_down and cur_head;
+          if (stop_mode_r = '0' and (state_r = C_ST_ACCEL or state_r = C_ST_RUN or (head_down = '1' and cur_head = '1'))) then
             if (stop_big = '1' or stop_m > pc_m) then
               alt_kind_r <= C_ALT_IGNORE;
             elsif (stop_m = 0) then
@@ -370,9 +404,12 @@ begin
             le_sd     <= lt_sd;
             prod_step <= le_sa;
 
-            -- Ramp phase of interval j: ACCEL if j < sa, RUN if sa <= j < sd, DECEL if j >= sd (sa <= sd); all
-            -- intervals of a soft stop are DECEL.
+            -- Ramp phase of interval j: the head if j < sa (ACCEL, or DECEL in a down head), RUN if sa <= j < sd,
+            -- DECEL if j >= sd (sa <= sd); all intervals of a soft stop are DECEL.
+            nxt_head_r <= lt_sa and not stop_mode_r;
             if (stop_mode_r = '1') then
+              nxt_state_r <= C_ST_DECEL;
+            elsif (lt_sa = '1' and head_down = '1') then
               nxt_state_r <= C_ST_DECEL;
             elsif (lt_sa = '1') then
               nxt_state_r <= C_ST_ACCEL;
@@ -401,12 +438,21 @@ begin
             elsif (eq_sd = '1') then
               v_r      <= p_c_sd & C_Q16_PAD;
               pc_state <= C_PC_ADD;
-            elsif (lt_sa = '1') then
-              -- A_{j-1} from A_{j-2}.
+            elsif (lt_sa = '1' and head_down = '0') then
+              -- A_(n0+j-1) from A_(n0+j-2) (IDX set the index).
               req_r       <= '1';
               req_seed_r  <= '0';
               req_decel_r <= '0';
               pc_state    <= C_PC_WAIT;
+            elsif (lt_sa = '1' and head_started = '0') then
+              -- The down head's first value D_(K-2), interval 2: the seed itself (rec_val since setup, remainder 0).
+              v_r          <= rec_val & C_Q16_PAD;
+              head_started <= '1';
+              pc_state     <= C_PC_ADD;
+            elsif (lt_sa = '1') then
+              -- D_(K-j) from D_(K-j+1).
+              request('0', '1', head_ctr);
+              pc_state <= C_PC_WAIT;
             elsif (le_sd = '0') then
               -- D_{L-j}: the seed itself at j = sd + 1, else from D_{L-j+1}.
               request(not dec_started, '1', pc_m);
@@ -442,6 +488,13 @@ begin
             if (alt_one_r = '1') then
               v_r      <= p_c_last & C_Q16_PAD;
               pc_state <= C_PC_ALT_ADD;
+            elsif (alt_cont = '1' and eq_sa = '0') then
+              -- A down head goes on: its next value (in v_r) is the stop's too.
+              pc_state <= C_PC_ALT_ADD;
+            elsif (alt_cont = '1') then
+              -- ... and where it gave way to c_sa, its own value D_(K-sa).
+              request('0', '1', head_ctr);
+              pc_state <= C_PC_ALT_WAIT;
             else
               -- D_(m-1) = D + (2 D) div (4 m - 1): the unit's decel step at index m - 1.
               request('0', '1', stop_mm1);
@@ -476,6 +529,10 @@ begin
         nxt_acc <= unsigned(c_first(15 downto 0)) & C_Q16_PAD;
         rec_val <= unsigned(accel_seed);
         rec_rem <= (others => '0');
+        -- The head's index (setup moves it on to interval 2's), and an up head's running product n0 * stop_ratio.
+        head_ctr <= unsigned(head_index);
+        cur_prod <= unsigned(head_prod(46 downto 0));
+        prod_big <= head_prod(47);
       end if;
 
       if (begin_move = '1') then
@@ -487,6 +544,7 @@ begin
         stop_mode_r <= '0';
         alt_kind_r  <= C_ALT_IGNORE;
         alt_ok_r    <= '0';
+        cur_head    <= '0';
       end if;
 
       if (setup = '1') then
@@ -494,14 +552,17 @@ begin
         nxt_range <= '0';
         nxt_zero  <= '0';
         nxt_ok_r  <= '1';
-        if (p_sa(30 downto 1) /= 0) then
+        if (p_sa(30 downto 1) /= 0 and head_down = '1') then
+          nxt_state_r <= C_ST_DECEL;
+        elsif (p_sa(30 downto 1) /= 0) then
           nxt_state_r <= C_ST_ACCEL;
-        elsif (p_sd(30 downto 1) /= 0) then
+        elsif (p_sd(30 downto 1) /= 0 or endless = '1') then
           nxt_state_r <= C_ST_RUN;
         else
           nxt_state_r <= C_ST_DECEL;
         end if;
-        nxt_last_r <= to_sl(p_l = 1);
+        nxt_head_r <= to_sl(p_sa(30 downto 1) /= 0);
+        nxt_last_r <= to_sl(p_l = 1) and not endless;
 
         pc_j <= to_unsigned(1, 31);
         -- Interval 1 needs no DECIDE: the flags start as after it, (1 < sa) and (1 < sd).
@@ -510,14 +571,19 @@ begin
         if (p_sa(30 downto 1) /= 0) then
           le_sa <= '1';
         end if;
-        if (p_sd(30 downto 1) /= 0) then
+        if (p_sd(30 downto 1) /= 0 or endless = '1') then
           le_sd <= '1';
         end if;
-        prod_big    <= '0';
-        pc_m        <= p_l - 1;
-        dec_started <= '0';
-        cur_prod    <= (others => '0');
-        first_pend  <= '1';
+        -- An endless move never counts pc_m down (until a soft stop sets it).
+        pc_m      <= p_l - 1;
+        pc_m_zero <= '0';
+        if (endless = '1') then
+          pc_m <= (others => '1');
+        end if;
+        head_started <= '0';
+        head_ctr     <= step_head(head_ctr, head_down);
+        dec_started  <= '0';
+        first_pend   <= '1';
         -- Load the accel seed A_0 through the unit (at index 0), like the decel seed later: the unit sees the
         -- start of every value sequence, so a closed-form mode can take its constants from the seeds.
         request('1', '0', (others => '0'));
@@ -538,7 +604,8 @@ begin
       end if;
 
       if (advance = '1') then
-        acc <= nxt_acc;
+        acc      <= nxt_acc;
+        cur_head <= nxt_head_r;
         -- The interval loaded is pc_j (<= sa: the running product follows it). pc_j is 1 at pulse 0 (sa >= 1 there,
         -- the parameter check has passed: first_pend); any later pulse loads an interval whose DECIDE set prod_step.
         if (first_pend = '1' or prod_step = '1') then
@@ -558,10 +625,12 @@ begin
         stop_mode_r <= '1';
         -- D_(m-1) and its remainder, the stop's recurrence state: still the unit's last answer (ALT_WAIT took it,
         -- ALT_ADD set alt_ok, and nothing asks the unit between then and this edge).
-        rec_val <= unsigned(nd_value);
-        rec_rem <= unsigned(nd_rem);
-        v_pcm   := stop_mm1;
-        pc_m    <= stop_mm1;
+        -- (A down head going on: the unit's last answer is the head's own value of interval p + 1, or its seed.)
+        rec_val  <= unsigned(nd_value);
+        rec_rem  <= unsigned(nd_rem);
+        cur_head <= '0';
+        v_pcm    := stop_mm1;
+        pc_m     <= stop_mm1;
         prepare_unless_last(alt_one_r);
       end if;
 
@@ -570,29 +639,40 @@ begin
       if (v_idx) then
         -- The index of an accel step for interval pc_j + 1 (A_(pc_j) from A_(pc_j - 1)); DECIDE replaces it for
         -- any other request. The unit is idle here (flushed at the pulse edge), and latches the index it takes.
-        req_index_r <= pc_j;
-        -- The equalities of the new pc_j, registered here so that DECIDE starts from flip-flops.
+        -- (n0 + pc_j: head_ctr in an up head).
+        req_index_r <= head_ctr;
+        head_ctr    <= step_head(head_ctr, head_down);
+        -- The equalities of the new pc_j, registered here so that DECIDE starts from flip-flops (sa only while pc_j
+        -- is below it, and sd never in an endless move: pc_j may wrap there).
         eq_sa <= '0';
         eq_sd <= '0';
-        if (pc_j + 1 = p_sa) then
+        if (pc_j + 1 = p_sa and le_sa = '1') then
           eq_sa <= '1';
         end if;
-        if (pc_j + 1 = p_sd) then
+        if (pc_j + 1 = p_sd and endless = '0') then
           eq_sd <= '1';
         end if;
         pc_j <= pc_j + 1;
-        pc_m <= v_pcm - 1;
-        -- pc_m = 0 after this step (j = L: the last interval), as a flip-flop for DECIDE.
-        pc_m_zero <= '0';
-        if (v_pcm = 1) then
-          pc_m_zero <= '1';
+        -- pc_m = 0 after this step (j = L: the last interval), as a flip-flop for DECIDE; an endless move counts
+        -- only in a soft stop.
+        if (endless = '0' or stop_mode_r = '1' or take_alt = '1') then
+          pc_m      <= v_pcm - 1;
+          pc_m_zero <= to_sl(v_pcm = 1);
         end if;
         pc_state <= C_PC_DECIDE;
 
         -- The m of a soft stop decided at pulse c = pc_j (the end of the interval now counting):
         -- floor(c * stop_ratio / 2^16) in ACCEL, L - sd + 1 in RUN. DECIDE compares it with L - c.
-        if (state_r = C_ST_RUN) then
+        -- In a down head (interval c is one: nxt_head_r still tells it here) m = K - c, head_ctr before its step;
+        -- in the cruise of an endless move, run_stop.
+        if (state_r = C_ST_RUN and endless = '1') then
+          stop_m   <= unsigned(run_stop);
+          stop_big <= '0';
+        elsif (state_r = C_ST_RUN) then
           stop_m   <= p_l - p_sd + 1;
+          stop_big <= '0';
+        elsif (head_down = '1' and nxt_head_r = '1') then
+          stop_m   <= head_ctr;
           stop_big <= '0';
         else
           stop_m   <= v_cur_prod(46 downto 16);

@@ -41,6 +41,11 @@ entity stepramp_regfile is
     decel_seed : out   std_logic_vector(47 downto 0);
     cruise     : out   std_logic_vector(63 downto 0);
     stop_ratio : out   std_logic_vector(31 downto 0);
+    head_down  : out   std_logic;
+    endless    : out   std_logic;
+    head_index : out   std_logic_vector(30 downto 0);
+    run_stop   : out   std_logic_vector(30 downto 0);
+    head_prod  : out   std_logic_vector(47 downto 0);
     pos_load   : out   std_logic;
     pos_value  : out   std_logic_vector(31 downto 0);
     -- Stepping logic configuration.
@@ -68,14 +73,17 @@ end entity stepramp_regfile;
 
 architecture rtl of stepramp_regfile is
 
-  -- The plain read/write words: the motion registers STEPS .. STOP_RATIO, and the stepping configuration DRIVE ..
-  -- STEP_SPACE (written only while stopped). One register per word, indexed by word offset, reached with constant
+  -- The plain read/write words: the motion registers STEPS .. STOP_RATIO and SEGMENT .. HEAD_PROD_HI, and the
+  -- stepping configuration DRIVE .. STEP_SPACE (written only while stopped). One register per word, indexed by word
+  -- offset, reached with constant
   -- indices only (loops below), so no memory is inferred; the words in between are never written (constant 0).
   -- ram is their read-back copy (header), indexed by the word address; only its storage words are ever read.
   constant C_FIRST_W      : natural := C_REG_STEPS / 4;
   constant C_LAST_MOVE_W  : natural := C_REG_STOP_RATIO / 4;
   constant C_FIRST_CFG_W  : natural := C_REG_DRIVE / 4;
-  constant C_LAST_W       : natural := C_REG_STEP_SPACE / 4;
+  constant C_LAST_CFG_W   : natural := C_REG_STEP_SPACE / 4;
+  constant C_FIRST_SEG_W  : natural := C_REG_SEGMENT / 4;
+  constant C_LAST_W       : natural := C_REG_HEAD_PROD_HI / 4;
   constant C_ERR_CODE_MSB : natural := C_STATUS_ERR_CODE_LSB + C_STATUS_ERR_CODE_W - 1;
   constant C_WORDS        : natural := 2 ** (C_ADDR_BITS - 2);
 
@@ -155,7 +163,8 @@ architecture rtl of stepramp_regfile is
   ) return boolean is
   begin
 
-    return (w >= C_FIRST_W and w <= C_LAST_MOVE_W) or (w >= C_FIRST_CFG_W and w <= C_LAST_W);
+    return (w >= C_FIRST_W and w <= C_LAST_MOVE_W) or (w >= C_FIRST_CFG_W and w <= C_LAST_CFG_W) or
+           (w >= C_FIRST_SEG_W and w <= C_LAST_W);
 
   end function is_storage;
 
@@ -165,7 +174,7 @@ architecture rtl of stepramp_regfile is
   ) return boolean is
   begin
 
-    return w >= C_FIRST_CFG_W and w <= C_LAST_W;
+    return w >= C_FIRST_CFG_W and w <= C_LAST_CFG_W;
 
   end function is_config;
 
@@ -528,6 +537,11 @@ begin
   decel_seed <= mem(word(C_REG_DECEL_SEED_HI))(15 downto 0) & mem(word(C_REG_DECEL_SEED_LO));
   cruise     <= mem(word(C_REG_CRUISE_HI)) & mem(word(C_REG_CRUISE_LO));
   stop_ratio <= mem(word(C_REG_STOP_RATIO));
+  head_down  <= mem(word(C_REG_SEGMENT))(C_SEGMENT_HEAD_DOWN_LSB);
+  endless    <= mem(word(C_REG_SEGMENT))(C_SEGMENT_ENDLESS_LSB);
+  head_index <= mem(word(C_REG_HEAD_INDEX))(30 downto 0);
+  run_stop   <= mem(word(C_REG_RUN_STOP))(30 downto 0);
+  head_prod  <= mem(word(C_REG_HEAD_PROD_HI))(15 downto 0) & mem(word(C_REG_HEAD_PROD_LO));
   enable     <= enable_r;
   mode       <= mem(word(C_REG_DRIVE))(C_DRIVE_MODE_LSB + 2 downto C_DRIVE_MODE_LSB);
   ustep_log2 <= mem(word(C_REG_DRIVE))(C_DRIVE_USTEP_LOG2_LSB + 2 downto C_DRIVE_USTEP_LOG2_LSB);

@@ -8,8 +8,8 @@ library ieee;
 package stepramp_regs_pkg is
 
   -- Decoded address bits and the ID register's value.
-  constant C_ADDR_BITS : natural                       := 7;
-  constant C_ID_VALUE  : std_logic_vector(31 downto 0) := x"53520003";
+  constant C_ADDR_BITS : natural                       := 8;
+  constant C_ID_VALUE  : std_logic_vector(31 downto 0) := x"53520004";
 
   -- Byte offsets.
   constant C_REG_ID            : natural := 16#00#;
@@ -42,6 +42,11 @@ package stepramp_regs_pkg is
   constant C_REG_DIR_TIMING    : natural := 16#6C#;
   constant C_REG_PWM_PERIOD    : natural := 16#70#;
   constant C_REG_STEP_SPACE    : natural := 16#74#;
+  constant C_REG_SEGMENT       : natural := 16#78#;
+  constant C_REG_HEAD_INDEX    : natural := 16#7C#;
+  constant C_REG_RUN_STOP      : natural := 16#80#;
+  constant C_REG_HEAD_PROD_LO  : natural := 16#84#;
+  constant C_REG_HEAD_PROD_HI  : natural := 16#88#;
 
   -- Fields: lowest bit and width.
   constant C_CTRL_START_LSB        : natural := 0;
@@ -78,6 +83,10 @@ package stepramp_regs_pkg is
   constant C_DIR_TIMING_SETUP_W    : natural := 16;
   constant C_DIR_TIMING_HOLD_LSB   : natural := 16;
   constant C_DIR_TIMING_HOLD_W     : natural := 16;
+  constant C_SEGMENT_HEAD_DOWN_LSB : natural := 0;
+  constant C_SEGMENT_HEAD_DOWN_W   : natural := 1;
+  constant C_SEGMENT_ENDLESS_LSB   : natural := 1;
+  constant C_SEGMENT_ENDLESS_W     : natural := 1;
 
   -- STATUS.ERR_CODE values.
   constant C_ERR_NONE       : std_logic_vector(4 downto 0) := "00000";
@@ -97,11 +106,12 @@ package stepramp_regs_pkg is
   constant C_ERR_POS_BUSY   : std_logic_vector(4 downto 0) := "01110";
   constant C_ERR_CFG_BUSY   : std_logic_vector(4 downto 0) := "01111";
   constant C_ERR_STEP_SPACE : std_logic_vector(4 downto 0) := "10000";
+  constant C_ERR_SEGMENT    : std_logic_vector(4 downto 0) := "10001";
 
   -- Per word offset: the bits a write can set (the RW fields) and the reset value (the register file's
   -- storage words).
 
-  type t_reg_words is array (0 to 31) of std_logic_vector(31 downto 0);
+  type t_reg_words is array (0 to 63) of std_logic_vector(31 downto 0);
 
   constant C_REG_RW_MASK : t_reg_words :=
   (
@@ -135,12 +145,17 @@ package stepramp_regs_pkg is
     27     => x"FFFFFFFF",
     28     => x"0000FFFF",
     29     => x"0000FFFF",
+    30     => x"00000003",
+    31     => x"7FFFFFFF",
+    32     => x"7FFFFFFF",
+    33     => x"FFFFFFFF",
+    34     => x"0000FFFF",
     others => x"00000000"
   );
 
   constant C_REG_RESET : t_reg_words :=
   (
-    0      => x"53520003",
+    0      => x"53520004",
     1      => x"00000000",
     2      => x"00000000",
     3      => x"00000000",
@@ -170,6 +185,11 @@ package stepramp_regs_pkg is
     27     => x"00000000",
     28     => x"00000000",
     29     => x"00000001",
+    30     => x"00000000",
+    31     => x"00000000",
+    32     => x"00000000",
+    33     => x"00000000",
+    34     => x"00000000",
     others => x"00000000"
   );
 

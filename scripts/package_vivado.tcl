@@ -74,7 +74,7 @@ set_bus_parameter $core irq     SENSITIVITY LEVEL_HIGH
 ipx::associate_bus_interfaces -busif s_axil -clock aclk $core
 ipx::associate_bus_interfaces -clock aclk -reset aresetn $core
 
-# Memory map: the registers sit in the low 128 bytes (7 address bits) and repeat in the rest of the 4 KiB block.
+# Memory map: the registers sit in the low 256 bytes (8 address bits) and repeat in the rest of the 4 KiB block.
 set mmap [ipx::add_memory_map s_axil $core]
 set_property slave_memory_map_ref s_axil [ipx::get_bus_interfaces s_axil -of_objects $core]
 set block [ipx::add_address_block reg0 $mmap]

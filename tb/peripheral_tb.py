@@ -274,6 +274,33 @@ class PeripheralTb(MotionBench):
             self.monitors.check()
             self.monitors = None
 
+    def watch_stops(self) -> dict[str, list[int]]:
+        """The clock edges at which the register file raises its soft_stop and hard_stop strobes, from now on (the
+        engine samples a strobe at the edge after)."""
+        assert self.pins is not None, "reset() first"
+        edges: dict[str, list[int]] = {"soft": [], "hard": []}
+        for kind, seen in edges.items():
+            cocotb.start_soon(self.pins.watch(getattr(self.dut.core_inst, f"{kind}_stop"), seen))
+        return edges
+
+    async def stop_after(
+        self, drv: StepRamp, stop_edges: dict[str, list[int]], kind: str, pulses: int, phase: str, start: Any
+    ) -> tuple[list[int], int, Any]:
+        """Start a move (`start`: a coroutine function, its result returned last), wait for `pulses` STEP pulses, check
+        that the engine is in `phase`, then SOFT_STOP or HARD_STOP (`kind`) and wait for done. Returns the move's
+        edges, the edge of the move's numbering at which the engine sampled the stop (stop_edges: watch_stops), and
+        what `start` returned."""
+        n0, s0, k0 = len(self.step_edges), len(self.start_edges), len(stop_edges[kind])
+        started = await start()
+        while len(self.step_edges) < n0 + pulses:
+            await RisingEdge(self.dut.step)
+        assert (await drv.status()).state == phase, f"{kind} stop: not in {phase} after {pulses} pulses"
+        await (drv.soft_stop() if kind == "soft" else drv.hard_stop())
+        await drv.wait_done(idle=lambda: self.irq_or(5_000))
+        # The register file's strobe is high after edge w; the engine samples it at w + 1.
+        request = stop_edges[kind][k0] + 1 - self.start_edges[s0]
+        return self.edges_since(n0, s0), request, started
+
     def edges_since(self, first_step: int, first_start: int) -> list[int]:
         """STEP pin edges of a move in the model's convention (stepramp.sim.stepwatch.StepWatch.since)."""
         assert self.pins is not None, "reset() first"

@@ -15,7 +15,9 @@ driver's own view:
   (ECORE(PRESCALE), no pulse);
 - c_driver_stops: stepramp_soft_stop and stepramp_hard_stop in RUN, edges as stepramp.models.engine.edges_with_stop;
 - c_driver_status_fields: stepramp_status in the middle of ACCEL, RUN and DECEL: its fields equal the register map's
-  decoding of the raw word, the state is the model's phase there.
+  decoding of the raw word, the state is the model's phase there;
+- c_driver_jog: stepramp_jog forwards ended by stepramp_soft_stop, backwards by stepramp_hard_stop, both in RUN:
+  edges as stepramp.models.engine.segment_edges of change.py's segment; a stepramp_move after them as the model's.
 """
 
 from __future__ import annotations
@@ -30,10 +32,11 @@ import pytest
 from cocotb.triggers import ClockCycles, First, RisingEdge
 
 from peripheral_tb import TOPS, PeripheralTb, profiles_limit_us
+from stepramp.board.change import plan_change
 from stepramp.board.plan import Plan, plan_move
 from stepramp.board.regmap import ERROR_CODES, ID_VALUE, REGISTERS_BY_NAME
 from stepramp.models.engine import edges as model_edges
-from stepramp.models.engine import edges_with_stop, phase_of
+from stepramp.models.engine import edges_with_stop, phase_of, segment_edges
 from stepramp.sim.cdriver import CDriver
 from stepramp.sim.profiles import PROFILES_BY_NAME, Profile
 from stepramp.sim.runner import run_cocotb
@@ -244,7 +247,50 @@ async def c_driver_status_fields(dut) -> None:
     tb.finish()
 
 
-C_TESTS = ["c_driver_moves_by_polling", "c_driver_isr", "c_driver_stops", "c_driver_status_fields"]
+@cocotb.test(timeout_time=8, timeout_unit="ms")
+async def c_driver_jog(dut) -> None:
+    """stepramp_jog forwards ended by stepramp_soft_stop, backwards by stepramp_hard_stop, both in RUN: every edge as
+    segment_edges says of change.py's segment (the C driver writes its registers), POSITION the pulses seen; then a
+    stepramp_move runs as the model says (the driver cleared the segment registers)."""
+    prof = PROFILES_BY_NAME["trap_long_cruise"]
+    tb, cdrv = await c_bench(dut, prof)
+    cdrv.so.stepramp_jog.argtypes = [ctypes.POINTER(cdrv.dev_t), *(ctypes.c_double,) * 3]
+    cdrv.so.stepramp_jog.restype = ctypes.c_int
+    requests: dict[str, list[int]] = {"soft": [], "hard": []}
+    assert tb.pins is not None
+    for kind in requests:
+        cocotb.start_soon(tb.pins.watch(getattr(dut.core_inst, f"{kind}_stop"), requests[kind]))
+    position = 0
+    for speed, kind in ((prof.speed, "soft"), (-prof.speed, "hard")):
+        seg = plan_change(0.0, None, prof.accel, prof.decel, abs(speed), prof.spr, prof.fclk, prof.prescale).segment
+        n0, s0, k0 = len(tb.step_edges), len(tb.start_edges), len(requests[kind])
+        rc = await cdrv.dev_call("stepramp_jog", speed, prof.accel, prof.decel)
+        assert rc == OK, f"stepramp_jog({speed}): {await cdrv.call('stepramp_strresult', rc)}"
+        await until_pulses(tb, n0 + seg.sa + 10)
+        await cdrv.dev_call("stepramp_status", ctypes.byref(cdrv.status))
+        assert cdrv.status.state == STATE_CODES["RUN"], f"jog {speed}: state {cdrv.status.state} after sa + 10 pulses"
+        await cdrv.dev_call(f"stepramp_{kind}_stop")
+        rc = await cdrv.dev_call("stepramp_wait_done", 100_000)
+        assert rc == OK, f"jog {speed}, {kind} stop: {await cdrv.call('stepramp_strresult', rc)}"
+        edges = tb.edges_since(n0, s0)
+        # The register file's strobe is high after edge w; the engine samples it at w + 1.
+        request = requests[kind][k0] + 1 - tb.start_edges[s0]
+        want = segment_edges(seg, prof.prescale, stop=(kind, request))
+        assert edges == want, f"jog {speed}, {kind} stop: {edges_differ(edges, want)}"
+        position += -len(edges) if speed < 0 else len(edges)
+        assert await cdrv.dev_call("stepramp_position") == position, f"jog {speed}: position is not the pulses seen"
+    assert cdrv.dev.segment_set == 1
+    n0, s0 = len(tb.step_edges), len(tb.start_edges)
+    await c_move(cdrv, prof)
+    assert cdrv.dev.segment_set == 0
+    rc = await cdrv.dev_call("stepramp_wait_done", 100_000)
+    assert rc == OK, f"the move after the jogs: {await cdrv.call('stepramp_strresult', rc)}"
+    edges, want = tb.edges_since(n0, s0), model_edges(plan_move(**prof.args()))
+    assert edges == want, f"the move after the jogs: {edges_differ(edges, want)}"
+    tb.finish()
+
+
+C_TESTS = ["c_driver_moves_by_polling", "c_driver_isr", "c_driver_stops", "c_driver_status_fields", "c_driver_jog"]
 
 
 @pytest.mark.parametrize("top", TOPS)

@@ -10,6 +10,7 @@ enables, bus errors, W1C, interrupt, shadowing, bad values) against the register
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import os
 import random
@@ -29,9 +30,10 @@ from peripheral_tb import (
 )
 from stepramp.board.driver import Outputs, StepRampError, plan_writes
 from stepramp.board.plan import Plan, plan_move
-from stepramp.board.regmap import ERROR_CODES, ID_VALUE, REGISTERS, REGISTERS_BY_NAME, RW, offset
+from stepramp.board.regmap import ADDR_BITS, ERROR_CODES, ID_VALUE, REGISTERS, REGISTERS_BY_NAME, RW, offset
 from stepramp.models import stepping as sm
 from stepramp.models.engine import edges as model_edges
+from stepramp.models.engine import segment_edges
 from stepramp.sim.profiles import PROFILES, PROFILES_BY_NAME
 from stepramp.sim.runner import run_cocotb
 from tbutil import build_dir, cocotb, edges_differ, env_int
@@ -181,9 +183,9 @@ async def concurrent_reads_and_writes(dut) -> None:
 
 @cocotb.test(timeout_time=8, timeout_unit="us")  # measured 1.8 us (the slower top)
 async def unmapped_offsets_answer_with_error(dut) -> None:
-    """Every offset of the 128-byte window that is not a register answers with IP2Bus_Error / SLVERR."""
+    """Every offset of the register window that is not a register answers with IP2Bus_Error / SLVERR."""
     tb = await PeripheralTb.started(dut)
-    for addr in range(0, 128, 4):
+    for addr in range(0, 1 << ADDR_BITS, 4):
         if addr in MAPPED:
             await tb.bus.read(addr)  # no error
             continue
@@ -398,26 +400,15 @@ async def soft_and_hard_stop(dut) -> None:
     equal to the pulses seen, a soft stop ending at the slow end of a decel ramp, no pulse after a hard stop."""
     tb = await PeripheralTb.started(dut)
     await tb.configure(Outputs(mode="half", step_width=4, dir_setup=12, dir_hold=6), enable=True)
-    stop_edges: dict[str, list[int]] = {"soft": [], "hard": []}
-    for kind in stop_edges:
-        cocotb.start_soon(tb.pins.watch(getattr(dut.core_inst, f"{kind}_stop"), stop_edges[kind]))
+    stop_edges = tb.watch_stops()
     prof = PROFILES_BY_NAME["trap_long_cruise"]
     drv = tb.driver(prof.args())
     plan = drv.plan(prof.steps, prof.accel, prof.decel, prof.speed)
     position = 0
     for kind, wait_pulses, phase in STOP_CASES:
         await drv.program(plan)
-        n0, s0, k0 = len(tb.step_edges), len(tb.start_edges), len(stop_edges[kind])
-        await drv.start()
-        while len(tb.step_edges) < n0 + wait_pulses:
-            await RisingEdge(dut.step)
-        assert (await drv.status()).state == phase, f"{kind} stop: not in {phase} after {wait_pulses} pulses"
-        await (drv.soft_stop() if kind == "soft" else drv.hard_stop())
-        await drv.wait_done(idle=lambda: tb.irq_or(5_000))
-        edges = tb.edges_since(n0, s0)
-        start = tb.start_edges[s0]
-        # The register file's strobe is high after edge w; the engine samples it at w + 1.
-        check_stopped(plan, kind, phase, stop_edges[kind][k0] + 1 - start, edges, wait_pulses)
+        edges, request, _ = await tb.stop_after(drv, stop_edges, kind, wait_pulses, phase, drv.start)
+        check_stopped(plan, kind, phase, request, edges, wait_pulses)
         position += -len(edges) if plan.direction else len(edges)
         assert await drv.position() == position, f"{kind} stop in {phase}: position is not the pulses seen"
     tb.finish()
@@ -534,6 +525,32 @@ async def profiles_through_the_bus(dut) -> None:
     tb.finish()
 
 
+@cocotb.test(timeout_time=3000, timeout_unit="us")
+async def jog_through_the_bus(dut) -> None:
+    """Jog (an endless segment, docs/algorithm.md "Changes while moving") through the bus with the driver: forwards
+    ended by SOFT_STOP in RUN, backwards by SOFT_STOP in ACCEL, and by HARD_STOP; every edge as
+    stepramp.models.engine.segment_edges says, POSITION the pulses seen; a plain move after them runs as the model
+    says (the driver cleared the segment registers)."""
+    tb = await PeripheralTb.started(dut)
+    await tb.configure(Outputs(mode="half", step_width=4, dir_setup=12, dir_hold=6), enable=True)
+    stop_edges = tb.watch_stops()
+    drv = tb.driver()
+    position = 0
+    jogs = ((100.0, "soft", 20, "RUN"), (-100.0, "soft", 3, "ACCEL"), (60.0, "hard", 15, "RUN"))
+    for speed, kind, wait, phase in jogs:
+        jog = functools.partial(drv.jog, speed, 20000.0, 15000.0)
+        edges, request, seg = await tb.stop_after(drv, stop_edges, kind, wait, phase, jog)
+        want = segment_edges(seg, drv.prescale, stop=(kind, request))
+        assert edges == want, f"jog {speed}, {kind} stop: {edges_differ(edges, want)}"
+        position += -len(edges) if speed < 0 else len(edges)
+        assert await drv.position() == position, f"jog {speed}: position is not the pulses seen"
+    plan = valid_plan()
+    edges, status = await tb.run_plan(drv, plan)
+    assert edges == model_edges(plan), f"the move after the jogs: {edges_differ(edges, model_edges(plan))}"
+    assert not status.error
+    tb.finish()
+
+
 REGISTER_TESTS = [
     "reset_values_and_id",
     "read_write_every_register",
@@ -550,6 +567,7 @@ REGISTER_TESTS = [
     "stepping_configuration",
     "soft_and_hard_stop",
     "hard_stop_cancels_a_held_start",
+    "jog_through_the_bus",
 ]
 
 

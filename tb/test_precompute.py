@@ -331,10 +331,17 @@ def rule_order_plans() -> list[Move]:
 MOVE_INPUTS = ("sa", "sd", "c_first", "c_last", "c_sa", "c_sd", "accel_seed", "decel_seed", "cruise", "stop_ratio")
 
 
+#: The segment inputs (docs/algorithm.md, "Changes while moving"): 0 for a move from rest to rest, which is what
+#: this bench plays (tb/test_engine_segments.py plays segments through the engine).
+SEGMENT_INPUTS = ("head_down", "endless", "head_index", "run_stop", "head_prod")
+
+
 def drive_move(dut: Any, plan: Plan) -> None:
     dut.l.value = (plan.steps - 1) % (1 << 31)  # the engine's p_l = steps - 1 (all ones for N = 0)
     for name in MOVE_INPUTS:
         getattr(dut, name).value = getattr(plan, name)
+    for name in SEGMENT_INPUTS:
+        getattr(dut, name).value = 0
 
 
 def read(dut: Any, name: str) -> int | None:

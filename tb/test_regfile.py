@@ -70,7 +70,7 @@ def _span(first: str, last: str) -> tuple[str, ...]:
     return tuple(r.name for r in REGISTERS if lo <= r.offset <= hi)
 
 
-MOTION = _span("STEPS", "STOP_RATIO")  # written at any time (the engine latches them at START)
+MOTION = _span("STEPS", "STOP_RATIO") + _span("SEGMENT", "HEAD_PROD_HI")  # written at any time (latched at START)
 CONFIG = _span("DRIVE", "STEP_SPACE")  # written only while stopped (CFG_BUSY)
 STORAGE = MOTION + CONFIG  # plain read/write storage
 CTRL = REGISTERS_BY_NAME["CTRL"]

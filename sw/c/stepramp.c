@@ -8,6 +8,7 @@
 
 #include "stepramp.h"
 
+#include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -40,6 +41,9 @@
 #endif
 
 #define REG(dev, off) ((dev)->base + (uintptr_t)(off))
+
+/* 2 * math.pi, the double plan_jog divides by */
+#define TWO_PI 6.283185307179586
 
 static void write_reg(const stepramp_t *dev, uint32_t off, uint32_t value)
 {
@@ -78,6 +82,8 @@ int stepramp_init(stepramp_t *dev, uintptr_t base, double fclk, double spr, uint
     dev->fclk = fclk;
     dev->spr = spr;
     dev->prescale = prescale;
+    dev->segment_set = 0u;
+    dev->min_gap = STEPRAMP_MIN_GAP_RESET;
     id = read_reg(dev, STEPRAMP_REG_ID);
     dev->version = id & 0xFFFFu;
     return (id >> 16) == STEPRAMP_ID_MAGIC ? STEPRAMP_OK : STEPRAMP_EID;
@@ -91,8 +97,16 @@ int stepramp_plan(const stepramp_t *dev, stepramp_plan_t *plan, int64_t steps, d
     return (int)stepramp_plan_move(plan, steps, accel, decel, speed, dev->spr, dev->fclk, dev->prescale);
 }
 
-int stepramp_program(const stepramp_t *dev, const stepramp_plan_t *plan)
+int stepramp_program(stepramp_t *dev, const stepramp_plan_t *plan)
 {
+    return stepramp_program_segment(dev, plan, NULL);
+}
+
+int stepramp_program_segment(stepramp_t *dev, const stepramp_plan_t *plan, const stepramp_segment_regs_t *segment)
+{
+    static const stepramp_segment_regs_t no_segment = {0u, 0u, 0u, 0u, 0u}; /* driver.NO_SEGMENT */
+    const stepramp_segment_regs_t *seg = (segment != NULL) ? segment : &no_segment;
+
     if (dev == NULL || plan == NULL) {
         return STEPRAMP_ENULL;
     }
@@ -109,6 +123,16 @@ int stepramp_program(const stepramp_t *dev, const stepramp_plan_t *plan)
     write_wide(dev, STEPRAMP_REG_DECEL_SEED_LO, STEPRAMP_REG_DECEL_SEED_HI, plan->decel_seed);
     write_wide(dev, STEPRAMP_REG_CRUISE_LO, STEPRAMP_REG_CRUISE_HI, plan->cruise);
     write_reg(dev, STEPRAMP_REG_STOP_RATIO, plan->stop_ratio);
+    if (segment != NULL || dev->segment_set) { /* driver.segment_writes, in address order */
+        write_reg(dev, STEPRAMP_REG_SEGMENT,
+                  (seg->head_down << STEPRAMP_SEGMENT_HEAD_DOWN_SHIFT) |
+                      (seg->endless << STEPRAMP_SEGMENT_ENDLESS_SHIFT));
+        write_reg(dev, STEPRAMP_REG_HEAD_INDEX, seg->head_index);
+        write_reg(dev, STEPRAMP_REG_RUN_STOP, seg->run_stop);
+        write_wide(dev, STEPRAMP_REG_HEAD_PROD_LO, STEPRAMP_REG_HEAD_PROD_HI, seg->head_prod);
+        dev->segment_set = (seg->head_down | seg->endless | seg->head_index | seg->run_stop) != 0u ||
+                           seg->head_prod != 0u;
+    }
     return STEPRAMP_OK;
 }
 
@@ -117,7 +141,7 @@ void stepramp_start(const stepramp_t *dev)
     command(dev, STEPRAMP_CTRL_START_MASK);
 }
 
-int stepramp_move(const stepramp_t *dev, int64_t steps, double accel, double decel, double speed)
+int stepramp_move(stepramp_t *dev, int64_t steps, double accel, double decel, double speed)
 {
     stepramp_plan_t plan;
     int rc = stepramp_plan(dev, &plan, steps, accel, decel, speed);
@@ -126,6 +150,47 @@ int stepramp_move(const stepramp_t *dev, int64_t steps, double accel, double dec
         return rc; /* nothing written */
     }
     (void)stepramp_program(dev, &plan);
+    stepramp_start(dev);
+    return STEPRAMP_OK;
+}
+
+int stepramp_plan_jog(const stepramp_t *dev, stepramp_plan_t *plan, stepramp_segment_regs_t *regs, double speed,
+                      double accel, double decel)
+{
+    stepramp_change_t ch;
+    double shortest;
+    int rc;
+
+    if (dev == NULL || plan == NULL || regs == NULL) {
+        return STEPRAMP_ENULL;
+    }
+    if (!(isfinite(speed) && speed != 0.0)) {
+        return STEPRAMP_EJOG_SPEED;
+    }
+    rc = stepramp_plan_change(&ch, 0.0, STEPRAMP_ENDLESS, accel, decel, fabs(speed), dev->spr, dev->fclk,
+                              dev->prescale);
+    if (rc != STEPRAMP_OK) {
+        return rc;
+    }
+    /* int(fclk / prescale / (|speed| spr / 2 pi)) * prescale, as plan_jog has it; a product that rounds does so
+     * monotonically, and an infinite quotient leaves any gap room: the same outcome as Python's integers */
+    shortest = floor(dev->fclk / (double)dev->prescale / (fabs(speed) * dev->spr / TWO_PI));
+    if ((double)dev->min_gap > shortest * (double)dev->prescale) {
+        return STEPRAMP_EGAP;
+    }
+    return stepramp_segment_registers(&ch.segment, (speed < 0.0) ? 1u : 0u, plan, regs);
+}
+
+int stepramp_jog(stepramp_t *dev, double speed, double accel, double decel)
+{
+    stepramp_plan_t plan;
+    stepramp_segment_regs_t regs;
+    int rc = stepramp_plan_jog(dev, &plan, &regs, speed, accel, decel);
+
+    if (rc != STEPRAMP_OK) {
+        return rc; /* nothing written */
+    }
+    (void)stepramp_program_segment(dev, &plan, &regs);
     stepramp_start(dev);
     return STEPRAMP_OK;
 }
@@ -152,7 +217,7 @@ void stepramp_set_enable(const stepramp_t *dev, int on)
     STEPRAMP_WRITE8(CTRL_BYTE(dev, 2u), (uint8_t)(on ? (STEPRAMP_CTRL_ENABLE_MASK >> 16) : 0u));
 }
 
-int stepramp_configure_outputs(const stepramp_t *dev, const stepramp_outputs_t *out)
+int stepramp_configure_outputs(stepramp_t *dev, const stepramp_outputs_t *out)
 {
     if (out == NULL || out->mode > 4u || out->ustep_log2 > 7u) {
         return STEPRAMP_EOUTPUTS;
@@ -165,6 +230,7 @@ int stepramp_configure_outputs(const stepramp_t *dev, const stepramp_outputs_t *
                   ((uint32_t)out->dir_hold << STEPRAMP_DIR_TIMING_HOLD_SHIFT));
     write_reg(dev, STEPRAMP_REG_PWM_PERIOD, out->pwm_period);
     write_reg(dev, STEPRAMP_REG_STEP_SPACE, out->step_space);
+    dev->min_gap = (out->step_width > 1u ? out->step_width : 1u) + (out->step_space > 1u ? out->step_space : 1u);
     return STEPRAMP_OK;
 }
 
@@ -254,8 +320,10 @@ int stepramp_wait_done(const stepramp_t *dev, uint32_t max_polls)
     X(STEPS, "STEPS is -2^31 (|steps| must be <= 2^31 - 1)")                                                           \
     X(POS_BUSY, "POSITION written while a move runs (the write was ignored)")                                          \
     X(CFG_BUSY, "DRIVE, STEP_WIDTH, DIR_TIMING, PWM_PERIOD or STEP_SPACE written while a move runs (ignored)")         \
-    X(STEP_SPACE, "a pulse would have come less than STEP_WIDTH + STEP_SPACE clocks after the previous one (the two "   \
-                  "would merge on the STEP pin); it was not emitted and the move stopped")
+    X(STEP_SPACE, "a pulse would have come less than STEP_WIDTH + STEP_SPACE clocks after the previous one (the two "  \
+                  "would merge on the STEP pin); it was not emitted and the move stopped")                             \
+    X(SEGMENT, "a down head with HEAD_INDEX < SA, or an up head whose index HEAD_INDEX + SA - 1 passes "               \
+               "2^31 - 1")
 
 #define CORE_TABLE_SIZE 32u /* ERR_CODE is 5 bits */
 #define CAUSE(name, text) [STEPRAMP_ERR_##name] = text,
@@ -289,6 +357,13 @@ const char *stepramp_strresult(int result)
     }
     if (result == STEPRAMP_EOUTPUTS) {
         return "invalid stepping outputs: mode must be 0 .. 4 and ustep_log2 0 .. 7";
+    }
+    if (result == STEPRAMP_EJOG_SPEED) {
+        return "the jog speed must be a finite non-zero number of rad/s";
+    }
+    if (result == STEPRAMP_EGAP) {
+        return "STEP width + STEP space clocks does not fit the jog's shortest interval: lower the speed, the STEP "
+               "width or the space";
     }
     if (STEPRAMP_IS_ECORE(result)) {
         uint32_t code = STEPRAMP_ECORE_CODE(result);

@@ -3,7 +3,8 @@
  * stepramp driver: the C counterpart of sw/stepramp/board/driver.py (class StepRamp), for MicroBlaze standalone.
  *
  * The same operations with the same register semantics as the Python driver: stepramp_program writes every
- * motion register (STEPS .. STOP_RATIO) in address order, like driver.plan_writes(); START, SOFT_STOP and
+ * motion register (STEPS .. STOP_RATIO) in address order, like driver.plan_writes(), and the segment registers
+ * (SEGMENT .. HEAD_PROD_HI, driver.segment_writes()) when a jog has left them set; START, SOFT_STOP and
  * HARD_STOP are written to byte 0 of CTRL only, so the interrupt enables in byte 1 are kept; STATUS.DONE and
  * STATUS.ERROR are cleared by writing 1. The register map is docs/registers.md (stepramp_regs.h in C).
  *
@@ -22,9 +23,10 @@
  * MicroBlaze, x86), 3 on a big-endian one (PLB MicroBlaze); the default follows the compiler's byte order
  * (__BYTE_ORDER__) and may be overridden with -DSTEPRAMP_CMD_BYTE_LANE=n. Every other access is a 32-bit word.
  *
- * Results are int: STEPRAMP_OK (0); a stepramp_err_t of stepramp_plan.h (bad move parameters, NULL pointer);
- * STEPRAMP_EID or STEPRAMP_ETIMEOUT; or STEPRAMP_ECORE(code) for an error the core flagged in STATUS.ERR_CODE.
- * stepramp_strresult() gives any of them in words.
+ * Results are int: STEPRAMP_OK (0); a stepramp_err_t of stepramp_plan.h (bad move parameters, NULL pointer) or a
+ * result of stepramp_plan_change (a jog's plan); one of the driver's own (STEPRAMP_EID, STEPRAMP_ETIMEOUT, ...); or
+ * STEPRAMP_ECORE(code) for an error the core flagged in STATUS.ERR_CODE. stepramp_strresult() gives any of them in
+ * words. Link stepramp_plan.c and stepramp_change.c with it.
  *
  *   stepramp_t motor;
  *   if (stepramp_init(&motor, XPAR_STEPRAMP_0_BASEADDR, 50e6, 400.0 * 16, 50) != STEPRAMP_OK) { ... }
@@ -32,12 +34,14 @@
  *   rc = stepramp_move(&motor, 3200, 40.0, 40.0, 20.0);      (steps, rad/s^2, rad/s^2, rad/s)
  *   if (rc == STEPRAMP_OK) rc = stepramp_wait_done(&motor, 100000000u);
  *   if (rc != STEPRAMP_OK) puts(stepramp_strresult(rc));
+ *   rc = stepramp_jog(&motor, -20.0, 40.0, 40.0);            (signed rad/s, rad/s^2, rad/s^2): until a stop
  */
 #ifndef STEPRAMP_H
 #define STEPRAMP_H
 
 #include <stdint.h>
 
+#include "stepramp_change.h"
 #include "stepramp_plan.h"
 #include "stepramp_regs.h"
 
@@ -57,6 +61,8 @@ enum {
     STEPRAMP_ETIMEOUT = 65,   /**< stepramp_wait_done: no STATUS.DONE within max_polls reads */
     STEPRAMP_EOUTPUTS = 66,   /**< stepramp_configure_outputs: NULL, mode > 4 or ustep_log2 > 7 */
     STEPRAMP_ENOIRQ = 67,     /**< stepramp_isr: neither STATUS.DONE nor STATUS.ERROR was set (not this core) */
+    STEPRAMP_EJOG_SPEED = 68, /**< stepramp_jog: the jog speed is 0, inf or NaN */
+    STEPRAMP_EGAP = 69,       /**< stepramp_jog: STEP width + STEP space does not fit the jog's shortest interval */
     STEPRAMP_ECORE_BASE = 128 /**< STEPRAMP_ECORE(code): the core flagged STATUS.ERROR with ERR_CODE code */
 };
 
@@ -73,13 +79,24 @@ enum {
 #define STEPRAMP_STATE_RUN 2u
 #define STEPRAMP_STATE_DECEL 3u
 
-/** One stepramp core: its base address and the parameters every move is planned with. */
+/** STEP width + STEP space after reset (1 + 1 clocks): stepramp_t.min_gap until stepramp_configure_outputs. */
+#define STEPRAMP_MIN_GAP_RESET 2u
+
+/**
+ * One stepramp core: its base address and the parameters every move is planned with, and what the driver knows of
+ * the registers it wrote (set by stepramp_init; the driver's own business, like the Python driver's attributes).
+ */
 typedef struct {
-    uintptr_t base;    /**< bus address of the core's register window (offset 0 = ID) */
-    double fclk;       /**< engine clock frequency, Hz */
-    double spr;        /**< steps per revolution (with microstepping) */
-    uint32_t prescale; /**< base timer period in clocks, 1 .. 65535 */
-    uint32_t version;  /**< ID bits 15:0 read by stepramp_init: major << 8 | minor */
+    uintptr_t base;       /**< bus address of the core's register window (offset 0 = ID) */
+    double fclk;          /**< engine clock frequency, Hz */
+    double spr;           /**< steps per revolution (with microstepping) */
+    uint32_t prescale;    /**< base timer period in clocks, 1 .. 65535 */
+    uint32_t version;     /**< ID bits 15:0 read by stepramp_init: major << 8 | minor */
+    uint32_t segment_set; /**< 1: a jog left SEGMENT .. HEAD_PROD_HI non-zero (the next program clears them); 0: all
+                               0, their reset values (stepramp_init assumes them) */
+    uint32_t min_gap;     /**< STEP width + STEP space, clocks (each 0 acting as 1), as stepramp_configure_outputs last
+                               wrote them (STEPRAMP_MIN_GAP_RESET after stepramp_init): a jog's shortest interval
+                               must hold it */
 } stepramp_t;
 
 /** STATUS decoded (like driver.Status). */
@@ -94,7 +111,8 @@ typedef struct {
 } stepramp_status_t;
 
 /**
- * Set up the device structure and check that a stepramp core answers at base (reads ID only; writes nothing).
+ * Set up the device structure and check that a stepramp core answers at base (reads ID only; writes nothing). The
+ * driver assumes the core's segment registers and stepping outputs at their reset values.
  *
  * @param dev      device structure to fill in (filled in even when the ID check fails)
  * @param base     bus address of the core
@@ -119,13 +137,25 @@ int stepramp_plan(const stepramp_t *dev, stepramp_plan_t *plan, int64_t steps, d
  * Write every motion register of a plan, in address order (Python's plan_writes): STEPS as the signed step
  * count in two's complement (-steps when direction is 1), PRESCALE, each wide value as _LO (bits 31:0) and _HI
  * (the bits above), SA, SD, STOP_RATIO. The core latches them at START, so this is safe during a move (it
- * prepares the next one). Does not start the move.
+ * prepares the next one). Does not start the move. When a jog has left the segment registers set
+ * (dev->segment_set), they follow, cleared to 0 (a move from rest to rest): stepramp_program_segment(dev, plan,
+ * NULL), Python's program(plan).
  *
  * STOP_RATIO: plan->stop_ratio.
  *
  * @return STEPRAMP_OK; STEPRAMP_ENULL (nothing written) if dev or plan is NULL
  */
-int stepramp_program(const stepramp_t *dev, const stepramp_plan_t *plan);
+int stepramp_program(stepramp_t *dev, const stepramp_plan_t *plan);
+
+/**
+ * Python's program(plan, segment): the plan's registers as stepramp_program, then, when segment is not NULL or
+ * dev->segment_set, SEGMENT (HEAD_DOWN, ENDLESS), HEAD_INDEX, RUN_STOP, HEAD_PROD_LO, HEAD_PROD_HI in address order
+ * (driver.segment_writes; all 0 for a NULL segment). dev->segment_set is then 1 when they hold anything but 0.
+ *
+ * @param segment the segment registers (stepramp_segment_registers), or NULL for a move from rest to rest
+ * @return STEPRAMP_OK; STEPRAMP_ENULL (nothing written) if dev or plan is NULL
+ */
+int stepramp_program_segment(stepramp_t *dev, const stepramp_plan_t *plan, const stepramp_segment_regs_t *segment);
 
 /** START: begin the programmed move (ignored by the core while busy). Byte 0 of CTRL only. */
 void stepramp_start(const stepramp_t *dev);
@@ -136,7 +166,32 @@ void stepramp_start(const stepramp_t *dev);
  * @param steps signed step count (|steps| <= 2^31 - 1); accel, decel in rad/s^2; speed in rad/s
  * @return STEPRAMP_OK, or the plan's error (stepramp_err_t) -- then no register has been written
  */
-int stepramp_move(const stepramp_t *dev, int64_t steps, double accel, double decel, double speed);
+int stepramp_move(stepramp_t *dev, int64_t steps, double accel, double decel, double speed);
+
+/**
+ * The registers of a jog from rest (Python's StepRamp.plan_jog), touching no register: the continuation from speed
+ * 0 with no target (stepramp_plan_change(u = 0, STEPRAMP_ENDLESS) at |speed| with the device's spr, fclk and
+ * prescale) as its plan and segment registers (stepramp_segment_registers, direction 1 for a negative speed).
+ *
+ * @param plan  output, written only on success
+ * @param regs  output, written only on success
+ * @param speed signed jog speed, rad/s (its sign gives the direction); accel, decel in rad/s^2
+ * @return STEPRAMP_OK; STEPRAMP_EJOG_SPEED for a speed 0, inf or NaN; stepramp_plan_change's error; STEPRAMP_EGAP
+ *         when dev->min_gap exceeds the jog's shortest interval, int(f_tick / v) * prescale clocks at v = |speed| in
+ *         steps/s; STEPRAMP_ENULL if dev, plan or regs is NULL
+ */
+int stepramp_plan_jog(const stepramp_t *dev, stepramp_plan_t *plan, stepramp_segment_regs_t *regs, double speed,
+                      double accel, double decel);
+
+/**
+ * Jog from rest (Python's StepRamp.jog): accelerate at accel to |speed| in the direction of its sign and hold it
+ * until stepramp_soft_stop (which decelerates at decel to rest) or stepramp_hard_stop. Plans (stepramp_plan_jog),
+ * writes the plan's and the segment registers (stepramp_program_segment) and START; the next stepramp_program or
+ * stepramp_move clears the segment registers again.
+ *
+ * @return STEPRAMP_OK, or stepramp_plan_jog's error -- then no register has been written
+ */
+int stepramp_jog(stepramp_t *dev, double speed, double accel, double decel);
 
 /** SOFT_STOP: decelerate at the programmed decel to zero, then DONE. Byte 0 of CTRL only. */
 void stepramp_soft_stop(const stepramp_t *dev);
@@ -168,11 +223,11 @@ typedef struct {
 
 /**
  * Write the stepping output registers. Only while stopped: the core ignores these writes during a move and flags
- * ERROR with ERR_CODE CFG_BUSY.
+ * ERROR with ERR_CODE CFG_BUSY. Records STEP width + STEP space in dev->min_gap (the jog's check).
  *
  * @return STEPRAMP_OK, or STEPRAMP_EOUTPUTS (nothing written) for a NULL pointer, mode > 4 or ustep_log2 > 7
  */
-int stepramp_configure_outputs(const stepramp_t *dev, const stepramp_outputs_t *out);
+int stepramp_configure_outputs(stepramp_t *dev, const stepramp_outputs_t *out);
 
 /**
  * Read and decode STATUS.

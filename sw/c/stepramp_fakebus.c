@@ -74,7 +74,7 @@ static long window_offset(uintptr_t addr)
 
 static int mapped(uint32_t word)
 {
-    return word <= WORD(STEP_SPACE);
+    return word <= WORD(HEAD_PROD_HI);
 }
 
 static uint32_t merge(uint32_t old, uint32_t data, uint32_t be)
@@ -125,8 +125,8 @@ static void write_word(uint32_t off, uint32_t data, uint32_t be)
         } else {
             *reg = merge(*reg, data, be);
         }
-    } else if (word >= WORD(STEPS) && word <= WORD(STOP_RATIO)) {
-        *reg = merge(*reg, data, be);
+    } else if ((word >= WORD(STEPS) && word <= WORD(STOP_RATIO)) || word >= WORD(SEGMENT)) {
+        *reg = merge(*reg, data, be); /* the motion and the segment registers: at any time */
     } else if (word >= WORD(DRIVE) && word <= WORD(STEP_SPACE)) {
         if (status & STEPRAMP_STATUS_BUSY_MASK) { /* stepping configuration: only while stopped */
             stepramp_fakebus_set_status((status & STEPRAMP_STATUS_STATE_MASK) >> STEPRAMP_STATUS_STATE_SHIFT, 1u,

@@ -4,7 +4,8 @@
  * STEPRAMP_READ32 / STEPRAMP_WRITE32 / STEPRAMP_WRITE8, with the core's register semantics -- byte-lane
  * writes (little-endian lanes: byte address offset b is bits 8b+7:8b), ID and the status fields read only,
  * CTRL command bits act on write and read 0, STATUS.DONE / ERROR cleared by writing 1, POSITION writes
- * ignored (ERROR, POS_BUSY) while busy, bus errors counted for addresses outside the 128-byte window -- and
+ * ignored (ERROR, POS_BUSY) while busy, bus errors counted for addresses outside the 256-byte window (or past
+ * HEAD_PROD_HI, the last register) -- and
  * a log of every write and a count of the driver's STEPRAMP_IDLE() calls. The "core" side is driven by the test:
  * stepramp_fakebus_set_status() and stepramp_fakebus_finish_after().
  *
@@ -22,8 +23,8 @@
 extern "C" {
 #endif
 
-/** Registers of the 128-byte window. */
-#define STEPRAMP_FAKEBUS_WORDS 32u
+/** Registers of the 256-byte window (STEPRAMP_ADDR_BITS = 8). */
+#define STEPRAMP_FAKEBUS_WORDS 64u
 /** Entries of the write log (later writes are counted, not logged). */
 #define STEPRAMP_FAKEBUS_LOG_MAX 256u
 

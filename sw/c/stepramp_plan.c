@@ -11,6 +11,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "stepramp_plan_priv.h"
+
 /*
  * CPython computes math.gamma / math.lgamma with its own Lanczos code, whose last bit differs from libm's
  * (glibc gives 0.6759782400672848 and -0.3015527878531085). So the two constants are literals: 17
@@ -20,26 +22,7 @@
 const double stepramp_seed_factor = 0.67597824006728469;
 const double stepramp_lgamma_ratio_0 = -0.30155278785310768;
 
-/* math.pi (the double nearest pi). M_PI is not C99. */
-#define STEPRAMP_PI 3.141592653589793
-
 #define PRODUCT_LOOP_MAX 256
-#define TWO_POW_16 65536.0
-#define TWO_POW_32 4294967296.0
-#define TWO_POW_48 281474976710656.0
-#define TWO_POW_64 18446744073709551616.0
-
-/* Python's max(a, b): a unless b > a (keeps a NaN or a -0.0 in a, unlike fmax). */
-static double py_max(double a, double b)
-{
-    return (b > a) ? b : a;
-}
-
-/* Python's min(a, b): a unless b < a. */
-static double py_min(double a, double b)
-{
-    return (b < a) ? b : a;
-}
 
 /* a value that plan._check_positive (without the type checks) wants finite and > 0, and the error if it is not */
 typedef struct {
@@ -47,38 +30,30 @@ typedef struct {
     stepramp_err_t err;
 } positive_check_t;
 
-/* the first check in the table whose value is not finite and > 0 (NaN fails) gives its error; else STEPRAMP_OK */
-static stepramp_err_t check_positive(const positive_check_t *checks, size_t count)
+/* the first check in the table whose value is not finite and > 0 (NaN fails), or with squares whose square is not
+ * finite and > 0, gives its error; else STEPRAMP_OK */
+static stepramp_err_t check_positive(const positive_check_t *checks, size_t count, int squares)
 {
     size_t i;
     for (i = 0; i < count; i++) {
-        if (!(isfinite(checks[i].value) && checks[i].value > 0.0)) {
+        double value = checks[i].value;
+        if (!(isfinite(value) && value > 0.0) || (squares && !(isfinite(value * value) && value * value > 0.0))) {
             return checks[i].err;
         }
     }
     return STEPRAMP_OK;
 }
 
-double stepramp_decel_product(int64_t m)
+/* decel_product above PRODUCT_LOOP_MAX: the Stirling series of the log ratio, from the double m */
+static double decel_product_series(double m)
 {
-    double z1;
-    double z2;
-    double log_ratio;
+    double z1 = m + 0.75;
+    double z2 = m + 1.25;
+    double log_ratio = (m + 0.25) * log1p(-0.5 / z2) - 0.5 * log(z2) + 0.5;
     double zi2;
     double s1;
     double s2;
 
-    if (m <= PRODUCT_LOOP_MAX) {
-        double p = 1.0;
-        int64_t k;
-        for (k = 1; k <= m; k++) {
-            p *= (double)(4 * k - 1) / (double)(4 * k + 1);
-        }
-        return p;
-    }
-    z1 = (double)m + 0.75;
-    z2 = (double)m + 1.25;
-    log_ratio = ((double)m + 0.25) * log1p(-0.5 / z2) - 0.5 * log(z2) + 0.5;
     /* series(z) = (1/12 - zi2 * (1/360 - zi2 / 1260)) / z, zi2 = 1 / (z * z) */
     zi2 = 1.0 / (z1 * z1);
     s1 = (1.0 / 12.0 - zi2 * (1.0 / 360.0 - zi2 / 1260.0)) / z1;
@@ -87,12 +62,30 @@ double stepramp_decel_product(int64_t m)
     return exp(log_ratio + s1 - s2 + stepramp_lgamma_ratio_0);
 }
 
-/*
- * plan._to_fixed: round(ticks * 2^frac) below 2^width, else STEPRAMP_EOVERFLOW. Python tests only ticks for
- * finiteness; a finite ticks whose product overflows to inf makes Python's round() raise OverflowError
- * (reported separately: not a ValueError); here it is the same STEPRAMP_EOVERFLOW as any too long delay.
- */
-static stepramp_err_t to_fixed(double ticks, double scale, double limit, uint64_t *out)
+double stepramp_decel_product(int64_t m)
+{
+    if (m <= PRODUCT_LOOP_MAX) {
+        double p = 1.0;
+        int64_t k;
+        for (k = 1; k <= m; k++) {
+            p *= (double)(4 * k - 1) / (double)(4 * k + 1);
+        }
+        return p;
+    }
+    return decel_product_series((double)m);
+}
+
+double stepramp_priv_decel_product(double m)
+{
+    if (m <= (double)PRODUCT_LOOP_MAX) { /* also for a negative m: the empty product */
+        return (m >= 1.0) ? stepramp_decel_product((int64_t)m) : 1.0;
+    }
+    return decel_product_series(m);
+}
+
+/* plan._to_fixed: round(ticks * 2^frac) below 2^width, else STEPRAMP_EOVERFLOW, also when ticks or the product is
+ * not finite (a delay so long that its scaling overflows a double), as in Python. */
+stepramp_err_t stepramp_priv_to_fixed(double ticks, double scale, double limit, uint64_t *out)
 {
     double value;
     if (!isfinite(ticks)) {
@@ -104,6 +97,44 @@ static stepramp_err_t to_fixed(double ticks, double scale, double limit, uint64_
     }
     *out = (uint64_t)value;
     return STEPRAMP_OK;
+}
+
+stepramp_err_t stepramp_priv_cruise(double f_tick, double v, uint64_t *out)
+{
+    return stepramp_priv_to_fixed(f_tick / v, TWO_POW_32, TWO_POW_64, out);
+}
+
+uint32_t stepramp_priv_stop_ratio(double accel, double decel)
+{
+    double ratio = accel / decel * TWO_POW_16;
+    return (ratio < 4294967295.0) ? (uint32_t)rint(ratio) : UINT32_MAX;
+}
+
+double stepramp_priv_decel_seed(double cd0, int64_t m0)
+{
+    double seed_d = stepramp_seed_factor * cd0 * stepramp_decel_product(m0);
+    double unit_d = 2.0 * ((double)m0 + 0.75) - 1.5 / stepramp_decel_product(m0); /* (D_1 + .. + D_m0) / D_m0 */
+    double half_d = (cd0 * (sqrt((double)m0 + 1.0) - 1.0) - seed_d * unit_d) / 2.0;
+    return seed_d + half_d / unit_d;
+}
+
+stepramp_err_t stepramp_priv_check_args(double accel, double decel, double speed, double spr, double fclk,
+                                        uint32_t prescale)
+{
+    const positive_check_t args[] = {{accel, STEPRAMP_EACCEL}, {decel, STEPRAMP_EDECEL}, {speed, STEPRAMP_ESPEED},
+                                     {spr, STEPRAMP_ESPR}, {fclk, STEPRAMP_EFCLK}};
+    stepramp_err_t err = check_positive(args, sizeof args / sizeof args[0], 0);
+    if (err == STEPRAMP_OK && (prescale < 1 || prescale > STEPRAMP_MAX_PRESCALE)) {
+        err = STEPRAMP_EPRESCALE;
+    }
+    return err;
+}
+
+stepramp_err_t stepramp_priv_check_units(double a, double d, double v, double f_tick, int squares)
+{
+    const positive_check_t units[] = {{a, STEPRAMP_EACCEL_UNITS}, {d, STEPRAMP_EDECEL_UNITS},
+                                      {v, STEPRAMP_ESPEED_UNITS}, {f_tick, STEPRAMP_EFTICK}};
+    return check_positive(units, sizeof units / sizeof units[0], squares);
 }
 
 /* plan._Ramp: the piecewise exact trajectory. */
@@ -203,16 +234,9 @@ stepramp_err_t stepramp_plan_move_info(stepramp_plan_t *plan, stepramp_info_t *i
     if (plan == NULL) {
         return STEPRAMP_ENULL;
     }
-    { /* the argument checks, in plan_move_info's order */
-        const positive_check_t args[] = {{accel, STEPRAMP_EACCEL}, {decel, STEPRAMP_EDECEL}, {speed, STEPRAMP_ESPEED},
-                                         {spr, STEPRAMP_ESPR}, {fclk, STEPRAMP_EFCLK}};
-        err = check_positive(args, sizeof args / sizeof args[0]);
-    }
+    err = stepramp_priv_check_args(accel, decel, speed, spr, fclk, prescale); /* in plan_move_info's order */
     if (err != STEPRAMP_OK) {
         return err;
-    }
-    if (prescale < 1 || prescale > STEPRAMP_MAX_PRESCALE) {
-        return STEPRAMP_EPRESCALE;
     }
     if (steps > STEPRAMP_MAX_STEPS || steps < -STEPRAMP_MAX_STEPS) {
         return STEPRAMP_ESTEPS;
@@ -225,11 +249,7 @@ stepramp_err_t stepramp_plan_move_info(stepramp_plan_t *plan, stepramp_info_t *i
     a = accel / alpha;
     d = decel / alpha;
     v = speed / alpha;
-    { /* the same check on the values in steps units, in plan_move_info's order */
-        const positive_check_t units[] = {{a, STEPRAMP_EACCEL_UNITS}, {d, STEPRAMP_EDECEL_UNITS},
-                                          {v, STEPRAMP_ESPEED_UNITS}, {f_tick, STEPRAMP_EFTICK}};
-        err = check_positive(units, sizeof units / sizeof units[0]);
-    }
+    err = stepramp_priv_check_units(a, d, v, f_tick, 0); /* the same check in steps units, in plan_move_info's order */
     if (err != STEPRAMP_OK) {
         return err;
     }
@@ -277,7 +297,7 @@ stepramp_err_t stepramp_plan_move_info(stepramp_plan_t *plan, stepramp_info_t *i
      * each seed, the accel ramp's other half into interval 1), the same doubles in the same order */
     {
         double seed_a = stepramp_seed_factor * ramp.k_a;
-        double seed_d = (m0 >= 1) ? stepramp_seed_factor * ramp.k_d * stepramp_decel_product(m0) : 0.0;
+        double seed_d = (m0 >= 1) ? stepramp_priv_decel_seed(ramp.k_d, m0) : 0.0;
         double first_extra = 0.0;
         int64_t n_a = sa - 2;
         if (n_a >= 1) {
@@ -285,11 +305,6 @@ stepramp_err_t stepramp_plan_move_info(stepramp_plan_t *plan, stepramp_info_t *i
             double half_a = (ramp.k_a * (sqrt((double)n_a + 1.0) - 1.0) - seed_a * unit_a) / 2.0;
             first_extra = half_a;
             seed_a = seed_a + half_a / unit_a;
-        }
-        if (m0 >= 1) {
-            double unit_d = 2.0 * ((double)m0 + 0.75) - 1.5 / stepramp_decel_product(m0);
-            double half_d = (ramp.k_d * (sqrt((double)m0 + 1.0) - 1.0) - seed_d * unit_d) / 2.0;
-            seed_d = seed_d + half_d / unit_d;
         }
         inf.t_first = ramp_interval(&ramp, 1) + first_extra;
         inf.t_last = ramp_interval(&ramp, length);
@@ -301,28 +316,27 @@ stepramp_err_t stepramp_plan_move_info(stepramp_plan_t *plan, stepramp_info_t *i
     inf.t_cruise = f_tick / v;
 
     /* Plan's fields in the order Python evaluates them (the first overflow wins; all are EOVERFLOW) */
-    err = to_fixed(inf.t_first, TWO_POW_16, TWO_POW_48, &out.c_first);
+    err = stepramp_priv_to_fixed(inf.t_first, TWO_POW_16, TWO_POW_48, &out.c_first);
     if (err == STEPRAMP_OK) {
-        err = to_fixed(inf.t_last, TWO_POW_16, TWO_POW_48, &out.c_last);
+        err = stepramp_priv_to_fixed(inf.t_last, TWO_POW_16, TWO_POW_48, &out.c_last);
     }
     if (err == STEPRAMP_OK) {
-        err = to_fixed(inf.t_sa, TWO_POW_16, TWO_POW_48, &out.c_sa);
+        err = stepramp_priv_to_fixed(inf.t_sa, TWO_POW_16, TWO_POW_48, &out.c_sa);
     }
     if (err == STEPRAMP_OK) {
-        err = to_fixed(inf.t_sd, TWO_POW_16, TWO_POW_48, &out.c_sd);
+        err = stepramp_priv_to_fixed(inf.t_sd, TWO_POW_16, TWO_POW_48, &out.c_sd);
     }
     if (err == STEPRAMP_OK) {
-        err = to_fixed(inf.t_accel_seed, TWO_POW_16, TWO_POW_48, &out.accel_seed);
+        err = stepramp_priv_to_fixed(inf.t_accel_seed, TWO_POW_16, TWO_POW_48, &out.accel_seed);
     }
     if (err == STEPRAMP_OK && m0 >= 1) {
-        err = to_fixed(inf.t_decel_seed, TWO_POW_16, TWO_POW_48, &out.decel_seed);
+        err = stepramp_priv_to_fixed(inf.t_decel_seed, TWO_POW_16, TWO_POW_48, &out.decel_seed);
     }
     if (err == STEPRAMP_OK) { /* plan._cruise: round(f_tick / v * 2^32) < 2^64 */
-        err = to_fixed(inf.t_cruise, TWO_POW_32, TWO_POW_64, &out.cruise);
+        err = stepramp_priv_cruise(f_tick, v, &out.cruise);
     }
     if (err == STEPRAMP_OK) { /* plan._stop_ratio: round(accel / decel * 2^16), saturated at 2^32 - 1 */
-        double ratio = accel / decel * TWO_POW_16;
-        out.stop_ratio = (ratio < 4294967295.0) ? (uint32_t)rint(ratio) : UINT32_MAX;
+        out.stop_ratio = stepramp_priv_stop_ratio(accel, decel);
     }
     if (err != STEPRAMP_OK) {
         return err;
@@ -342,7 +356,7 @@ stepramp_err_t stepramp_plan_move(stepramp_plan_t *plan, int64_t steps, double a
 
 const char *stepramp_strerror(stepramp_err_t err)
 {
-    switch (err) {
+    switch ((int)err) { /* an int: the results of stepramp_plan_change beyond the enum are named here too */
     case STEPRAMP_OK:
         return "success";
     case STEPRAMP_EACCEL:
@@ -379,6 +393,14 @@ const char *stepramp_strerror(stepramp_err_t err)
         return "peak speed underflows: the delays would overflow their registers";
     case STEPRAMP_ENULL:
         return "plan is a NULL pointer";
+    case STEPRAMP_ECHANGE_SPEED:
+        return "the speed at the change must be finite and >= 0";
+    case STEPRAMP_EREMAINING:
+        return "remaining must be in 0 .. 2^31 - 1 steps (or STEPRAMP_ENDLESS)";
+    case STEPRAMP_ESEGMENT:
+        return "a step count of the segment is more than 2^31 - 1 (does not fit 31 bits): the stop distance from the "
+               "speed at the change, the stop from the jog speed or the accel ramp's index at the speed at the change; "
+               "or a Segment.<field> does not fit its register";
     default:
         return "unknown error";
     }

@@ -105,6 +105,20 @@ typedef enum {
 } stepramp_err_t;
 
 /**
+ * The results of stepramp_plan_change (stepramp_change.h) beyond stepramp_err_t, which stays plan.py's errors one to
+ * one: the ValueErrors that change.py adds. Values 32 .. 63, between stepramp_err_t and the driver's results
+ * (stepramp.h); stepramp_strerror names them too.
+ */
+enum {
+    STEPRAMP_ECHANGE_SPEED = 32, /**< "the speed at the change must be finite and >= 0" */
+    STEPRAMP_EREMAINING = 33,    /**< "remaining must be in 0 .. 2^31 - 1 steps" */
+    STEPRAMP_ESEGMENT = 34       /**< a step count of the segment does not fit 31 bits: "the stop distance from the
+                                      speed at the change is ... more than 2^31 - 1", "the stop from the jog speed
+                                      ...", "the accel ramp's index at the speed at the change ... does not fit 31
+                                      bits", or "Segment.<field> = ... does not fit" (a negative register value) */
+};
+
+/**
  * Plan a move, exactly like Python's stepramp.board.plan.plan_move.
  *
  * @param plan     output; written only on success (left untouched on error)
@@ -130,9 +144,10 @@ stepramp_err_t stepramp_plan_move_info(stepramp_plan_t *plan, stepramp_info_t *i
                                        double decel, double speed, double spr, double fclk, uint32_t prescale);
 
 /**
- * The reason for an error in words, like plan.py's ValueError messages without the numbers.
+ * The reason for an error in words, like plan.py's (and change.py's) ValueError messages without the numbers.
  *
- * @return a static string; "success" for STEPRAMP_OK, "unknown error" for a value outside the enum
+ * @param err a stepramp_err_t, or a result of stepramp_plan_change (STEPRAMP_ECHANGE_SPEED .. STEPRAMP_ESEGMENT, cast)
+ * @return a static string; "success" for STEPRAMP_OK, "unknown error" for a value that is none of these
  */
 const char *stepramp_strerror(stepramp_err_t err);
 

@@ -9,6 +9,7 @@
 #include "stepramp_fakebus.h"
 #include "stepramp_hostbus.h"
 
+#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
@@ -54,10 +55,16 @@ enum {
     O_CRUISE_LO = 0x4C,
     O_CRUISE_HI = 0x50,
     O_STOP_RATIO = 0x54,
-    O_POSITION = 0x58
+    O_POSITION = 0x58,
+    O_SEGMENT = 0x78,
+    O_HEAD_INDEX = 0x7C,
+    O_RUN_STOP = 0x80,
+    O_HEAD_PROD_LO = 0x84,
+    O_HEAD_PROD_HI = 0x88
 };
 
 #define N_MOTION 19 /* STEPS .. STOP_RATIO: (0x54 - 0x0C) / 4 + 1 */
+#define N_SEGMENT 5 /* SEGMENT .. HEAD_PROD_HI */
 #define TWO32 4294967296.0
 
 typedef struct {
@@ -123,20 +130,48 @@ static stepramp_t fresh(double fclk, double spr, uint32_t prescale)
     return dev;
 }
 
-/* the log holds exactly the motion words of plan (full-word writes, address order) from entry first on */
-static void check_program_log(const stepramp_plan_t *plan, uint32_t first)
+/* the log holds exactly the n words of want as full-word writes from entry first on, and the registers hold them */
+static void check_log_words(const word_t *want, int n, uint32_t first)
 {
-    word_t want[N_MOTION];
     int i;
 
-    expected_words(plan, want);
-    for (i = 0; i < N_MOTION; i++) {
+    for (i = 0; i < n; i++) {
         const stepramp_fakebus_write_t *w = &bus->log[first + (uint32_t)i];
         CHECK_EQ(w->offset, want[i].offset);
         CHECK_EQ(w->value, want[i].value);
         CHECK_EQ(w->be, 0xFu);
         CHECK_EQ(reg(want[i].offset), want[i].value);
     }
+}
+
+/* the log holds exactly the motion words of plan (full-word writes, address order) from entry first on */
+static void check_program_log(const stepramp_plan_t *plan, uint32_t first)
+{
+    word_t want[N_MOTION];
+
+    expected_words(plan, want);
+    check_log_words(want, N_MOTION, first);
+}
+
+/* the log holds exactly the segment words of regs (full-word writes, address order) from entry first on:
+ * SEGMENT = HEAD_DOWN (bit 0) | ENDLESS (bit 1), HEAD_PROD split by division */
+static void check_segment_log(const stepramp_segment_regs_t *regs, uint32_t first)
+{
+    const word_t want[N_SEGMENT] = {{O_SEGMENT, regs->head_down + 2u * regs->endless},
+                                    {O_HEAD_INDEX, regs->head_index},
+                                    {O_RUN_STOP, regs->run_stop},
+                                    {O_HEAD_PROD_LO, (uint32_t)(regs->head_prod % 4294967296ULL)},
+                                    {O_HEAD_PROD_HI, (uint32_t)(regs->head_prod / 4294967296ULL)}};
+
+    check_log_words(want, N_SEGMENT, first);
+}
+
+/* log entry i is START: bit 0 in byte 0 of CTRL only */
+static void check_start(uint32_t i)
+{
+    CHECK_EQ(bus->log[i].offset, O_CTRL);
+    CHECK_EQ(bus->log[i].be, 0x1u);
+    CHECK_EQ(bus->log[i].value, 0x1u);
 }
 
 static void test_init(void)
@@ -149,6 +184,7 @@ static void test_init(void)
     CHECK_EQ(stepramp_init(&dev, BASE, 50e6, 6400.0, 50u), STEPRAMP_OK);
     CHECK(dev.base == BASE && dev.fclk == 50e6 && dev.spr == 6400.0 && dev.prescale == 50u);
     CHECK_EQ(dev.version, 0x0003u);
+    CHECK(dev.segment_set == 0u && dev.min_gap == STEPRAMP_MIN_GAP_RESET && STEPRAMP_MIN_GAP_RESET == 2u);
     CHECK_EQ(bus->writes, 0u); /* init only reads */
     CHECK_EQ(bus->reads, 1u);
     for (i = 0; i < sizeof bad_ids / sizeof bad_ids[0]; i++) {
@@ -340,6 +376,7 @@ static void test_enable_and_outputs(void)
     CHECK_EQ(reg(0x6Cu), 20u | (9u << 16));
     CHECK_EQ(reg(0x70u), 40u);
     CHECK_EQ(reg(0x74u), 3u);
+    CHECK_EQ(dev.min_gap, 7u + 3u);
     out.mode = 5u;
     CHECK_EQ(stepramp_configure_outputs(&dev, &out), STEPRAMP_EOUTPUTS);
     out.mode = 3u;
@@ -347,7 +384,179 @@ static void test_enable_and_outputs(void)
     CHECK_EQ(stepramp_configure_outputs(&dev, &out), STEPRAMP_EOUTPUTS);
     CHECK_EQ(stepramp_configure_outputs(&dev, NULL), STEPRAMP_EOUTPUTS);
     CHECK_EQ(reg(0x64u), 4u | (4u << 4)); /* nothing written on error */
+    CHECK_EQ(dev.min_gap, 7u + 3u);
+    out.step_width = 0u; /* 0 acts as 1 */
+    out.step_space = 0u;
+    out.ustep_log2 = 0u;
+    CHECK_EQ(stepramp_configure_outputs(&dev, &out), STEPRAMP_OK);
+    CHECK_EQ(dev.min_gap, 2u);
     CHECK(strstr(stepramp_strresult(STEPRAMP_EOUTPUTS), "mode") != NULL);
+}
+
+/* the registers of two plans are the same words */
+static int same_words(const stepramp_plan_t *a, const stepramp_plan_t *b)
+{
+    word_t wa[N_MOTION];
+    word_t wb[N_MOTION];
+
+    expected_words(a, wa);
+    expected_words(b, wb);
+    return memcmp(wa, wb, sizeof wa) == 0;
+}
+
+/* jog = plan_change from rest, endless + registers + program with the segment + START; the next move clears the
+ * segment registers, the one after it writes what a move always did */
+static void test_jog_writes(void)
+{
+    static const struct {
+        double speed, accel, decel, spr, fclk;
+        uint32_t prescale;
+    } jogs[] = {
+        {20.0, 40.0, 40.0, 400.0, 1e6, 1u},
+        {-20.0, 40.0, 25.0, 6400.0, 50e6, 50u},
+        {-0.5, 100.0, 3.0, 200.0, 1e6, 1u},
+        {3.0, 1.0, 500.0, 3200.0, 10e6, 7u},
+    };
+    static const stepramp_segment_regs_t zero = {0u, 0u, 0u, 0u, 0u};
+    size_t i;
+
+    for (i = 0; i < sizeof jogs / sizeof jogs[0]; i++) {
+        stepramp_t dev = fresh(jogs[i].fclk, jogs[i].spr, jogs[i].prescale);
+        stepramp_change_t ch;
+        stepramp_plan_t plan;
+        stepramp_plan_t again;
+        stepramp_plan_t move;
+        stepramp_segment_regs_t regs;
+        stepramp_segment_regs_t regs_again;
+
+        CHECK_EQ(stepramp_plan_change(&ch, 0.0, STEPRAMP_ENDLESS, jogs[i].accel, jogs[i].decel, fabs(jogs[i].speed),
+                                      jogs[i].spr, jogs[i].fclk, jogs[i].prescale),
+                 STEPRAMP_OK);
+        CHECK_EQ(stepramp_segment_registers(&ch.segment, jogs[i].speed < 0.0, &plan, &regs), STEPRAMP_OK);
+        CHECK_EQ(stepramp_jog(&dev, jogs[i].speed, jogs[i].accel, jogs[i].decel), STEPRAMP_OK);
+        CHECK_EQ(bus->writes, N_MOTION + N_SEGMENT + 1u);
+        check_program_log(&plan, 0u);
+        check_segment_log(&regs, N_MOTION);
+        check_start(N_MOTION + N_SEGMENT);
+        CHECK(bus->starts == 1u && bus->bus_errors == 0u && dev.segment_set == 1u);
+        /* STEPS is +-1 (the direction only), an endless up head from rest with its soft stop's length */
+        CHECK_EQ(reg(O_STEPS), jogs[i].speed < 0.0 ? 0xFFFFFFFFu : 1u);
+        CHECK_EQ(reg(O_SEGMENT), 2u);
+        CHECK(reg(O_HEAD_INDEX) == 0u && reg(O_HEAD_PROD_LO) == 0u && reg(O_HEAD_PROD_HI) == 0u);
+        CHECK(reg(O_RUN_STOP) == ch.segment.run_stop && ch.segment.run_stop > 0u);
+        CHECK(reg(O_SD) == 0u && reg(O_SA) == ch.segment.sa);
+        /* stepramp_plan_jog: the same registers, none written */
+        stepramp_fakebus_clear_log();
+        CHECK_EQ(stepramp_plan_jog(&dev, &again, &regs_again, jogs[i].speed, jogs[i].accel, jogs[i].decel),
+                 STEPRAMP_OK);
+        CHECK(same_words(&again, &plan) && regs_again.run_stop == regs.run_stop && regs_again.endless == 1u);
+        CHECK_EQ(bus->writes, 0u);
+
+        /* a move after the jog: its registers, the segment registers cleared, START */
+        CHECK_EQ(stepramp_plan_move(&move, -400, 40.0, 40.0, 1.0, jogs[i].spr, jogs[i].fclk, jogs[i].prescale),
+                 STEPRAMP_OK);
+        CHECK_EQ(stepramp_move(&dev, -400, 40.0, 40.0, 1.0), STEPRAMP_OK);
+        CHECK_EQ(bus->writes, N_MOTION + N_SEGMENT + 1u);
+        check_program_log(&move, 0u);
+        check_segment_log(&zero, N_MOTION);
+        check_start(N_MOTION + N_SEGMENT);
+        CHECK_EQ(dev.segment_set, 0u);
+        /* and the move after it: the motion registers and START only */
+        stepramp_fakebus_clear_log();
+        CHECK_EQ(stepramp_move(&dev, -400, 40.0, 40.0, 1.0), STEPRAMP_OK);
+        CHECK_EQ(bus->writes, N_MOTION + 1u);
+        check_program_log(&move, 0u);
+        check_start(N_MOTION);
+        CHECK_EQ(bus->bus_errors, 0u);
+    }
+}
+
+/* program with segment registers: all 0 leaves them clear, anything else set; NULL writes them only when set */
+static void test_program_segment(void)
+{
+    stepramp_t dev = fresh(1e6, 200.0, 1u);
+    stepramp_plan_t plan;
+    stepramp_segment_regs_t regs = {1u, 1u, 0x7FFFFFFFu, 0x12345u, UINT64_C(0x800012345678)};
+    static const stepramp_segment_regs_t zero = {0u, 0u, 0u, 0u, 0u};
+
+    memset(&plan, 0, sizeof plan);
+    plan.steps = 10u;
+    plan.prescale = 1u;
+    CHECK_EQ(stepramp_program_segment(&dev, &plan, &regs), STEPRAMP_OK);
+    CHECK_EQ(bus->writes, N_MOTION + N_SEGMENT);
+    CHECK_EQ(bus->starts, 0u);
+    check_program_log(&plan, 0u);
+    check_segment_log(&regs, N_MOTION);
+    CHECK(reg(O_SEGMENT) == 3u && reg(O_HEAD_INDEX) == 0x7FFFFFFFu && reg(O_RUN_STOP) == 0x12345u);
+    CHECK(reg(O_HEAD_PROD_LO) == 0x12345678u && reg(O_HEAD_PROD_HI) == 0x8000u && dev.segment_set == 1u);
+    /* one field alone keeps them set */
+    regs = zero;
+    regs.head_prod = UINT64_C(1) << 40;
+    stepramp_fakebus_clear_log();
+    CHECK_EQ(stepramp_program_segment(&dev, &plan, &regs), STEPRAMP_OK);
+    CHECK(bus->writes == N_MOTION + N_SEGMENT && reg(O_HEAD_PROD_HI) == 0x100u && dev.segment_set == 1u);
+    /* all 0 given: written, clear */
+    stepramp_fakebus_clear_log();
+    CHECK_EQ(stepramp_program_segment(&dev, &plan, &zero), STEPRAMP_OK);
+    CHECK_EQ(bus->writes, N_MOTION + N_SEGMENT);
+    check_segment_log(&zero, N_MOTION);
+    CHECK_EQ(dev.segment_set, 0u);
+    /* then NULL: the motion registers only */
+    stepramp_fakebus_clear_log();
+    CHECK_EQ(stepramp_program_segment(&dev, &plan, NULL), STEPRAMP_OK);
+    CHECK_EQ(bus->writes, (uint32_t)N_MOTION);
+    /* NULL pointers: nothing written, the flag kept */
+    dev.segment_set = 1u;
+    stepramp_fakebus_clear_log();
+    CHECK_EQ(stepramp_program_segment(&dev, NULL, &regs), STEPRAMP_ENULL);
+    CHECK_EQ(stepramp_program_segment(NULL, &plan, &regs), STEPRAMP_ENULL);
+    CHECK(bus->writes == 0u && dev.segment_set == 1u);
+}
+
+/* the jog's checks: its speed, the plan's errors, STEP width + space against its shortest interval; nothing written */
+static void test_jog_errors(void)
+{
+    static const double bad_speeds[] = {0.0, -0.0, NAN, INFINITY, -INFINITY};
+    stepramp_t dev = fresh(1e6, 400.0, 4u);
+    stepramp_outputs_t out = {0u, 0u, 1u, 0u, 0u, 0u, 1u};
+    stepramp_plan_t plan;
+    stepramp_segment_regs_t regs;
+    /* 20 rad/s at 400 steps/rev: 1273.2 steps/s, 196.3 ticks of 4 clocks: 784 clocks */
+    const uint32_t shortest = (uint32_t)floor(1e6 / 4.0 / (20.0 * 400.0 / (2.0 * 3.141592653589793))) * 4u;
+    size_t i;
+
+    CHECK_EQ(shortest, 784u);
+    for (i = 0; i < sizeof bad_speeds / sizeof bad_speeds[0]; i++) {
+        CHECK_EQ(stepramp_jog(&dev, bad_speeds[i], 40.0, 40.0), STEPRAMP_EJOG_SPEED);
+    }
+    CHECK_EQ(stepramp_jog(&dev, 20.0, 0.0, 40.0), STEPRAMP_EACCEL);
+    CHECK_EQ(stepramp_jog(&dev, 20.0, 40.0, NAN), STEPRAMP_EDECEL);
+    CHECK_EQ(stepramp_jog(&dev, -1e4, 40.0, 40.0), STEPRAMP_ETOOFAST);
+    CHECK_EQ(stepramp_jog(&dev, 20.0, 40.0, 1e-9), STEPRAMP_ESEGMENT); /* a soft stop of 2^31 steps or more */
+    CHECK_EQ(bus->writes, 0u);
+
+    /* STEP width + space: up to the shortest interval, not one clock more */
+    out.step_width = (uint16_t)(shortest - 100u);
+    out.step_space = 100u;
+    CHECK_EQ(stepramp_configure_outputs(&dev, &out), STEPRAMP_OK);
+    stepramp_fakebus_clear_log();
+    CHECK_EQ(stepramp_plan_jog(&dev, &plan, &regs, -20.0, 40.0, 40.0), STEPRAMP_OK);
+    out.step_space = 101u;
+    CHECK_EQ(stepramp_configure_outputs(&dev, &out), STEPRAMP_OK);
+    stepramp_fakebus_clear_log();
+    CHECK_EQ(stepramp_jog(&dev, -20.0, 40.0, 40.0), STEPRAMP_EGAP);
+    CHECK_EQ(stepramp_jog(&dev, 19.9, 40.0, 40.0), STEPRAMP_OK); /* a little slower fits */
+    CHECK_EQ(bus->writes, N_MOTION + N_SEGMENT + 1u);
+
+    stepramp_fakebus_clear_log();
+    CHECK_EQ(stepramp_plan_jog(NULL, &plan, &regs, 20.0, 40.0, 40.0), STEPRAMP_ENULL);
+    CHECK_EQ(stepramp_plan_jog(&dev, NULL, &regs, 20.0, 40.0, 40.0), STEPRAMP_ENULL);
+    CHECK_EQ(stepramp_plan_jog(&dev, &plan, NULL, 20.0, 40.0, 40.0), STEPRAMP_ENULL);
+    CHECK_EQ(stepramp_jog(NULL, 20.0, 40.0, 40.0), STEPRAMP_ENULL);
+    CHECK_EQ(bus->writes, 0u);
+    CHECK(strstr(stepramp_strresult(STEPRAMP_EJOG_SPEED), "jog speed") != NULL);
+    CHECK(strstr(stepramp_strresult(STEPRAMP_EGAP), "STEP width + STEP space") != NULL);
+    CHECK(strstr(stepramp_strresult(STEPRAMP_ESEGMENT), "2^31 - 1") != NULL);
 }
 
 static void test_status_decoding(void)
@@ -575,7 +784,7 @@ static void test_error_texts(void)
                  "POSITION written while a move runs (the write was ignored)") == 0);
     CHECK(strcmp(stepramp_corename(STEPRAMP_ERR_LATE), "LATE") == 0);
     CHECK(strcmp(stepramp_corename(STEPRAMP_ERR_ZERO_TICKS), "ZERO_TICKS") == 0);
-    for (a = 0; a <= STEPRAMP_ERR_STEP_SPACE; a++) {
+    for (a = 0; a <= STEPRAMP_ERR_SEGMENT; a++) {
         CHECK(strcmp(stepramp_strcoreerror(a), "unknown error code") != 0);
         CHECK(strcmp(stepramp_corename(a), "UNKNOWN") != 0);
         CHECK(strstr(stepramp_strresult(STEPRAMP_ECORE(a)), stepramp_strcoreerror(a)) != NULL);
@@ -584,7 +793,7 @@ static void test_error_texts(void)
             CHECK(strcmp(stepramp_strcoreerror(a), stepramp_strcoreerror(b)) != 0);
         }
     }
-    CHECK(strcmp(stepramp_strcoreerror(STEPRAMP_ERR_STEP_SPACE + 1u), "unknown error code") == 0);
+    CHECK(strcmp(stepramp_strcoreerror(STEPRAMP_ERR_SEGMENT + 1u), "unknown error code") == 0);
     CHECK(strcmp(stepramp_strcoreerror(31u), "unknown error code") == 0);
     CHECK(strcmp(stepramp_strcoreerror(UINT32_MAX), "unknown error code") == 0);
     CHECK(strcmp(stepramp_corename(99u), "UNKNOWN") == 0);
@@ -610,6 +819,9 @@ int main(void)
     test_program_splits_wide_values();
     test_commands_keep_irq_enables();
     test_enable_and_outputs();
+    test_jog_writes();
+    test_program_segment();
+    test_jog_errors();
     test_status_decoding();
     test_clear_flags();
     test_wait_done();

@@ -1,8 +1,8 @@
 /* SPDX-License-Identifier: MIT */
 /*
- * Host unit tests of stepramp_plan: expected values from the physics of the move (not from the code under
- * test), every error code, the empty moves. The bit-for-bit comparison with the Python driver is done by
- * sw/tests/test_c_plan.py. Exit status 0 when every check passes.
+ * Host unit tests of stepramp_plan and stepramp_change: expected values from the physics of the move (not from the
+ * code under test), every error code, the empty moves. The bit-for-bit comparison with the Python driver is done by
+ * sw/tests/test_c_plan.py and sw/tests/test_c_change.py. Exit status 0 when every check passes.
  */
 #include "stepramp_plan.h"
 
@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "stepramp_change.h"
 #include "test_check.h"
 
 #define PI 3.141592653589793
@@ -450,6 +451,170 @@ static void test_move_info(void)
     CHECK(stepramp_plan_move_info(NULL, &info, 100, 100.0, 100.0, 50.0, 200.0, 1e6, 1) == STEPRAMP_ENULL);
 }
 
+/* changes while moving, 400 steps/rev at 1 MHz: a = 6366 steps/s^2, d = 5093 steps/s^2, v = 1273 steps/s */
+#define CH_ACCEL 100.0
+#define CH_DECEL 80.0
+#define CH_SPEED 20.0
+#define CH_SPR 400.0
+#define CH_FCLK 1e6
+
+static int change(stepramp_change_t *ch, double u, int64_t remaining)
+{
+    return stepramp_plan_change(ch, u, remaining, CH_ACCEL, CH_DECEL, CH_SPEED, CH_SPR, CH_FCLK, 1);
+}
+
+static void test_change_kinds(void)
+{
+    phys_t p = physics(100000, CH_ACCEL, CH_DECEL, CH_SPEED, CH_SPR, CH_FCLK, 1);
+    double stop = p.v * p.v / (2.0 * p.d); /* 159.2 steps */
+    stepramp_plan_t move;
+    stepramp_change_t ch;
+
+    /* a jog from rest starts like a move from rest: its accel ramp, then the cruise; a soft stop takes v^2 / 2d */
+    CHECK(stepramp_plan_move(&move, 100000, CH_ACCEL, CH_DECEL, CH_SPEED, CH_SPR, CH_FCLK, 1) == STEPRAMP_OK);
+    CHECK(change(&ch, 0.0, STEPRAMP_ENDLESS) == STEPRAMP_OK);
+    CHECK(ch.segment.endless == 1 && ch.segment.length == 0 && ch.segment.sd == 0 && ch.has_back == 0);
+    CHECK(ch.segment.head == STEPRAMP_HEAD_UP && ch.segment.head_index == 0 && ch.start_speed == 0.0);
+    CHECK(ch.segment.sa == move.sa && ch.segment.sa == (uint32_t)floor(p.v * p.v / (2.0 * p.a)) + 1u);
+    CHECK(near((double)ch.segment.c_first, (double)move.c_first, 1.0));
+    CHECK(near((double)ch.segment.accel_seed, (double)move.accel_seed, 1.0));
+    CHECK(near((double)ch.segment.c_sa, (double)move.c_sa, 1.0) && ch.segment.cruise == move.cruise);
+    CHECK(ch.segment.run_stop == (uint32_t)ceil(stop) && rel_near((double)ch.segment.c_last, p.cd0 * Q16, 1e-15));
+    CHECK(ch.segment.stop_ratio == (uint32_t)rint(CH_ACCEL / CH_DECEL * Q16) && ch.segment.prescale == 1);
+
+    /* slower from twice the speed: a down head from the rest K = floor(u^2 / 2d) steps ahead, snapped to it */
+    CHECK(change(&ch, 2.0 * p.v, 100000) == STEPRAMP_OK);
+    CHECK(ch.segment.head == STEPRAMP_HEAD_DOWN && ch.segment.head_index == (uint32_t)floor(4.0 * stop));
+    CHECK(ch.segment.length == 100000 && ch.segment.endless == 0 && ch.has_back == 0);
+    CHECK(ch.start_speed <= 2.0 * p.v && 2.0 * p.v - ch.start_speed < 2.0 * p.d / (2.0 * p.v));
+    CHECK(ch.segment.sd > ch.segment.sa && ch.segment.decel_seed > 0 && ch.segment.run_stop == 0);
+
+    /* faster from v: an up head from n0 = round(v^2 / 2a) */
+    CHECK(stepramp_plan_change(&ch, p.v, 100000, CH_ACCEL, CH_DECEL, 2.0 * CH_SPEED, CH_SPR, CH_FCLK, 1) ==
+          STEPRAMP_OK);
+    CHECK(ch.segment.head == STEPRAMP_HEAD_UP && ch.segment.head_index == (uint32_t)rint(p.v * p.v / (2.0 * p.a)));
+
+    /* the target 10 steps ahead, inside the stop distance: to rest 159 steps ahead, then 149 steps back */
+    CHECK(change(&ch, p.v, 10) == STEPRAMP_OK);
+    CHECK(ch.has_back == 1 && ch.back.steps == (uint32_t)floor(stop) - 10u && ch.back.direction == 1);
+    CHECK(ch.segment.length == (uint32_t)floor(stop) && ch.segment.sa == 1 && ch.segment.sd == 1);
+    CHECK(ch.segment.accel_seed == 0 && ch.segment.cruise == 0 && ch.segment.head_index == 0);
+    CHECK(rel_near_d(ch.start_speed, sqrt(2.0 * p.d * floor(stop)), 1e-15));
+    CHECK(rel_near((double)ch.segment.c_last, p.cd0 * Q16, 1e-12)); /* the last step of a decel to rest */
+
+    /* at the target at rest: the empty segment */
+    CHECK(change(&ch, 0.0, 0) == STEPRAMP_OK);
+    CHECK(ch.segment.length == 0 && ch.segment.sa == 0 && ch.segment.c_first == 0 && ch.segment.c_last == 0);
+    CHECK(ch.has_back == 0 && ch.start_speed == 0.0 && ch.segment.stop_ratio != 0);
+}
+
+static void test_change_errors(void)
+{
+    stepramp_change_t ch;
+    stepramp_change_t before;
+    /* a stop distance of 2^31 + 9 steps; and of 2^31 - 1/2 steps: rest 2^31 - 1 steps ahead, then 2^31 - 11 back */
+    const double far = sqrt(2.0 * 80.0 / (2.0 * PI / 400.0) * 2147483657.0);
+    const double near_far = sqrt(2.0 * 80.0 / (2.0 * PI / 400.0) * 2147483647.5);
+    int e;
+
+    memset(&ch, 0x5A, sizeof ch);
+    before = ch;
+    CHECK(change(&ch, -1.0, 100) == STEPRAMP_ECHANGE_SPEED);
+    CHECK(change(&ch, NAN, 100) == STEPRAMP_ECHANGE_SPEED);
+    CHECK(change(&ch, INFINITY, STEPRAMP_ENDLESS) == STEPRAMP_ECHANGE_SPEED);
+    CHECK(change(&ch, 10.0, -2) == STEPRAMP_EREMAINING);
+    CHECK(change(&ch, 10.0, INT64_C(2147483648)) == STEPRAMP_EREMAINING);
+    CHECK(change(&ch, far, 10) == STEPRAMP_ESEGMENT);               /* the stop distance */
+    CHECK(change(&ch, far * 2.0, STEPRAMP_ENDLESS) == STEPRAMP_ESEGMENT); /* also for a jog */
+    /* the accel ramp's index u^2 / 2a = 3.1e9 steps, its stop distance 3.1e6 (d = 1000 a) */
+    CHECK(stepramp_plan_change(&ch, 2e4, STEPRAMP_ENDLESS, 1e-3, 1.0, 1000.0, 400.0, 1e6, 1) == STEPRAMP_ESEGMENT);
+    /* a jog's soft stop v^2 / 2d = 2.5e10 steps */
+    CHECK(stepramp_plan_change(&ch, 0.0, STEPRAMP_ENDLESS, 50.0, 1e-2, 1600.0, 400.0, 1e9, 1) == STEPRAMP_ESEGMENT);
+    CHECK(stepramp_plan_change(&ch, 10.0, 100, 0.0, 1.0, 1.0, 400.0, 1e6, 1) == STEPRAMP_EACCEL);
+    CHECK(stepramp_plan_change(&ch, -1.0, -2, 1.0, 1.0, 1.0, 400.0, 1e6, 0) == STEPRAMP_EPRESCALE);
+    CHECK(stepramp_plan_change(&ch, 0.0, STEPRAMP_ENDLESS, 1.0, 1.0, 1e9, 400.0, 1e6, 1) == STEPRAMP_ETOOFAST);
+    /* in steps units: 0 (spr = 1: the smallest subnormal accel), a square that overflows, f_tick's square */
+    CHECK(stepramp_plan_change(&ch, 0.0, 100, 5e-324, 1.0, 1.0, 1.0, 1e6, 1) == STEPRAMP_EACCEL_UNITS);
+    CHECK(stepramp_plan_change(&ch, 0.0, 100, 1.0, 1e160, 1.0, 400.0, 1e6, 1) == STEPRAMP_EDECEL_UNITS);
+    CHECK(stepramp_plan_change(&ch, 0.0, 100, 1.0, 1.0, 1e160, 400.0, 1e6, 1) == STEPRAMP_ESPEED_UNITS);
+    CHECK(stepramp_plan_change(&ch, 0.0, 100, 1.0, 1.0, 1.0, 400.0, 2e154, 1) == STEPRAMP_EFTICK);
+    /* the target inside the stop distance (2513 steps, 100 to the target): the move back's own error */
+    CHECK(stepramp_plan_change(&ch, 4000.0, 100, 50.0, 50.0, 10.0, 400.0, 2e4, 1) == STEPRAMP_ETOOFAST);
+    CHECK(memcmp(&ch, &before, sizeof ch) == 0); /* never written on error */
+    CHECK(change(NULL, 0.0, 100) == STEPRAMP_ENULL);
+    CHECK(change(&ch, near_far, 10) == STEPRAMP_OK);
+    CHECK(ch.segment.length == 2147483647u && ch.has_back && ch.back.steps == 2147483637u && ch.back.direction == 1);
+    for (e = STEPRAMP_ECHANGE_SPEED; e <= STEPRAMP_ESEGMENT; e++) {
+        const char *s = stepramp_strerror((stepramp_err_t)e);
+        CHECK(strcmp(s, "unknown error") != 0 && strcmp(s, stepramp_strerror((stepramp_err_t)(e - 1))) != 0);
+    }
+    CHECK(strcmp(stepramp_strerror((stepramp_err_t)(STEPRAMP_ESEGMENT + 1)), "unknown error") == 0);
+}
+
+/* Segment.head_prod and Segment.registers */
+static void test_segment_registers(void)
+{
+    stepramp_change_t ch;
+    stepramp_plan_t plan;
+    stepramp_segment_regs_t regs;
+    stepramp_segment_t seg = {0};
+
+    /* a jog from rest: STEPS 1 (the sign only), ENDLESS, an up head from 0, RUN_STOP */
+    CHECK(change(&ch, 0.0, STEPRAMP_ENDLESS) == STEPRAMP_OK);
+    CHECK(stepramp_segment_registers(&ch.segment, 1u, &plan, &regs) == STEPRAMP_OK);
+    CHECK(plan.steps == 1u && plan.direction == 1u && plan.prescale == 1u && plan.sa == ch.segment.sa);
+    CHECK(plan.c_first == ch.segment.c_first && plan.c_last == ch.segment.c_last && plan.c_sa == ch.segment.c_sa);
+    CHECK(plan.sd == 0u && plan.c_sd == 0u && plan.decel_seed == 0u && plan.cruise == ch.segment.cruise);
+    CHECK(plan.accel_seed == ch.segment.accel_seed && plan.stop_ratio == ch.segment.stop_ratio);
+    CHECK(regs.head_down == 0u && regs.endless == 1u && regs.head_index == 0u && regs.head_prod == 0u);
+    CHECK(regs.run_stop == ch.segment.run_stop && regs.run_stop > 0u);
+    /* faster from v: an up head from n0, HEAD_PROD = n0 * STOP_RATIO; STEPS = L + 1 */
+    CHECK(stepramp_plan_change(&ch, 1000.0, 100000, CH_ACCEL, CH_DECEL, 2.0 * CH_SPEED, CH_SPR, CH_FCLK, 1) ==
+          STEPRAMP_OK);
+    CHECK(stepramp_segment_registers(&ch.segment, 0u, &plan, &regs) == STEPRAMP_OK);
+    CHECK(plan.steps == 100001u && plan.direction == 0u && plan.sd == ch.segment.sd && regs.endless == 0u);
+    CHECK(regs.head_down == 0u && regs.head_index > 0u && regs.run_stop == 0u);
+    CHECK(regs.head_prod == (uint64_t)regs.head_index * ch.segment.stop_ratio);
+    /* slower: a down head, HEAD_PROD 0 */
+    CHECK(change(&ch, 2000.0, 100000) == STEPRAMP_OK);
+    CHECK(stepramp_segment_registers(&ch.segment, 7u, &plan, &regs) == STEPRAMP_OK);
+    CHECK(regs.head_down == 1u && regs.head_index == ch.segment.head_index && regs.head_prod == 0u);
+    CHECK(plan.direction == 1u);
+    /* HEAD_PROD saturates at 2^47 */
+    seg.head_index = 2147483647u;
+    seg.stop_ratio = 0xFFFFFFFFu;
+    CHECK(stepramp_segment_head_prod(&seg) == UINT64_C(1) << 47);
+    seg.head_index = 65536u;
+    seg.stop_ratio = 0x7FFFFFFFu; /* 2^47 - 2^16 */
+    CHECK(stepramp_segment_head_prod(&seg) == (UINT64_C(1) << 47) - 65536u);
+    seg.head = STEPRAMP_HEAD_DOWN;
+    CHECK(stepramp_segment_head_prod(&seg) == 0u && stepramp_segment_head_prod(NULL) == 0u);
+    /* STEPS = L + 1 must fit 31 bits; NULL pointers */
+    seg.length = 2147483647u;
+    CHECK(stepramp_segment_registers(&seg, 0u, &plan, &regs) == STEPRAMP_ESTEPS);
+    seg.length = 2147483646u;
+    CHECK(stepramp_segment_registers(&seg, 0u, &plan, &regs) == STEPRAMP_OK && plan.steps == 2147483647u);
+    CHECK(stepramp_segment_registers(NULL, 0u, &plan, &regs) == STEPRAMP_ENULL);
+    CHECK(stepramp_segment_registers(&seg, 0u, NULL, &regs) == STEPRAMP_ENULL);
+    CHECK(stepramp_segment_registers(&seg, 0u, &plan, NULL) == STEPRAMP_ENULL);
+}
+
+static void test_speed_at_pulse(void)
+{
+    stepramp_plan_t plan;
+    stepramp_info_t info;
+    phys_t p = physics(100000, CH_ACCEL, CH_DECEL, CH_SPEED, CH_SPR, CH_FCLK, 1);
+
+    CHECK(stepramp_plan_move_info(&plan, &info, 100000, CH_ACCEL, CH_DECEL, CH_SPEED, CH_SPR, CH_FCLK, 1) ==
+          STEPRAMP_OK);
+    CHECK(rel_near_d(stepramp_speed_at_pulse(&info, 50), sqrt(2.0 * p.a * 50.0), 1e-15)); /* accelerating */
+    CHECK(stepramp_speed_at_pulse(&info, 50000) == info.v_peak && info.v_peak == info.v); /* cruising */
+    CHECK(rel_near_d(stepramp_speed_at_pulse(&info, 99999 - 50), sqrt(2.0 * p.d * 50.0), 1e-15)); /* decelerating */
+    CHECK(stepramp_speed_at_pulse(&info, 0) == 0.0 && stepramp_speed_at_pulse(&info, -5) == 0.0);
+    CHECK(stepramp_speed_at_pulse(&info, 99999) == 0.0 && stepramp_speed_at_pulse(&info, 100003) == 0.0);
+    CHECK(stepramp_speed_at_pulse(NULL, 50) == 0.0);
+}
+
 int main(void)
 {
     test_long_symmetric_trapezoid();
@@ -463,5 +628,9 @@ int main(void)
     test_strerror();
     test_decel_product_and_constants();
     test_move_info();
+    test_change_kinds();
+    test_change_errors();
+    test_segment_registers();
+    test_speed_at_pulse();
     return test_report("test_stepramp_plan");
 }

@@ -1,6 +1,7 @@
 # SPDX-License-Identifier: MIT
-"""What the ctypes tests of the C library (test_c_plan.py, test_c_driver.py) share: stepramp_plan_t as its header
-declares it, running a host test program, and the log-uniform draw of their random moves."""
+"""What the ctypes tests of the C library (test_c_plan.py, test_c_driver.py, test_c_change.py) share: the structs as
+their headers declare them (stepramp_plan_t), running a host test program, and the log-uniform draw of their random
+moves."""
 
 from __future__ import annotations
 
@@ -9,29 +10,30 @@ import math
 import random
 import re
 import subprocess
+from pathlib import Path
 from typing import Any
 
+from stepramp.sim.cdriver import C_TYPES
 from stepramp.tools import clib
 
 PLAN_HEADER = clib.C_DIR / "stepramp_plan.h"
 
-_C_TYPES = {
-    "uint32_t": ctypes.c_uint32,
-    "uint64_t": ctypes.c_uint64,
-    "int32_t": ctypes.c_int32,
-    "int64_t": ctypes.c_int64,
-}
+
+def struct_fields(header: Path, struct: str, types: dict[str, Any] | None = None) -> list[tuple[str, Any]]:
+    """The fields of `typedef struct { ... } <struct>;` in a header, as ctypes types (so that a field added there is
+    followed here); types names further C types, such as a struct the struct holds."""
+    text = re.sub(r"/\*.*?\*/", "", header.read_text(), flags=re.S)
+    match = re.search(r"typedef struct \{([^{}]*)\} " + struct + ";", text)
+    assert match, f"no {struct} in {header}"
+    fields = re.findall(r"(\w+)\s+(\w+)\s*;", match.group(1))
+    assert fields, f"{struct} has no fields"
+    known = C_TYPES | (types or {})
+    return [(name, known[ctype]) for ctype, name in fields]
 
 
 def plan_struct_fields() -> list[tuple[str, Any]]:
-    """stepramp_plan_t's fields, read from stepramp_plan.h (so that a field added there is followed here)."""
-    text = PLAN_HEADER.read_text()
-    match = re.search(r"typedef struct \{(.*?)\} stepramp_plan_t;", text, re.S)
-    assert match, f"no stepramp_plan_t in {PLAN_HEADER}"
-    body = re.sub(r"/\*.*?\*/", "", match.group(1), flags=re.S)
-    fields = re.findall(r"(\w+)\s+(\w+)\s*;", body)
-    assert fields, "stepramp_plan_t has no fields"
-    return [(name, _C_TYPES[ctype]) for ctype, name in fields]
+    """stepramp_plan_t's fields, read from stepramp_plan.h."""
+    return struct_fields(PLAN_HEADER, "stepramp_plan_t")
 
 
 class CPlan(ctypes.Structure):

@@ -5,28 +5,48 @@
 library holds the driver with its register access routed to the fake register bank of stepramp_fakebus.c, whose
 write log ctypes reads: for random plans (stepramp_program) and random valid moves (stepramp_move) the C driver
 must write exactly the (offset, value) pairs of stepramp.board.driver.plan_writes, in the same order, with all byte
-enables, and START to byte 0 of CTRL; an invalid move returns the plan's error and writes nothing.
+enables, and START to byte 0 of CTRL; an invalid move returns the plan's error and writes nothing. For random jogs
+(stepramp_jog, with random STEP width and space) and the two moves after each, the C driver must write what the
+Python driver's jog and move write (plan_jog, plan_writes and segment_writes), or fail with the same error and
+write nothing.
 """
 
 from __future__ import annotations
 
 import ctypes
 import dataclasses
+import math
 import random
 import re
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
 import pytest
+from test_c_change import RESULT_NAMES, change_error_name
+from test_driver import FakeBank
+from test_driver import run as run_async
 
-from c_abi import CPlan, log_uniform, run
-from stepramp.board.driver import plan_writes
+from c_abi import CPlan, log_uniform, run, struct_fields
+from stepramp.board.driver import MODES, Outputs, StepRamp, plan_writes
 from stepramp.board.plan import MAX_PRESCALE, MAX_STEPS, REG_WIDTHS, Plan, plan_move
-from stepramp.board.regmap import ERROR_CODES, offset
+from stepramp.board.regmap import ERROR_CODES, ID_VALUE, offset
 from stepramp.sim.profiles import INVALID_INPUTS, PROFILES, design_args
+from stepramp.tools import clib
 
-FAKEBUS_WORDS = 32
-LOG_MAX = 256
+DRIVER_HEADER = clib.C_DIR / "stepramp.h"
+FAKEBUS_HEADER = clib.C_DIR / "stepramp_fakebus.h"
+
+
+def _define(header: Path, name: str) -> int:
+    match = re.search(rf"#define {name} (\d+)u", header.read_text())
+    assert match, f"no {name} in {header}"
+    return int(match.group(1))
+
+
+FAKEBUS_WORDS = _define(FAKEBUS_HEADER, "STEPRAMP_FAKEBUS_WORDS")
+LOG_MAX = _define(FAKEBUS_HEADER, "STEPRAMP_FAKEBUS_LOG_MAX")
+FAKEBUS_BASE = 0x44A0_0000  # STEPRAMP_FAKEBUS_BASE of stepramp_ctypes.h
 
 RANDOM_COUNT = 500
 
@@ -62,6 +82,33 @@ class CFakeBus(ctypes.Structure):
     ]
 
 
+class CDev(ctypes.Structure):
+    """stepramp_t."""
+
+    _fields_ = struct_fields(DRIVER_HEADER, "stepramp_t")
+
+
+class COutputs(ctypes.Structure):
+    """stepramp_outputs_t."""
+
+    _fields_ = struct_fields(DRIVER_HEADER, "stepramp_outputs_t")
+
+
+def _driver_result_names() -> dict[int, str]:
+    """The driver's own results (stepramp.h), then stepramp_plan.h's, by value."""
+    text = re.sub(r"/\*.*?\*/", "", DRIVER_HEADER.read_text(), flags=re.S)
+    return RESULT_NAMES | {int(value): name for name, value in re.findall(r"(STEPRAMP_E\w+)\s*=\s*(\d+)", text)}
+
+
+DRIVER_RESULTS = _driver_result_names()
+
+#: The Python driver's own ValueErrors of plan_jog -> the C driver's results.
+JOG_ERROR_KEYS = {
+    "the jog speed must be a finite non-zero number": "STEPRAMP_EJOG_SPEED",
+    "does not fit the jog's shortest interval": "STEPRAMP_EGAP",
+}
+
+
 @pytest.fixture(scope="module")
 def lib(build: Path) -> ctypes.CDLL:
     """libstepramp.so (plan, driver and fake bank) with its argument and result types declared."""
@@ -82,6 +129,16 @@ def lib(build: Path) -> ctypes.CDLL:
         getattr(so, name).restype = ctypes.c_char_p
     so.stepramp_strresult.argtypes = [ctypes.c_int]
     so.stepramp_strresult.restype = ctypes.c_char_p
+    dev = ctypes.POINTER(CDev)
+    for name, args in {
+        "stepramp_init": [dev, ctypes.c_size_t, ctypes.c_double, ctypes.c_double, ctypes.c_uint32],
+        "stepramp_jog": [dev, *(ctypes.c_double,) * 3],
+        "stepramp_move": [dev, ctypes.c_int64, *(ctypes.c_double,) * 3],
+        "stepramp_configure_outputs": [dev, ctypes.POINTER(COutputs)],
+    }.items():
+        getattr(so, name).argtypes, getattr(so, name).restype = args, ctypes.c_int
+    so.stepramp_fakebus_reset.argtypes = [ctypes.c_size_t, ctypes.c_uint32]
+    so.stepramp_fakebus_reset.restype = so.stepramp_fakebus_clear_log.restype = None
     assert so.stepramp_fakebus_sizeof_plan() == ctypes.sizeof(CPlan), "stepramp_plan_t layout"
     assert so.stepramp_fakebus_sizeof_state() == ctypes.sizeof(CFakeBus), "stepramp_fakebus_t layout"
     return so
@@ -225,6 +282,88 @@ def test_invalid_move_writes_nothing(lib: ctypes.CDLL) -> None:
         assert bus_writes(lib) == [], f"{args}: the driver wrote registers for an invalid move"
         checked += 1
     assert checked >= 15
+
+
+class Pair:
+    """The C driver on the fake bank and the Python driver on test_driver's FakeBank, set up alike (init, stepping
+    outputs), their logs cleared before each call; a call gives each side's result and writes."""
+
+    def __init__(self, so: ctypes.CDLL, fclk: float, spr: float, prescale: int, outputs: Outputs) -> None:
+        self.so = so
+        self.dev = CDev()
+        so.stepramp_fakebus_reset(FAKEBUS_BASE, ID_VALUE)
+        assert so.stepramp_init(ctypes.byref(self.dev), FAKEBUS_BASE, fclk, spr, prescale) == 0
+        fields = dataclasses.asdict(outputs) | {"mode": MODES[outputs.mode]}
+        assert so.stepramp_configure_outputs(ctypes.byref(self.dev), ctypes.byref(COutputs(**fields))) == 0
+        self.bank = FakeBank()
+        self.drv = StepRamp(self.bank, fclk, spr, prescale)
+        run_async(self.drv.configure_outputs(outputs))
+
+    def call(self, name: str, *args: Any) -> tuple[tuple[str, list[Write]], tuple[str, list[Write]]]:
+        """(Python's result and writes, C's): the result's C name (STEPRAMP_OK or an error); the writes as (offset,
+        value, byte enables: the Python driver's strobe)."""
+        self.so.stepramp_fakebus_clear_log()
+        self.bank.log.clear()
+        try:
+            run_async(getattr(self.drv, name)(*args))
+            py = "STEPRAMP_OK"
+        except ValueError as exc:
+            keys = [code for key, code in JOG_ERROR_KEYS.items() if key in str(exc)]
+            py = keys[0] if keys else change_error_name(str(exc))
+        rc = getattr(self.so, f"stepramp_{name}")(ctypes.byref(self.dev), *args)
+        return (py, self.bank.log[:]), (DRIVER_RESULTS.get(rc, f"unknown result {rc}"), bus_writes(self.so))
+
+
+def random_jogs(seed: int, count: int) -> list[dict[str, Any]]:
+    """Jogs designed in the tick domain over wide ranges (some too fast, some with a STEP width + space that does
+    not fit, some with no valid speed), each with a STEP width and space, and the accel, decel and speed of a move
+    whose shortest interval holds them."""
+    rng = random.Random(seed)
+    jogs = []
+    for _ in range(count):
+        prescale = rng.choice((1, 1, 2, 7, 50, 1000, MAX_PRESCALE, rng.randint(1, MAX_PRESCALE)))
+        spr = rng.choice((200.0, 400.0, 1600.0, 3200.0, 51200.0)) * rng.choice((1.0, 1.37))
+        fclk = log_uniform(rng, 1e5, 2e8)
+        period = max(64.0 / prescale, 1.0) * log_uniform(rng, 0.5, 1e4)  # the jog's interval, ticks
+        n_a, n_d = log_uniform(rng, 0.1, 1e6), log_uniform(rng, 0.1, 1e6)
+        gap = min(round(period * prescale * log_uniform(rng, 0.01, 2.0)), 2 * 65535) if rng.random() < 0.3 else 2
+        width = rng.randint(max(gap - 65535, 0), min(gap, 65535))
+        args = design_args(0, period, n_a, n_d, spr, fclk, prescale)
+        speed = args["speed"] * rng.choice((1.0, -1.0))
+        if rng.random() < 0.03:
+            speed = rng.choice((0.0, -0.0, math.nan, math.inf))
+        move = design_args(0, max(period, (gap + 64) / prescale + 1.0), n_a, n_d, spr, fclk, prescale)
+        jogs.append(
+            {
+                "init": (fclk, spr, prescale, Outputs(step_width=width, step_space=gap - width, dir_setup=gap % 7)),
+                "jog": (speed, args["accel"], args["decel"]),
+                "move": (move["accel"], move["decel"], move["speed"]),
+            }
+        )
+    return jogs
+
+
+def test_jog_like_the_python_driver(lib: ctypes.CDLL) -> None:
+    """stepramp_jog writes what StepRamp.jog writes (the plan's registers, the segment registers, START), and the
+    moves after it what StepRamp.move writes (the segment registers cleared once); or both fail alike, writing
+    nothing. The moves are slow enough for the STEP width + space, which StepRamp.plan checks and the C move does
+    not (only the jog does)."""
+    seed = 2026_0512
+    print(f"seed {seed}")
+    jogs = random_jogs(seed, RANDOM_COUNT)
+    mismatches: list[str] = []
+    results: Counter[str] = Counter()
+    for jog in jogs:
+        pair = Pair(lib, *jog["init"])
+        for name, *args in [("jog", *jog["jog"]), ("move", -1000, *jog["move"]), ("move", 3, *jog["move"])]:
+            (py, py_writes), (c, c_writes) = pair.call(name, *args)
+            if (py, py_writes) != (c, c_writes):
+                mismatches.append(f"{jog} {name}{tuple(args)}: python {py} {py_writes}, C {c} {c_writes}")
+            results[f"{name} {py.removeprefix('STEPRAMP_')}"] += 1
+    print(sorted(results.items()))
+    assert not mismatches, f"{len(mismatches)} calls differ:\n" + "\n".join(mismatches[:5])
+    assert {"jog OK", "jog EGAP", "jog ETOOFAST", "jog EJOG_SPEED"} <= set(results), results
+    assert results["jog OK"] >= RANDOM_COUNT // 2 and results["move OK"] >= RANDOM_COUNT
 
 
 def test_core_error_texts_match_the_register_map(lib: ctypes.CDLL) -> None:

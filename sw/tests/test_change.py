@@ -37,29 +37,40 @@ SEED = int(os.environ.get("STEPRAMP_SEED", "20261126"))
 
 @dataclass(frozen=True)
 class Case:
-    """A change in physical units: speed u (steps/s) at the change, the new accel, decel, speed, the distance."""
+    """A change in physical units: speed u (steps/s) at the change, the distance, and plan_change's other arguments
+    (accel, decel, speed, spr, fclk, prescale)."""
 
     u: float
     remaining: int | None
-    accel: float
-    decel: float
-    speed: float
-    spr: float
-    fclk: float
-    prescale: int = 1
+    args: dict[str, float]
+
+    @classmethod
+    def of(cls, u: float, remaining: int | None, *rest: float) -> Case:
+        names = ("accel", "decel", "speed", "spr", "fclk", "prescale")
+        return cls(u, remaining, {"prescale": 1, **dict(zip(names, rest, strict=False))})
+
+    @property
+    def accel(self) -> float:
+        return self.args["accel"]
+
+    @property
+    def decel(self) -> float:
+        return self.args["decel"]
+
+    @property
+    def speed(self) -> float:
+        return self.args["speed"]
 
     @property
     def alpha(self) -> float:
-        return 2.0 * math.pi / self.spr
+        return 2.0 * math.pi / self.args["spr"]
 
     @property
     def f_tick(self) -> float:
-        return self.fclk / self.prescale
+        return self.args["fclk"] / self.args["prescale"]
 
     def plan(self) -> Change:
-        return plan_change(
-            self.u, self.remaining, self.accel, self.decel, self.speed, self.spr, self.fclk, self.prescale
-        )
+        return plan_change(self.u, self.remaining, **self.args)
 
 
 def _kind(change: Change) -> str:
@@ -96,7 +107,7 @@ def _random_case(rng: random.Random) -> Case | None:
     u = rng.uniform(0.0, 1.5) * v * rng.choice([0, 1, 1, 1])
     if fclk / max(v, u) < 80.0:  # faster than the engine allows (64 clocks): not a case the driver plans
         return None
-    return Case(u, rng.choice([None, rng.randint(0, 3000)]), accel, decel, speed, spr, fclk)
+    return Case.of(u, rng.choice([None, rng.randint(0, 3000)]), accel, decel, speed, spr, fclk)
 
 
 def test_a_move_from_rest_is_the_segment_with_head_up_at_index_0() -> None:
@@ -164,7 +175,7 @@ def test_changes_from_every_phase_of_a_move(profile) -> None:  # type: ignore[no
             new_speed = args["speed"] * speed_factor
             if math.floor(args["fclk"] / args["prescale"] / (new_speed / alpha)) * args["prescale"] < MIN_INTERVAL_CLKS:
                 continue  # faster than the engine allows: plan_change refuses it (test_bad_changes_raise_...)
-            case = Case(
+            case = Case.of(
                 u, target, args["accel"] * accel_factor, args["decel"], new_speed, args["spr"], args["fclk"],
                 args["prescale"],
             )  # fmt: skip
@@ -189,24 +200,24 @@ def test_named_changes() -> None:
     spr, fclk, accel, decel, speed = 400.0, 1e6, 100.0, 80.0, 20.0
     alpha = 2.0 * math.pi / spr
     v = speed / alpha
-    faster = Case(v, 4000, accel, decel, 2 * speed, spr, fclk).plan()
+    faster = Case.of(v, 4000, accel, decel, 2 * speed, spr, fclk).plan()
     assert faster.segment.head == UP and faster.segment.head_index == round(v * v / (2 * accel / alpha))
-    slower = Case(v, 4000, accel, decel, speed / 2, spr, fclk).plan()
+    slower = Case.of(v, 4000, accel, decel, speed / 2, spr, fclk).plan()
     assert slower.segment.head == DOWN and slower.segment.head_index == math.floor(v * v / (2 * decel / alpha))
     stop_distance = v * v / (2 * decel / alpha)
-    inside = Case(v, int(stop_distance) - 50, accel, decel, speed, spr, fclk).plan()
+    inside = Case.of(v, int(stop_distance) - 50, accel, decel, speed, spr, fclk).plan()
     assert inside.back is not None and inside.segment.length == math.floor(stop_distance)
     assert inside.segment.length - inside.back.steps == int(stop_distance) - 50
-    behind = Case(v, 0, accel, decel, speed, spr, fclk).plan()
+    behind = Case.of(v, 0, accel, decel, speed, spr, fclk).plan()
     assert behind.back is not None and behind.back.steps == behind.segment.length
-    jog = Case(0.0, None, accel, decel, speed, spr, fclk).plan()
+    jog = Case.of(0.0, None, accel, decel, speed, spr, fclk).plan()
     assert jog.segment.length is None and jog.segment.head_index == 0 and jog.start_speed == 0.0
     for case in (
-        Case(v, 4000, accel, decel, 2 * speed, spr, fclk),
-        Case(v, 4000, accel, decel, speed / 2, spr, fclk),
-        Case(v, int(stop_distance) - 50, accel, decel, speed, spr, fclk),
-        Case(0.0, None, accel, decel, speed, spr, fclk),
-        Case(v, None, accel, decel, speed / 4, spr, fclk),
+        Case.of(v, 4000, accel, decel, 2 * speed, spr, fclk),
+        Case.of(v, 4000, accel, decel, speed / 2, spr, fclk),
+        Case.of(v, int(stop_distance) - 50, accel, decel, speed, spr, fclk),
+        Case.of(0.0, None, accel, decel, speed, spr, fclk),
+        Case.of(v, None, accel, decel, speed / 4, spr, fclk),
     ):
         _check(case)
 

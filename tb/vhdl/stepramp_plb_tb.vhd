@@ -19,7 +19,7 @@ end entity stepramp_plb_tb;
 architecture sim of stepramp_plb_tb is
 
   constant C_PERIOD : time                  := 10 ns;
-  constant C_BASE   : unsigned(31 downto 0) := x"40A0_0000"; -- the core decodes the low 7 address bits
+  constant C_BASE   : unsigned(31 downto 0) := x"40A0_0000"; -- the core decodes the low 8 address bits
 
   -- Register offsets (docs/registers.md).
   constant C_ID         : natural := 16#00#;

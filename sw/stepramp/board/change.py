@@ -9,11 +9,10 @@ seeds, in doubles, each rounded once, as plan.py does for a move from rest).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 from stepramp.board.plan import (
     FRAC_RAMP,
-    MAX_PRESCALE,
     MAX_STEPS,
     MIN_INTERVAL_CLKS,
     REG_WIDTHS,
@@ -21,21 +20,22 @@ from stepramp.board.plan import (
     MoveInfo,
     Plan,
     _check_int,
-    _check_positive,
     _cruise,
     _stop_ratio,
     _to_fixed,
+    check_motion_args,
+    check_widths,
     decel_product,
     plan_move,
+    steps_units,
 )
 
 UP = "up"
 DOWN = "down"
 
-_SEGMENT_WIDTHS = {name: REG_WIDTHS[name] for name in ("prescale", "c_first", "c_last", "sa", "c_sa", "sd", "c_sd")}
-_SEGMENT_WIDTHS |= {name: REG_WIDTHS[name] for name in ("accel_seed", "decel_seed", "cruise", "stop_ratio")}
-_SEGMENT_WIDTHS["head_index"] = 31
-_SEGMENT_WIDTHS["run_stop"] = 31
+#: The fields a segment shares with a move's Plan (all but steps and direction), and its own register widths.
+_SHARED = tuple(name for name in REG_WIDTHS if name not in ("steps", "direction"))
+_SEGMENT_WIDTHS = {**{name: REG_WIDTHS[name] for name in _SHARED}, "head_index": 31, "run_stop": 31}
 
 
 @dataclass(frozen=True)
@@ -46,19 +46,19 @@ class Segment:
     stop decided in its cruise (a positioning segment takes L - sd + 1, as a move does)."""
 
     length: int | None
+    head: str
+    head_index: int
     prescale: int
-    c_first: int
-    c_last: int
     sa: int
-    c_sa: int
     sd: int
+    c_first: int
+    c_sa: int
     c_sd: int
+    c_last: int
     accel_seed: int
     decel_seed: int
     cruise: int
     stop_ratio: int
-    head: str
-    head_index: int
     run_stop: int = 0
 
     def __post_init__(self) -> None:
@@ -66,31 +66,34 @@ class Segment:
             raise ValueError(f"Segment.length = {self.length!r} is not in 0 .. 2^31 - 1 (or None: endless)")
         if self.head not in (UP, DOWN):
             raise ValueError(f"Segment.head = {self.head!r} is neither {UP!r} nor {DOWN!r}")
-        for f in fields(self):
-            if f.name in _SEGMENT_WIDTHS:
-                value, width = getattr(self, f.name), _SEGMENT_WIDTHS[f.name]
-                if not isinstance(value, int) or isinstance(value, bool) or not 0 <= value < 1 << width:
-                    raise ValueError(f"Segment.{f.name} = {value!r} does not fit an unsigned {width}-bit register")
+        check_widths(self, _SEGMENT_WIDTHS)
+
+    @property
+    def head_prod(self) -> int:
+        """HEAD_PROD: n0 * stop_ratio for an up head (Q31.16; 2^47 or more reads as bit 47 alone), 0 for a down one."""
+        if self.head == DOWN:
+            return 0
+        return min(self.head_index * self.stop_ratio, 1 << 47)
+
+    def registers(self, direction: int) -> tuple[Plan, dict[str, int]]:
+        """The registers: a Plan (STEPS = length + 1, or 1 for an endless segment: only its sign counts) and the
+        SEGMENT .. HEAD_PROD fields, as the engine's port names."""
+        steps = self.length + 1 if self.length is not None else 1
+        plan = Plan(steps=steps, direction=direction, **{name: getattr(self, name) for name in _SHARED})
+        segment = {
+            "head_down": int(self.head == DOWN),
+            "endless": int(self.length is None),
+            "head_index": self.head_index,
+            "run_stop": self.run_stop,
+            "head_prod": self.head_prod,
+        }
+        return plan, segment
 
     @classmethod
     def of_move(cls, plan: Plan) -> Segment:
         """A move from rest as a segment (head up from index 0): its intervals 1 .. N - 1, the same values."""
-        return cls(
-            length=max(plan.steps - 1, 0),
-            prescale=plan.prescale,
-            c_first=plan.c_first,
-            c_last=plan.c_last,
-            sa=plan.sa,
-            c_sa=plan.c_sa,
-            sd=plan.sd,
-            c_sd=plan.c_sd,
-            accel_seed=plan.accel_seed,
-            decel_seed=plan.decel_seed,
-            cruise=plan.cruise,
-            stop_ratio=plan.stop_ratio,
-            head=UP,
-            head_index=0,
-        )
+        shared = {name: getattr(plan, name) for name in _SHARED}
+        return cls(length=max(plan.steps - 1, 0), head=UP, head_index=0, **shared)
 
 
 @dataclass(frozen=True)
@@ -162,28 +165,23 @@ def plan_change(
     """The continuation from speed u (steps/s, >= 0) at pulse P with new accel, decel (rad/s^2) and speed (rad/s):
     to the target `remaining` steps ahead of P (>= 0), or endless (None: jog at `speed`). Raises ValueError with the
     reason when the segment does not fit the engine."""
-    accel = _check_positive("accel", accel)
-    decel = _check_positive("decel", decel)
-    speed = _check_positive("speed", speed)
-    spr = _check_positive("spr", spr)
-    fclk = _check_positive("fclk", fclk)
-    prescale = _check_int("prescale", prescale)
-    if not 1 <= prescale <= MAX_PRESCALE:
-        raise ValueError(f"prescale must be an integer in 1 .. {MAX_PRESCALE}, got {prescale}")
+    accel, decel, speed, spr, fclk, prescale = check_motion_args(accel, decel, speed, spr, fclk, prescale)
     if isinstance(u, bool) or not isinstance(u, (int, float)) or not (math.isfinite(u) and u >= 0.0):
         raise ValueError(f"the speed at the change must be finite and >= 0, got {u!r}")
     if remaining is not None:
         remaining = _check_int("remaining", remaining)
         if not 0 <= remaining <= MAX_STEPS:
             raise ValueError(f"remaining must be in 0 .. 2^31 - 1 steps, got {remaining}")
-    f_tick = fclk / prescale
-    alpha = 2.0 * math.pi / spr
-    a, d, v = accel / alpha, decel / alpha, speed / alpha
+    f_tick, a, d, v = steps_units(accel, decel, speed, spr, fclk, prescale, squares=True)
     ratio = _stop_ratio(accel, decel)
-    k = math.floor(u * u / (2.0 * d))  # the decel ramp's index at u: rest k steps ahead (floored)
+    # the decel ramp's index at u: rest k steps ahead (floored)
+    k = _steps("the stop distance from the speed at the change", u * u / (2.0 * d))
     if remaining is not None and remaining < k:
         # The target is inside the stop distance (or behind the motor): to rest k steps ahead, then back from rest.
-        back = plan_move(-(k - remaining), accel, decel, speed, spr, fclk, prescale)
+        try:
+            back = plan_move(-(k - remaining), accel, decel, speed, spr, fclk, prescale)
+        except ValueError as err:
+            raise ValueError(f"the target lies {k - remaining} steps behind the stop; the move back: {err}") from err
         return Change(_stop_segment(k, d, f_tick, prescale, ratio), math.sqrt(2.0 * d * k), back)
     if remaining == 0:
         return Change(_stop_segment(0, d, f_tick, prescale, ratio), 0.0, None)
@@ -194,9 +192,13 @@ def plan_change(
     profile = _Profile(f_tick)
     head, index, x_h = UP, 0, 0.0
     if u < v:
-        n0 = round(u * u / (2.0 * a))
-        if positioning:
-            n0 = min(n0, math.floor(cap2 / (2.0 * a)))
+        x0 = u * u / (2.0 * a)
+        n0 = round(x0) if x0 < 2.0**31 else 1 << 31
+        if n0 >= 1 << 31:
+            raise ValueError(f"the accel ramp's index at the speed at the change, {x0:.6g}, does not fit 31 bits")
+        cap = cap2 / (2.0 * a)
+        if positioning and cap < n0:  # (an infinite cap is none)
+            n0 = math.floor(cap)
         start2 = 2.0 * a * n0
         peak2 = min(v * v, 2.0 * a * d * (end + n0) / (a + d)) if positioning else v * v
         if start2 < peak2:  # the head: the accel ramp of a virtual move from rest n0 steps behind P
@@ -217,11 +219,13 @@ def plan_change(
         profile.add(x_c, end, cap2, -2.0 * d)
     v_peak = math.sqrt(peak2)
     _check_speed(f_tick, max(v_peak, math.sqrt(start2)), prescale)
+    if v_peak == 0.0:
+        raise ValueError("cruise overflows its register: the cruise speed is 0 in doubles; use a larger accel or decel")
 
     last = remaining if remaining is not None else MAX_STEPS
 
     def boundary(x: float) -> int:
-        return min(max(math.floor(x) + 1, 1), last)
+        return min(max(math.floor(min(x, last)) + 1, 1), last)
 
     sa = boundary(x_h)
     sd = boundary(x_c) if positioning else 0
@@ -253,7 +257,7 @@ def plan_change(
             head=head,
             head_index=index,
             # a soft stop in the cruise of a jog: v^2 / (2 d) rounded up, the L - sd + 1 a move would take
-            run_stop=math.ceil(peak2 / (2.0 * d)) if remaining is None else 0,
+            run_stop=_steps("the stop from the jog speed", peak2 / (2.0 * d), up=True) if remaining is None else 0,
             **_fields(profile, remaining, sa, sd, d, f_tick, t_first),
         ),
         math.sqrt(start2),
@@ -305,10 +309,17 @@ def _stop_segment(k: int, d: float, f_tick: float, prescale: int, ratio: int) ->
     )
 
 
+def _steps(what: str, x: float, up: bool = False) -> int:
+    """floor(x) (ceil with up) as a step count below 2^31, or ValueError with `what` it is."""
+    if not x < 2.0**31:
+        raise ValueError(f"{what} is {x:.6g} steps: more than 2^31 - 1")
+    return math.ceil(x) if up else math.floor(x)
+
+
 def _check_speed(f_tick: float, fastest: float, prescale: int) -> None:
     """The segment's shortest interval must leave the engine its MIN_INTERVAL_CLKS (as plan.py checks a move)."""
     shortest = f_tick / fastest if fastest > 0.0 else math.inf
-    if not shortest >= 1.0 or math.floor(shortest) * prescale < MIN_INTERVAL_CLKS:
+    if not shortest >= 1.0 or (math.isfinite(shortest) and math.floor(shortest) * prescale < MIN_INTERVAL_CLKS):
         raise ValueError(
             f"speed too high for the hardware to compute the next delay in time: shortest interval "
             f"floor({shortest:.6g}) ticks * prescale {prescale} < {MIN_INTERVAL_CLKS} clocks"

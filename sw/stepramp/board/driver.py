@@ -12,12 +12,14 @@ advance while the driver waits; on a board the methods simply run to completion.
 
 from __future__ import annotations
 
+import math
 import mmap
 import os
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import Protocol
 
+from stepramp.board.change import Segment, plan_change
 from stepramp.board.plan import Plan, plan_move_info
 from stepramp.board.regmap import ERROR_CODES, ID_MAGIC, REGISTERS_BY_NAME, offset, split_wide
 
@@ -92,6 +94,25 @@ def plan_writes(plan: Plan) -> list[tuple[int, int]]:
     return sorted(writes)
 
 
+def segment_writes(segment: dict[str, int]) -> list[tuple[int, int]]:
+    """(offset, value) of SEGMENT .. HEAD_PROD_HI for the segment fields of Segment.registers (all 0: a move from
+    rest to rest)."""
+    reg = REGISTERS_BY_NAME["SEGMENT"]
+    flags = segment["head_down"] << reg.field("HEAD_DOWN").lsb | segment["endless"] << reg.field("ENDLESS").lsb
+    lo, hi = split_wide(segment["head_prod"], 48)
+    return [
+        (offset("SEGMENT"), flags),
+        (offset("HEAD_INDEX"), segment["head_index"]),
+        (offset("RUN_STOP"), segment["run_stop"]),
+        (offset("HEAD_PROD_LO"), lo),
+        (offset("HEAD_PROD_HI"), hi),
+    ]
+
+
+#: The segment registers of a move from rest to rest.
+NO_SEGMENT = {"head_down": 0, "endless": 0, "head_index": 0, "run_stop": 0, "head_prod": 0}
+
+
 #: DRIVE.MODE values.
 MODES = {"stepdir": 0, "wave": 1, "full": 2, "half": 3, "pwm": 4}
 
@@ -134,6 +155,9 @@ class StepRamp:
         self.spr = spr
         self.prescale = prescale
         self.outputs = Outputs()
+        # SEGMENT .. HEAD_PROD_HI hold what a move from rest to rest needs (all 0: their reset values), so that
+        # program() need not write them; a jog sets them and the next program() clears them.
+        self._segment_clear = True
 
     async def check_id(self) -> int:
         """Read ID; raise StepRampError if this is not a stepramp core. Returns the version (major << 8 | minor)."""
@@ -179,10 +203,39 @@ class StepRamp:
         """The ENABLE output (byte 2 of CTRL only); off also switches the H-bridge windings off."""
         await self.access.write(offset("CTRL"), _bit("CTRL", "ENABLE") if on else 0, strobe=0x4)
 
-    async def program(self, plan: Plan) -> None:
-        """Write the move registers (the core latches them at START, so this is safe during a move)."""
+    async def program(self, plan: Plan, segment: dict[str, int] | None = None) -> None:
+        """Write the move registers (the core latches them at START, so this is safe during a move), and the segment
+        registers when a segment is given (Segment.registers) or when an earlier one left them set."""
         for addr, value in plan_writes(plan):
             await self.access.write(addr, value)
+        if segment is not None or not self._segment_clear:
+            for addr, value in segment_writes(NO_SEGMENT if segment is None else segment):
+                await self.access.write(addr, value)
+            self._segment_clear = segment is None or segment == NO_SEGMENT
+
+    def plan_jog(self, speed: float, accel: float, decel: float) -> tuple[Plan, dict[str, int], Segment]:
+        """Register values of a jog from rest (velocity mode: the sign of speed, rad/s, gives the direction); raises
+        ValueError with the reason, as plan() does."""
+        if isinstance(speed, bool) or not isinstance(speed, (int, float)) or not speed or not math.isfinite(speed):
+            raise ValueError(f"the jog speed must be a finite non-zero number of rad/s, got {speed!r}")
+        seg = plan_change(0.0, None, accel, decel, abs(speed), self.spr, self.fclk, self.prescale).segment
+        shortest = int(self.fclk / self.prescale / (abs(speed) * self.spr / (2 * math.pi))) * self.prescale
+        if self.outputs.min_gap > shortest:
+            raise ValueError(
+                f"STEP width {self.outputs.step_width} + STEP space {self.outputs.step_space} clocks does not fit "
+                f"the jog's shortest interval ({shortest} clocks): lower the speed, the STEP width or the space"
+            )
+        plan, segment = seg.registers(direction=int(speed < 0))
+        return plan, segment, seg
+
+    async def jog(self, speed: float, accel: float, decel: float) -> Segment:
+        """Jog from rest: accelerate at accel to |speed| in the direction of its sign and hold it until soft_stop()
+        (decelerates at decel to rest) or hard_stop(). Returns the segment (the model predicts every edge from it:
+        stepramp.models.engine.segment_edges)."""
+        plan, segment, seg = self.plan_jog(speed, accel, decel)
+        await self.program(plan, segment)
+        await self.start()
+        return seg
 
     async def start(self) -> None:
         """START (byte 0 of CTRL only, so the interrupt enables in byte 1 are kept)."""

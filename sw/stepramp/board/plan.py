@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 import operator
 from dataclasses import asdict, dataclass, fields
+from typing import Any
 
 FRAC_RAMP = 16
 """Fraction bits of the ramp values (Q32.16)."""
@@ -44,6 +45,16 @@ _LGAMMA_RATIO_0 = math.lgamma(1.25) - math.lgamma(0.75)
 _PRODUCT_LOOP_MAX = 256
 
 
+def check_widths(obj: Any, widths: dict[str, int]) -> None:
+    """ValueError unless each field of a dataclass named in widths is an int that fits its unsigned register."""
+    for f in fields(obj):
+        if f.name in widths:
+            value, width = getattr(obj, f.name), widths[f.name]
+            if not isinstance(value, int) or isinstance(value, bool) or not 0 <= value < 1 << width:
+                name = f"{type(obj).__name__}.{f.name}"
+                raise ValueError(f"{name} = {value!r} does not fit an unsigned {width}-bit register")
+
+
 @dataclass(frozen=True)
 class Plan:
     """The engine's inputs for one move (field by field the table of docs/algorithm.md)."""
@@ -63,11 +74,7 @@ class Plan:
     stop_ratio: int
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            value = getattr(self, f.name)
-            width = REG_WIDTHS[f.name]
-            if not isinstance(value, int) or isinstance(value, bool) or not 0 <= value < 1 << width:
-                raise ValueError(f"Plan.{f.name} = {value!r} does not fit an unsigned {width}-bit register")
+        check_widths(self, REG_WIDTHS)
 
     def to_dict(self) -> dict[str, int]:
         """The registers as a plain dict (field name -> unsigned integer)."""
@@ -249,31 +256,50 @@ def _stop_ratio(accel: float, decel: float) -> int:
     return round(ratio) if ratio < top else top
 
 
+def check_motion_args(
+    accel: float, decel: float, speed: float, spr: float, fclk: float, prescale: int
+) -> tuple[float, float, float, float, float, int]:
+    """The physical arguments checked in this order (finite and > 0, prescale an integer 1 .. MAX_PRESCALE), as
+    floats; ValueError with the reason for the first that is not."""
+    values = (accel, decel, speed, spr, fclk)
+    checked = [_check_positive(name, value) for name, value in zip(_MOTION, values, strict=True)]
+    prescale = _check_int("prescale", prescale)
+    if not 1 <= prescale <= MAX_PRESCALE:
+        raise ValueError(f"prescale must be an integer in 1 .. {MAX_PRESCALE}, got {prescale}")
+    return checked[0], checked[1], checked[2], checked[3], checked[4], prescale
+
+
+def steps_units(
+    accel: float, decel: float, speed: float, spr: float, fclk: float, prescale: int, squares: bool = False
+) -> tuple[float, float, float, float]:
+    """(f_tick, a, d, v) in ticks/s and steps units, each finite and > 0 (with squares, its square too: a segment
+    squares them), or ValueError with the reason."""
+    f_tick = fclk / prescale
+    alpha = 2.0 * math.pi / spr
+    a, d, v = accel / alpha, decel / alpha, speed / alpha
+    for name, value in (("accel", a), ("decel", d), ("speed", v), ("f_tick", f_tick)):
+        ok = math.isfinite(value) and value > 0.0
+        if not ok or (squares and not (math.isfinite(value * value) and value * value > 0.0)):
+            raise ValueError(f"{name} in steps units is out of range ({value!r}); check spr and the units")
+    return f_tick, a, d, v
+
+
+_MOTION = ("accel", "decel", "speed", "spr", "fclk")
+
+
 def plan_move_info(
     steps: int, accel: float, decel: float, speed: float, spr: float, fclk: float, prescale: int = 1
 ) -> tuple[Plan, MoveInfo]:
     """Like plan_move, also returning the informative MoveInfo."""
     steps = _check_int("steps", steps)
-    accel = _check_positive("accel", accel)
-    decel = _check_positive("decel", decel)
-    speed = _check_positive("speed", speed)
-    spr = _check_positive("spr", spr)
-    fclk = _check_positive("fclk", fclk)
-    prescale = _check_int("prescale", prescale)
-    if not 1 <= prescale <= MAX_PRESCALE:
-        raise ValueError(f"prescale must be an integer in 1 .. {MAX_PRESCALE}, got {prescale}")
+    accel, decel, speed, spr, fclk, prescale = check_motion_args(accel, decel, speed, spr, fclk, prescale)
     if abs(steps) > MAX_STEPS:
         raise ValueError(f"|steps| must be <= 2^31 - 1 = {MAX_STEPS}, got {steps}")
 
     n = abs(steps)
     direction = 1 if steps < 0 else 0
     length = n - 1
-    f_tick = fclk / prescale
-    alpha = 2.0 * math.pi / spr
-    a, d, v = accel / alpha, decel / alpha, speed / alpha
-    for name, value in (("accel", a), ("decel", d), ("speed", v), ("f_tick", f_tick)):
-        if not (math.isfinite(value) and value > 0.0):
-            raise ValueError(f"{name} in steps units is out of range ({value!r}); check spr and the units")
+    f_tick, a, d, v = steps_units(accel, decel, speed, spr, fclk, prescale)
 
     if length < 1:  # N = 0 or 1: no interval, nothing for the engine to compute
         info = MoveInfo(f_tick, max(length, 0), a, d, v, 0.0, 0.0, 0.0, True, 0.0, 0.0, 0, math.inf)

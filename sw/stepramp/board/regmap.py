@@ -86,7 +86,7 @@ ID_MAGIC = ID_VALUE >> 16
 VERSION_MAJOR = (ID_VALUE >> 8) & 0xFF
 VERSION_MINOR = ID_VALUE & 0xFF
 
-#: Address bits the core decodes: the register window rounded up to a power of two (128 bytes).
+#: Address bits the core decodes: the register window rounded up to a power of two (256 bytes).
 ADDR_BITS: int = _DATA["addr_bits"]
 
 

@@ -520,11 +520,13 @@ def segment_stop_length(seg: Segment, p: int) -> int | None:
     length = seg.length
     if length is not None and (p >= length or p >= seg.sd):
         return None
+    if p == 0:  # a request before pulse 0 (a segment run from START): the move ends with pulse 0, as a move does
+        return 0
     if p < seg.sa:
         m = seg.head_index - p if seg.head == "down" else (seg.head_index + p) * seg.stop_ratio >> STOP_RATIO_FRAC
     else:
         m = length - seg.sd + 1 if length is not None else seg.run_stop
-    if length is not None and p + m >= length:
+    if (length is not None and p + m >= length) or m >= 1 << 31:  # m >= 2^31: the engine's "m too big"
         return None
     return m
 
@@ -551,3 +553,43 @@ def segment_stop_values(seg: Segment, p: int) -> list[int] | None:
         values.append(d_val << _SHIFT)
     values.append(seg.c_last << _SHIFT)
     return values
+
+
+def segment_edges(
+    seg: Segment, prescale: int, *, count: int | None = None, stop: StopRequest | None = None
+) -> list[int]:
+    """Edges of a segment's pulses 0 .. when it runs from START (pulse 0 at FIRST_PULSE_LATENCY), as edges_with_stop
+    gives them for a move: all of them (a positioning segment), the first `count` intervals (an endless one), or
+    with a stop sampled at request_edge (hard: the pulses before it; soft: decided at the first pulse after it).
+    An endless segment needs `count` or a stop that ends it."""
+
+    def to_edges(values: list[int]) -> list[int]:
+        out, t, acc = [FIRST_PULSE_LATENCY], 0, 0
+        for value in values:
+            s = acc + value
+            t += s >> FRAC_CRUISE
+            acc = s & _FRAC_MASK
+            out.append(FIRST_PULSE_LATENCY + prescale * t)
+        return out
+
+    if stop is None:
+        if seg.length is None and count is None:
+            raise ValueError("an endless segment without a stop needs a count")
+        return to_edges(segment_values(seg, seg.length if count is None else count))
+    kind, request_edge = stop
+    # enough of the normal edges to pass the request edge
+    n = 64
+    while True:
+        normal = to_edges(segment_values(seg, n))
+        if normal[-1] > request_edge or (seg.length is not None and n >= seg.length):
+            break
+        n *= 2
+    if kind == HARD:
+        return normal if request_edge < 0 else normal[: bisect.bisect_left(normal, request_edge)]
+    p = _first_pulse_after(normal, request_edge)
+    values = None if p is None else segment_stop_values(seg, p)
+    if values is None:
+        if seg.length is None:
+            raise ValueError(f"the soft stop at edge {request_edge} is ignored: the endless segment would not end")
+        return normal
+    return to_edges(values)

@@ -24,7 +24,9 @@ from cocotb.task import bridge, resume
 #: Where the C code believes the core is; the bus sees offsets from it.
 BASE = 0x44A0_0000
 
-_C_TYPES: dict[str, Any] = {
+#: ctypes of the C types the driver's structs use (sw/tests/c_abi.py reads the structs of the plan with them too).
+C_TYPES: dict[str, Any] = {
+    "uint16_t": ctypes.c_uint16,
     "uint32_t": ctypes.c_uint32,
     "uint64_t": ctypes.c_uint64,
     "int32_t": ctypes.c_int32,
@@ -42,7 +44,7 @@ def c_struct(header: Path, name: str) -> type[ctypes.Structure]:
     if match is None:
         raise ValueError(f"no typedef struct {name} in {header}")
     body = re.sub(r"/\*.*?\*/", "", match.group(1), flags=re.S)
-    fields = [(field, _C_TYPES[ctype]) for ctype, field in re.findall(r"(\w+)\s+(\w+)\s*;", body)]
+    fields = [(field, C_TYPES[ctype]) for ctype, field in re.findall(r"(\w+)\s+(\w+)\s*;", body)]
     return type(name, (ctypes.Structure,), {"_fields_": fields})
 
 

@@ -3,8 +3,9 @@
 
 The bins (docs/verification.md, "Functional coverage"):
 
-* ``stepramp.fsm.transition``: the six transitions of the STOP/ACCEL/RUN/DECEL machine of the FPGA seed, and the
-  three more that stops and errors add (ACCEL -> STOP, RUN -> STOP, DECEL -> STOP early is transition 4 itself);
+* ``stepramp.fsm.transition``: the six transitions of the STOP/ACCEL/RUN/DECEL machine of the FPGA seed, the
+  three more that stops and errors add (ACCEL -> STOP, RUN -> STOP, DECEL -> STOP early is transition 4 itself),
+  and DECEL -> RUN (a segment's down head into its cruise);
 * ``stepramp.stop.where``: a soft and a hard stop strobe as the engine sees it: before pulse 0, in ACCEL, RUN or
   DECEL, in the last interval of a phase (the next interval is of another phase), in the first interval of a phase
   (no pulse since the phase changed), while idle; ``stepramp.stop.held``: each kind while the stepping logic holds a
@@ -37,7 +38,8 @@ COVERAGE_DIR_ENV = "STEPRAMP_COVERAGE_DIR"
 
 STOP, ACCEL, RUN, DECEL = STATE_NAMES
 
-#: FSM transitions (from, to): the six of the seed's figure (docs/stepramp_engine.md, "FSM"), then those of stops.
+#: FSM transitions (from, to): the six of the seed's figure (docs/stepramp_engine.md, "FSM"), then those of stops,
+#: then a segment's down head reaching its cruise (docs/algorithm.md, "Changes while moving").
 TRANSITIONS: tuple[tuple[str, str], ...] = (
     (STOP, ACCEL),
     (ACCEL, RUN),
@@ -47,6 +49,7 @@ TRANSITIONS: tuple[tuple[str, str], ...] = (
     (ACCEL, DECEL),
     (ACCEL, STOP),
     (RUN, STOP),
+    (DECEL, RUN),
 )
 
 #: Where a stop strobe can meet the engine.

@@ -29,6 +29,8 @@ Optional keys for the control inputs (none of them changes a move that does not 
   start edge on, with this move's registers on the inputs, so that the engine takes them in the previous move's done
   cycle. Its timestamps count from the edge after the previous move's done cycle, where the docs say it is accepted.
 
+* "segment": the segment inputs (SEGMENT_INPUTS: head_down, endless, head_index, run_stop, head_prod), 0 when
+  absent (a move from rest to rest).
 * "record_counters": true: with each pulse, also record step_count and cur_delay as the pulse's edge leaves them
   (result keys "step_counts", "cur_delays").
 
@@ -55,6 +57,8 @@ from stepramp.sim.waves import LAYOUTS, missing_in, signal_paths
 
 #: Engine inputs driven from a move's register values: the Plan's fields are the engine's port names.
 INPUTS = tuple(field.name for field in dataclasses.fields(Plan))
+#: The segment's inputs (stepramp.board.change.Segment.registers), from a move's "segment" (0 when it has none).
+SEGMENT_INPUTS = ("head_down", "endless", "head_index", "run_stop", "head_prod")
 
 
 def _signed(value: Any, bits: int) -> int:
@@ -135,10 +139,7 @@ async def _play(dut: Any, move: dict[str, Any], next_move: dict[str, Any] | None
     hold_next = bool(next_move and next_move.get("start_held"))
     if move.get("start_held"):
         return await _play_held(dut, move, hold_next, next_move)
-    regs: dict[str, int] = move["registers"]
-    for name in INPUTS:
-        getattr(dut, name).value = regs[name]
-    dut.min_gap.value = int(move.get("min_gap", 2))
+    _put_inputs(dut, move)
     lead = int(move.get("load_lead", 0))
     events = _events(move)
     early = [e for e in events if int(e["at_cycle"]) < 0]
@@ -209,6 +210,9 @@ async def _play(dut: Any, move: dict[str, Any], next_move: dict[str, Any] | None
 def _put_inputs(dut: Any, move: dict[str, Any]) -> None:
     for name in INPUTS:
         getattr(dut, name).value = move["registers"][name]
+    segment = move.get("segment", {})
+    for name in SEGMENT_INPUTS:
+        getattr(dut, name).value = int(segment.get(name, 0))
     dut.min_gap.value = int(move.get("min_gap", 2))
 
 
@@ -318,7 +322,7 @@ def _backstop_ns() -> int:
 async def play_moves(dut: Any) -> None:
     """Play every move of the request, back to back, and write what was observed."""
     request = json.loads(Path(os.environ["STEPRAMP_SIM_REQUEST"]).read_text())
-    for name in ("start", "load", "soft_stop", "hard_stop", "pos_load", "pos_value", *INPUTS):
+    for name in ("start", "load", "soft_stop", "hard_stop", "pos_load", "pos_value", *INPUTS, *SEGMENT_INPUTS):
         getattr(dut, name).value = 0
     dut.min_gap.value = 2
     await start_clock_and_reset(dut.clk, dut.rst, settle=2)

@@ -18,6 +18,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from stepramp.board.regmap import ADDR_BITS
+
 # GTKWave trace flags (gtkwave's analyzer.h).
 _HEX, _DEC, _BIN, _RJUSTIFY, _SIGNED = 0x2, 0x4, 0x8, 0x20, 0x400
 _ANALOG_STEP, _ANALOG_BLANK_STRETCH = 0x8000, 0x20000
@@ -119,10 +121,10 @@ LAYOUTS: dict[str, Layout] = {
                 Trace("aclk"),
                 Trace("aresetn"),
                 # each channel: valid, ready, then its payload
-                *_axil_channel("aw", ("awaddr", 7, "hex")),
+                *_axil_channel("aw", ("awaddr", ADDR_BITS, "hex")),
                 *_axil_channel("w", ("wdata", 32, "hex"), ("wstrb", 4, "bit")),
                 *_axil_channel("b", ("bresp", 2, "bit")),
-                *_axil_channel("ar", ("araddr", 7, "hex")),
+                *_axil_channel("ar", ("araddr", ADDR_BITS, "hex")),
                 *_axil_channel("r", ("rdata", 32, "hex"), ("rresp", 2, "bit")),
                 Trace("irq"),
             ],
