@@ -386,8 +386,9 @@ begin
           -- IDX has moved it on); m = 0 ends the move with pulse c, m >= 1 loads the alternative. (Repeated
           -- unchanged while DECIDE waits.)
           alt_kind_r <= C_ALT_IGNORE;
-          alt_cont   <= head_down and cur_head;
-          if (stop_mode_r = '0' and (state_r = C_ST_ACCEL or state_r = C_ST_RUN or (head_down = '1' and cur_head = '1'))) then
+          -- (In a down head, whose phase is DECEL, cur_head lets it act.)
+          alt_cont <= head_down and cur_head;
+          if (stop_mode_r = '0' and (state_r = C_ST_ACCEL or state_r = C_ST_RUN or (head_down and cur_head) = '1')) then
             if (stop_big = '1' or stop_m > pc_m) then
               alt_kind_r <= C_ALT_IGNORE;
             elsif (stop_m = 0) then
