@@ -279,10 +279,10 @@ async def c_driver_jog(dut) -> None:
         assert edges == want, f"jog {speed}, {kind} stop: {edges_differ(edges, want)}"
         position += -len(edges) if speed < 0 else len(edges)
         assert await cdrv.dev_call("stepramp_position") == position, f"jog {speed}: position is not the pulses seen"
-    assert cdrv.dev.segment_set == 1
+    assert cdrv.dev.segment_dirty == 1
     n0, s0 = len(tb.step_edges), len(tb.start_edges)
     await c_move(cdrv, prof)
-    assert cdrv.dev.segment_set == 0
+    assert cdrv.dev.segment_dirty == 0
     rc = await cdrv.dev_call("stepramp_wait_done", 100_000)
     assert rc == OK, f"the move after the jogs: {await cdrv.call('stepramp_strresult', rc)}"
     edges, want = tb.edges_since(n0, s0), model_edges(plan_move(**prof.args()))

@@ -50,7 +50,12 @@ from stepramp.sim.profiles import design_args
 from stepramp.sim.runner import run_cocotb
 from tbutil import build_dir, cocotb, edges_differ, env_int
 
-MOTION = tuple(r.name for r in REGISTERS if offset("STEPS") <= r.offset <= offset("STOP_RATIO"))
+#: The staging registers (written at any time; the engine takes them at START): the move's and the segment's.
+MOTION = tuple(
+    r.name
+    for r in REGISTERS
+    if offset("STEPS") <= r.offset <= offset("STOP_RATIO") or offset("SEGMENT") <= r.offset <= offset("HEAD_PROD_HI")
+)
 CONFIG = ("DRIVE", "STEP_WIDTH", "DIR_TIMING", "PWM_PERIOD", "STEP_SPACE")
 READ_ONLY = ("ID", "CUR_DELAY", "STEP_COUNT")
 #: Operation weights.

@@ -82,7 +82,7 @@ int stepramp_init(stepramp_t *dev, uintptr_t base, double fclk, double spr, uint
     dev->fclk = fclk;
     dev->spr = spr;
     dev->prescale = prescale;
-    dev->segment_set = 0u;
+    dev->segment_dirty = 1u; /* SEGMENT .. HEAD_PROD_HI unknown: the first program writes them */
     dev->min_gap = STEPRAMP_MIN_GAP_RESET;
     id = read_reg(dev, STEPRAMP_REG_ID);
     dev->version = id & 0xFFFFu;
@@ -123,15 +123,15 @@ int stepramp_program_segment(stepramp_t *dev, const stepramp_plan_t *plan, const
     write_wide(dev, STEPRAMP_REG_DECEL_SEED_LO, STEPRAMP_REG_DECEL_SEED_HI, plan->decel_seed);
     write_wide(dev, STEPRAMP_REG_CRUISE_LO, STEPRAMP_REG_CRUISE_HI, plan->cruise);
     write_reg(dev, STEPRAMP_REG_STOP_RATIO, plan->stop_ratio);
-    if (segment != NULL || dev->segment_set) { /* driver.segment_writes, in address order */
+    if (segment != NULL || dev->segment_dirty) { /* driver.segment_writes, in address order */
         write_reg(dev, STEPRAMP_REG_SEGMENT,
                   (seg->head_down << STEPRAMP_SEGMENT_HEAD_DOWN_SHIFT) |
                       (seg->endless << STEPRAMP_SEGMENT_ENDLESS_SHIFT));
         write_reg(dev, STEPRAMP_REG_HEAD_INDEX, seg->head_index);
         write_reg(dev, STEPRAMP_REG_RUN_STOP, seg->run_stop);
         write_wide(dev, STEPRAMP_REG_HEAD_PROD_LO, STEPRAMP_REG_HEAD_PROD_HI, seg->head_prod);
-        dev->segment_set = (seg->head_down | seg->endless | seg->head_index | seg->run_stop) != 0u ||
-                           seg->head_prod != 0u;
+        dev->segment_dirty = (seg->head_down | seg->endless | seg->head_index | seg->run_stop) != 0u ||
+                             seg->head_prod != 0u;
     }
     return STEPRAMP_OK;
 }

@@ -4,9 +4,10 @@
  *
  * The same operations with the same register semantics as the Python driver: stepramp_program writes every
  * motion register (STEPS .. STOP_RATIO) in address order, like driver.plan_writes(), and the segment registers
- * (SEGMENT .. HEAD_PROD_HI, driver.segment_writes()) when a jog has left them set; START, SOFT_STOP and
- * HARD_STOP are written to byte 0 of CTRL only, so the interrupt enables in byte 1 are kept; STATUS.DONE and
- * STATUS.ERROR are cleared by writing 1. The register map is docs/registers.md (stepramp_regs.h in C).
+ * (SEGMENT .. HEAD_PROD_HI, driver.segment_writes()) unless the driver knows them to hold 0 (they are written at the
+ * first program after stepramp_init and after a jog); START, SOFT_STOP and HARD_STOP are written to byte 0 of CTRL
+ * only, so the interrupt enables in byte 1 are kept; STATUS.DONE and STATUS.ERROR are cleared by writing 1. The
+ * register map is docs/registers.md (stepramp_regs.h in C).
  *
  * C99, no malloc, no stdio. Register access goes through three macros, which stepramp.c defines to the Xilinx
  * standalone BSP's functions (and includes "xil_io.h") unless they are already defined -- on the compiler's
@@ -87,16 +88,18 @@ enum {
  * the registers it wrote (set by stepramp_init; the driver's own business, like the Python driver's attributes).
  */
 typedef struct {
-    uintptr_t base;       /**< bus address of the core's register window (offset 0 = ID) */
-    double fclk;          /**< engine clock frequency, Hz */
-    double spr;           /**< steps per revolution (with microstepping) */
-    uint32_t prescale;    /**< base timer period in clocks, 1 .. 65535 */
-    uint32_t version;     /**< ID bits 15:0 read by stepramp_init: major << 8 | minor */
-    uint32_t segment_set; /**< 1: a jog left SEGMENT .. HEAD_PROD_HI non-zero (the next program clears them); 0: all
-                               0, their reset values (stepramp_init assumes them) */
-    uint32_t min_gap;     /**< STEP width + STEP space, clocks (each 0 acting as 1), as stepramp_configure_outputs last
-                               wrote them (STEPRAMP_MIN_GAP_RESET after stepramp_init): a jog's shortest interval
-                               must hold it */
+    uintptr_t base;         /**< bus address of the core's register window (offset 0 = ID) */
+    double fclk;            /**< engine clock frequency, Hz */
+    double spr;             /**< steps per revolution (with microstepping) */
+    uint32_t prescale;      /**< base timer period in clocks, 1 .. 65535 */
+    uint32_t version;       /**< ID bits 15:0 read by stepramp_init: major << 8 | minor */
+    uint32_t segment_dirty; /**< 1: SEGMENT .. HEAD_PROD_HI may hold anything but 0, so the next program writes them
+                                 (0 for a move from rest to rest): unknown after stepramp_init (an earlier program
+                                 without a core reset, or another master, may have left them set), or set by a jog;
+                                 0: this driver last wrote them all 0, a program with no segment leaves them */
+    uint32_t min_gap;       /**< STEP width + STEP space, clocks (each 0 acting as 1), as stepramp_configure_outputs
+                                 last wrote them (STEPRAMP_MIN_GAP_RESET after stepramp_init): a jog's shortest
+                                 interval must hold it */
 } stepramp_t;
 
 /** STATUS decoded (like driver.Status). */
@@ -112,7 +115,9 @@ typedef struct {
 
 /**
  * Set up the device structure and check that a stepramp core answers at base (reads ID only; writes nothing). The
- * driver assumes the core's segment registers and stepping outputs at their reset values.
+ * driver assumes the core's stepping outputs at their reset values (dev->min_gap), but not its segment registers:
+ * dev->segment_dirty is 1, so the first stepramp_program writes SEGMENT .. HEAD_PROD_HI (0 for a move from rest to
+ * rest) whatever an earlier program or another master left in them.
  *
  * @param dev      device structure to fill in (filled in even when the ID check fails)
  * @param base     bus address of the core
@@ -137,9 +142,10 @@ int stepramp_plan(const stepramp_t *dev, stepramp_plan_t *plan, int64_t steps, d
  * Write every motion register of a plan, in address order (Python's plan_writes): STEPS as the signed step
  * count in two's complement (-steps when direction is 1), PRESCALE, each wide value as _LO (bits 31:0) and _HI
  * (the bits above), SA, SD, STOP_RATIO. The core latches them at START, so this is safe during a move (it
- * prepares the next one). Does not start the move. When a jog has left the segment registers set
- * (dev->segment_set), they follow, cleared to 0 (a move from rest to rest): stepramp_program_segment(dev, plan,
- * NULL), Python's program(plan).
+ * prepares the next one). Does not start the move. Unless the segment registers are known to hold 0
+ * (dev->segment_dirty is 0), they follow, cleared to 0 (a move from rest to rest): so after stepramp_init (their
+ * contents unknown) and after a jog, the first program writes them, later ones do not:
+ * stepramp_program_segment(dev, plan, NULL), Python's program(plan).
  *
  * STOP_RATIO: plan->stop_ratio.
  *
@@ -149,8 +155,9 @@ int stepramp_program(stepramp_t *dev, const stepramp_plan_t *plan);
 
 /**
  * Python's program(plan, segment): the plan's registers as stepramp_program, then, when segment is not NULL or
- * dev->segment_set, SEGMENT (HEAD_DOWN, ENDLESS), HEAD_INDEX, RUN_STOP, HEAD_PROD_LO, HEAD_PROD_HI in address order
- * (driver.segment_writes; all 0 for a NULL segment). dev->segment_set is then 1 when they hold anything but 0.
+ * dev->segment_dirty, SEGMENT (HEAD_DOWN, ENDLESS), HEAD_INDEX, RUN_STOP, HEAD_PROD_LO, HEAD_PROD_HI in address
+ * order (driver.segment_writes; all 0 for a NULL segment). dev->segment_dirty is then 1 when they hold anything but
+ * 0, and 0 when they were all written 0.
  *
  * @param segment the segment registers (stepramp_segment_registers), or NULL for a move from rest to rest
  * @return STEPRAMP_OK; STEPRAMP_ENULL (nothing written) if dev or plan is NULL

@@ -20,12 +20,14 @@ extern "C" {
 
 /**
  * Reset the fake core, stepramp_init a device at STEPRAMP_FAKEBUS_BASE with fclk, spr, prescale, clear the log,
- * then stepramp_move. Returns stepramp_move's result (or stepramp_init's if it fails).
+ * then stepramp_move. Returns stepramp_move's result (or stepramp_init's if it fails). The first program of a fresh
+ * device: the log holds the segment registers written 0 after the motion registers, then START.
  */
 int stepramp_fakebus_move(int64_t steps, double accel, double decel, double speed, double spr, double fclk,
                           uint32_t prescale);
 
-/** Reset the fake core, clear the log, stepramp_program(plan). Returns its result. */
+/** Reset the fake core, init a device, clear the log, stepramp_program(plan) (with the segment registers 0, as the
+ * first program after init). Returns its result. */
 int stepramp_fakebus_program(const stepramp_plan_t *plan);
 
 /** sizeof(stepramp_plan_t): lets ctypes check its structure layout. */

@@ -166,6 +166,9 @@ static void check_segment_log(const stepramp_segment_regs_t *regs, uint32_t firs
     check_log_words(want, N_SEGMENT, first);
 }
 
+/* the segment registers of a move from rest to rest (driver.NO_SEGMENT) */
+static const stepramp_segment_regs_t no_segment = {0u, 0u, 0u, 0u, 0u};
+
 /* log entry i is START: bit 0 in byte 0 of CTRL only */
 static void check_start(uint32_t i)
 {
@@ -184,7 +187,8 @@ static void test_init(void)
     CHECK_EQ(stepramp_init(&dev, BASE, 50e6, 6400.0, 50u), STEPRAMP_OK);
     CHECK(dev.base == BASE && dev.fclk == 50e6 && dev.spr == 6400.0 && dev.prescale == 50u);
     CHECK_EQ(dev.version, 0x0003u);
-    CHECK(dev.segment_set == 0u && dev.min_gap == STEPRAMP_MIN_GAP_RESET && STEPRAMP_MIN_GAP_RESET == 2u);
+    /* the segment registers unknown (the first program writes them), the stepping outputs at their reset values */
+    CHECK(dev.segment_dirty == 1u && dev.min_gap == STEPRAMP_MIN_GAP_RESET && STEPRAMP_MIN_GAP_RESET == 2u);
     CHECK_EQ(bus->writes, 0u); /* init only reads */
     CHECK_EQ(bus->reads, 1u);
     for (i = 0; i < sizeof bad_ids / sizeof bad_ids[0]; i++) {
@@ -200,7 +204,8 @@ static void test_init(void)
     CHECK_EQ(stepramp_init(NULL, BASE, 1e6, 200.0, 1u), STEPRAMP_ENULL);
 }
 
-/* move = plan + program + START, for a trapezoid, a triangle with negative steps, and the empty moves */
+/* move = plan + program + START, for a trapezoid, a triangle with negative steps, and the empty moves; the first
+ * move after stepramp_init writes the segment registers 0 too */
 static void test_move_writes(void)
 {
     static const struct {
@@ -222,14 +227,16 @@ static void test_move_writes(void)
     for (i = 0; i < sizeof moves / sizeof moves[0]; i++) {
         stepramp_t dev = fresh(moves[i].fclk, moves[i].spr, moves[i].prescale);
         stepramp_plan_t plan;
-        const stepramp_fakebus_write_t *last = &bus->log[N_MOTION];
+        const stepramp_fakebus_write_t *last = &bus->log[N_MOTION + N_SEGMENT];
 
         CHECK_EQ(stepramp_plan_move(&plan, moves[i].steps, moves[i].accel, moves[i].decel, moves[i].speed, moves[i].spr,
                                     moves[i].fclk, moves[i].prescale),
                  STEPRAMP_OK);
         CHECK_EQ(stepramp_move(&dev, moves[i].steps, moves[i].accel, moves[i].decel, moves[i].speed), STEPRAMP_OK);
-        CHECK_EQ(bus->writes, N_MOTION + 1u);
+        CHECK_EQ(bus->writes, N_MOTION + N_SEGMENT + 1u);
         check_program_log(&plan, 0u);
+        check_segment_log(&no_segment, N_MOTION); /* the first program after init: SEGMENT .. HEAD_PROD_HI = 0 */
+        CHECK_EQ(dev.segment_dirty, 0u);
         /* then START: byte 0 of CTRL only */
         CHECK_EQ(last->offset, O_CTRL);
         CHECK_EQ(last->be, 0x1u);
@@ -241,14 +248,16 @@ static void test_move_writes(void)
               moves[i].steps);
         CHECK_EQ(bus->bus_errors, 0u);
         /* the log accessors (for ctypes) give the same entries */
-        CHECK_EQ(stepramp_fakebus_log_count(), N_MOTION + 1u);
+        CHECK_EQ(stepramp_fakebus_log_count(), N_MOTION + N_SEGMENT + 1u);
         {
             uint32_t off = 0u, value = 0u, be = 0u;
-            CHECK_EQ(stepramp_fakebus_log_entry(N_MOTION, &off, &value, &be), 0);
+            CHECK_EQ(stepramp_fakebus_log_entry(N_MOTION + N_SEGMENT, &off, &value, &be), 0);
             CHECK(off == O_CTRL && value == 0x1u && be == 0x1u);
             CHECK_EQ(stepramp_fakebus_log_entry(0u, &off, NULL, NULL), 0);
             CHECK_EQ(off, O_STEPS);
-            CHECK_EQ(stepramp_fakebus_log_entry(N_MOTION + 1u, &off, &value, &be), -1);
+            CHECK_EQ(stepramp_fakebus_log_entry(N_MOTION, &off, &value, &be), 0);
+            CHECK(off == O_SEGMENT && value == 0u && be == 0xFu);
+            CHECK_EQ(stepramp_fakebus_log_entry(N_MOTION + N_SEGMENT + 1u, &off, &value, &be), -1);
         }
     }
 }
@@ -274,9 +283,10 @@ static void test_program_splits_wide_values(void)
     plan.cruise = UINT64_C(0x0123456789ABCDEF);
     plan.stop_ratio = 0x00018000u; /* 1.5 */
     CHECK_EQ(stepramp_program(&dev, &plan), STEPRAMP_OK);
-    CHECK_EQ(bus->writes, (uint32_t)N_MOTION);
-    CHECK_EQ(bus->starts, 0u); /* program does not start */
+    CHECK_EQ(bus->writes, N_MOTION + N_SEGMENT); /* the first program after init clears the segment registers */
+    CHECK_EQ(bus->starts, 0u);                   /* program does not start */
     check_program_log(&plan, 0u);
+    check_segment_log(&no_segment, N_MOTION);
     /* the same words, spelled out */
     CHECK_EQ(reg(O_STEPS), 0x80000001u);
     CHECK_EQ(reg(O_C_FIRST_LO), 0x12345678u);
@@ -293,6 +303,7 @@ static void test_program_splits_wide_values(void)
     plan.steps = 5u;
     stepramp_fakebus_clear_log();
     CHECK_EQ(stepramp_program(&dev, &plan), STEPRAMP_OK);
+    CHECK_EQ(bus->writes, (uint32_t)N_MOTION); /* the segment registers are known to be 0 now */
     CHECK_EQ(reg(O_STEPS), 5u);
     plan.direction = 1u;
     plan.steps = 0u; /* -0 */
@@ -438,7 +449,7 @@ static void test_jog_writes(void)
         check_program_log(&plan, 0u);
         check_segment_log(&regs, N_MOTION);
         check_start(N_MOTION + N_SEGMENT);
-        CHECK(bus->starts == 1u && bus->bus_errors == 0u && dev.segment_set == 1u);
+        CHECK(bus->starts == 1u && bus->bus_errors == 0u && dev.segment_dirty == 1u);
         /* STEPS is +-1 (the direction only), an endless up head from rest with its soft stop's length */
         CHECK_EQ(reg(O_STEPS), jogs[i].speed < 0.0 ? 0xFFFFFFFFu : 1u);
         CHECK_EQ(reg(O_SEGMENT), 2u);
@@ -460,7 +471,7 @@ static void test_jog_writes(void)
         check_program_log(&move, 0u);
         check_segment_log(&zero, N_MOTION);
         check_start(N_MOTION + N_SEGMENT);
-        CHECK_EQ(dev.segment_set, 0u);
+        CHECK_EQ(dev.segment_dirty, 0u);
         /* and the move after it: the motion registers and START only */
         stepramp_fakebus_clear_log();
         CHECK_EQ(stepramp_move(&dev, -400, 40.0, 40.0, 1.0), STEPRAMP_OK);
@@ -488,29 +499,76 @@ static void test_program_segment(void)
     check_program_log(&plan, 0u);
     check_segment_log(&regs, N_MOTION);
     CHECK(reg(O_SEGMENT) == 3u && reg(O_HEAD_INDEX) == 0x7FFFFFFFu && reg(O_RUN_STOP) == 0x12345u);
-    CHECK(reg(O_HEAD_PROD_LO) == 0x12345678u && reg(O_HEAD_PROD_HI) == 0x8000u && dev.segment_set == 1u);
+    CHECK(reg(O_HEAD_PROD_LO) == 0x12345678u && reg(O_HEAD_PROD_HI) == 0x8000u && dev.segment_dirty == 1u);
     /* one field alone keeps them set */
     regs = zero;
     regs.head_prod = UINT64_C(1) << 40;
     stepramp_fakebus_clear_log();
     CHECK_EQ(stepramp_program_segment(&dev, &plan, &regs), STEPRAMP_OK);
-    CHECK(bus->writes == N_MOTION + N_SEGMENT && reg(O_HEAD_PROD_HI) == 0x100u && dev.segment_set == 1u);
+    CHECK(bus->writes == N_MOTION + N_SEGMENT && reg(O_HEAD_PROD_HI) == 0x100u && dev.segment_dirty == 1u);
     /* all 0 given: written, clear */
     stepramp_fakebus_clear_log();
     CHECK_EQ(stepramp_program_segment(&dev, &plan, &zero), STEPRAMP_OK);
     CHECK_EQ(bus->writes, N_MOTION + N_SEGMENT);
     check_segment_log(&zero, N_MOTION);
-    CHECK_EQ(dev.segment_set, 0u);
+    CHECK_EQ(dev.segment_dirty, 0u);
     /* then NULL: the motion registers only */
     stepramp_fakebus_clear_log();
     CHECK_EQ(stepramp_program_segment(&dev, &plan, NULL), STEPRAMP_OK);
     CHECK_EQ(bus->writes, (uint32_t)N_MOTION);
     /* NULL pointers: nothing written, the flag kept */
-    dev.segment_set = 1u;
+    dev.segment_dirty = 1u;
     stepramp_fakebus_clear_log();
     CHECK_EQ(stepramp_program_segment(&dev, NULL, &regs), STEPRAMP_ENULL);
     CHECK_EQ(stepramp_program_segment(NULL, &plan, &regs), STEPRAMP_ENULL);
-    CHECK(bus->writes == 0u && dev.segment_set == 1u);
+    CHECK(bus->writes == 0u && dev.segment_dirty == 1u);
+}
+
+/* after stepramp_init the segment registers are unknown: the first plain move writes them 0, once; on a core
+ * that an earlier program (a restart without a core reset) or another master left with a segment, that runs the
+ * move from rest to rest rather than the stale segment */
+static void test_first_program_clears_segment(void)
+{
+    static const word_t stale[N_SEGMENT] = {{O_SEGMENT, 2u},
+                                            {O_HEAD_INDEX, 17u},
+                                            {O_RUN_STOP, 0x1234u},
+                                            {O_HEAD_PROD_LO, 0x89ABCDEFu},
+                                            {O_HEAD_PROD_HI, 0x42u}};
+    stepramp_t dev;
+    stepramp_plan_t move;
+    int pass;
+    size_t i;
+
+    CHECK_EQ(stepramp_plan_move(&move, 300, 40.0, 40.0, 20.0, 400.0, 1e6, 1u), STEPRAMP_OK);
+    for (pass = 0; pass < 2; pass++) { /* a core from reset (all 0), then one left with an endless segment */
+        stepramp_fakebus_reset(BASE, GOOD_ID);
+        for (i = 0; pass == 1 && i < N_SEGMENT; i++) {
+            bus->regs[stale[i].offset / 4u] = stale[i].value;
+        }
+        CHECK_EQ(stepramp_init(&dev, BASE, 1e6, 400.0, 1u), STEPRAMP_OK);
+        CHECK_EQ(bus->writes, 0u); /* init writes nothing */
+        CHECK_EQ(dev.segment_dirty, 1u);
+        /* the first plain move: its registers, the five segment registers 0 in address order, START */
+        stepramp_fakebus_clear_log();
+        CHECK_EQ(stepramp_move(&dev, 300, 40.0, 40.0, 20.0), STEPRAMP_OK);
+        CHECK_EQ(bus->writes, N_MOTION + N_SEGMENT + 1u);
+        check_program_log(&move, 0u);
+        check_segment_log(&no_segment, N_MOTION);
+        check_start(N_MOTION + N_SEGMENT);
+        for (i = 0; i < N_SEGMENT; i++) {
+            CHECK_EQ(reg(stale[i].offset), 0u);
+        }
+        CHECK_EQ(dev.segment_dirty, 0u);
+        /* the second plain move: the motion registers and START only */
+        stepramp_fakebus_clear_log();
+        CHECK_EQ(stepramp_move(&dev, 300, 40.0, 40.0, 20.0), STEPRAMP_OK);
+        CHECK_EQ(bus->writes, N_MOTION + 1u);
+        check_program_log(&move, 0u);
+        check_start(N_MOTION);
+        CHECK_EQ(dev.segment_dirty, 0u);
+        CHECK_EQ(bus->starts, 1u);
+        CHECK_EQ(bus->bus_errors, 0u);
+    }
 }
 
 /* the jog's checks: its speed, the plan's errors, STEP width + space against its shortest interval; nothing written */
@@ -821,6 +879,7 @@ int main(void)
     test_enable_and_outputs();
     test_jog_writes();
     test_program_segment();
+    test_first_program_clears_segment();
     test_jog_errors();
     test_status_decoding();
     test_clear_flags();

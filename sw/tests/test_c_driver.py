@@ -3,9 +3,12 @@
 
 ``make -C sw/c`` builds and runs the host tests (a missing gcc or make is a failure, not a skip). The shared
 library holds the driver with its register access routed to the fake register bank of stepramp_fakebus.c, whose
-write log ctypes reads: for random plans (stepramp_program) and random valid moves (stepramp_move) the C driver
-must write exactly the (offset, value) pairs of stepramp.board.driver.plan_writes, in the same order, with all byte
-enables, and START to byte 0 of CTRL; an invalid move returns the plan's error and writes nothing. For random jogs
+write log ctypes reads: for random plans (stepramp_program) and random valid moves (stepramp_move), each the first
+program of a freshly initialised driver, the C driver must write exactly the (offset, value) pairs of
+stepramp.board.driver.plan_writes, in the same order, with all byte enables, then the segment registers 0
+(segment_writes(NO_SEGMENT): after init the driver does not know what they hold), and START to byte 0 of CTRL; an
+invalid move returns the plan's error and writes nothing. A fresh driver's first two moves write what the Python
+driver's write (the segment registers 0 with the first only). For random jogs
 (stepramp_jog, with random STEP width and space) and the two moves after each, the C driver must write what the
 Python driver's jog and move write (plan_jog, plan_writes and segment_writes), or fail with the same error and
 write nothing.
@@ -28,7 +31,7 @@ from test_driver import FakeBank
 from test_driver import run as run_async
 
 from c_abi import CPlan, log_uniform, run, struct_fields
-from stepramp.board.driver import MODES, Outputs, StepRamp, plan_writes
+from stepramp.board.driver import MODES, NO_SEGMENT, Outputs, StepRamp, plan_writes, segment_writes
 from stepramp.board.plan import MAX_PRESCALE, MAX_STEPS, REG_WIDTHS, Plan, plan_move
 from stepramp.board.regmap import ERROR_CODES, ID_VALUE, offset
 from stepramp.sim.profiles import INVALID_INPUTS, PROFILES, design_args
@@ -166,6 +169,15 @@ def expected_motion_writes(plan: Plan) -> list[Write]:
     return [(addr, value, 0xF) for addr, value in plan_writes(plan)]
 
 
+ZERO_SEGMENT_WRITES: list[Write] = [(addr, value, 0xF) for addr, value in segment_writes(NO_SEGMENT)]
+"""SEGMENT .. HEAD_PROD_HI written 0, which the first program after stepramp_init adds (their contents unknown)."""
+
+
+def expected_first_program_writes(plan: Plan) -> list[Write]:
+    """What the first program of a fresh driver writes: the motion registers, then the segment registers 0."""
+    return [*expected_motion_writes(plan), *ZERO_SEGMENT_WRITES]
+
+
 START_WRITE: Write = (offset("CTRL"), 0x1, 0x1)
 """START: bit 0 in byte 0 of CTRL, the other lanes (the interrupt enables) untouched."""
 
@@ -234,7 +246,7 @@ def test_program_random_plans_like_plan_writes(lib: ctypes.CDLL) -> None:
     for plan in plans:
         assert lib.stepramp_fakebus_program(ctypes.byref(c_plan(plan))) == 0
         got = bus_writes(lib)
-        want = expected_motion_writes(plan)
+        want = expected_first_program_writes(plan)
         if got != want:
             diff = sorted(set(got) ^ set(want))
             mismatches.append(f"{plan}: differ in {[(hex(a), hex(v), be) for a, v, be in diff]}")
@@ -251,7 +263,7 @@ def test_move_random_valid_moves_like_plan_writes(lib: ctypes.CDLL) -> None:
         rc = lib.stepramp_fakebus_move(*_move_args(move))
         assert rc == 0, f"{move}: C move failed with {lib.stepramp_strresult(rc).decode()}"
         got = bus_writes(lib)
-        want = [*expected_motion_writes(plan_move(**move)), START_WRITE]
+        want = [*expected_first_program_writes(plan_move(**move)), START_WRITE]
         if got != want:
             diff = sorted(set(got) ^ set(want))
             mismatches.append(f"{move}: differ in {[(hex(a), hex(v), be) for a, v, be in diff]}")
@@ -265,7 +277,7 @@ def test_stop_ratio_written_from_the_plan(lib: ctypes.CDLL) -> None:
     for move in [p.args() for p in PROFILES[:50]]:
         assert lib.stepramp_fakebus_move(*_move_args(move)) == 0
         got = bus_writes(lib)
-        assert got == [*expected_motion_writes(plan_move(**move)), START_WRITE], move
+        assert got == [*expected_first_program_writes(plan_move(**move)), START_WRITE], move
 
 
 def test_invalid_move_writes_nothing(lib: ctypes.CDLL) -> None:
@@ -312,6 +324,23 @@ class Pair:
             py = keys[0] if keys else change_error_name(str(exc))
         rc = getattr(self.so, f"stepramp_{name}")(ctypes.byref(self.dev), *args)
         return (py, self.bank.log[:]), (DRIVER_RESULTS.get(rc, f"unknown result {rc}"), bus_writes(self.so))
+
+
+def test_first_moves_like_the_python_driver(lib: ctypes.CDLL) -> None:
+    """A freshly initialised driver's first two moves: the first writes the motion registers, the five segment
+    registers 0 and START, the second the motion registers and START only, in C as in Python."""
+    assert len(ZERO_SEGMENT_WRITES) == 5 and all(value == 0 for _, value, _ in ZERO_SEGMENT_WRITES)
+    mismatches: list[str] = []
+    for move in random_valid_moves(2026_0513, 100) + [p.args() for p in PROFILES[:20]]:
+        pair = Pair(lib, move["fclk"], move["spr"], move["prescale"], Outputs())
+        for i, steps in enumerate((move["steps"], -move["steps"])):
+            args = (steps, float(move["accel"]), float(move["decel"]), float(move["speed"]))
+            (py, py_writes), (c, c_writes) = pair.call("move", *args)
+            plan = plan_move(**(move | {"steps": steps}))
+            want = [*(expected_motion_writes(plan) if i else expected_first_program_writes(plan)), START_WRITE]
+            if (py, py_writes) != ("STEPRAMP_OK", want) or (c, c_writes) != ("STEPRAMP_OK", want):
+                mismatches.append(f"{move} move {i + 1}: python {py} {py_writes}, C {c} {c_writes}")
+    assert not mismatches, f"{len(mismatches)} moves differ:\n" + "\n".join(mismatches[:5])
 
 
 def random_jogs(seed: int, count: int) -> list[dict[str, Any]]:

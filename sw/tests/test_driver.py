@@ -9,9 +9,18 @@ from pathlib import Path
 
 import pytest
 
-from stepramp.board.driver import MmapAccess, Outputs, Status, StepRamp, StepRampError, plan_writes
+from stepramp.board.driver import (
+    NO_SEGMENT,
+    MmapAccess,
+    Outputs,
+    Status,
+    StepRamp,
+    StepRampError,
+    plan_writes,
+    segment_writes,
+)
 from stepramp.board.plan import plan_move
-from stepramp.board.regmap import ERROR_CODES, ID_VALUE, offset
+from stepramp.board.regmap import ERROR_CODES, ID_VALUE, REGISTERS_BY_NAME, offset
 
 
 class FakeBank:
@@ -41,10 +50,29 @@ def test_move_writes_every_motion_register_then_start() -> None:
     drv = StepRamp(bank, fclk=1e6, spr=200.0)
     plan = run(drv.move(-150, 1000.0, 800.0, 50.0))
     assert plan == plan_move(-150, 1000.0, 800.0, 50.0, 200.0, 1e6)
-    assert bank.log[:-1] == [(a, v, 0xF) for a, v in plan_writes(plan)]
+    # A new driver does not know what SEGMENT .. HEAD_PROD hold: its first move writes them, 0 (a move from rest).
+    zeros = [(a, v, 0xF) for a, v in segment_writes(NO_SEGMENT)]
+    assert bank.log[:-1] == [(a, v, 0xF) for a, v in plan_writes(plan)] + zeros
+    assert all(v == 0 for _, v, _ in zeros) and len(zeros) == 5
     assert bank.log[-1] == (offset("CTRL"), 1, 0x1), "START is a byte-0 write"
     assert bank.regs[offset("STEPS")] == (-150) & 0xFFFF_FFFF
     assert bank.regs[offset("CRUISE_HI")] == plan.cruise >> 32
+    # The next move: the motion registers only.
+    bank.log.clear()
+    plan = run(drv.move(150, 1000.0, 800.0, 50.0))
+    assert bank.log[:-1] == [(a, v, 0xF) for a, v in plan_writes(plan)]
+
+
+def test_a_jog_then_a_move_clears_the_segment() -> None:
+    bank = FakeBank()
+    drv = StepRamp(bank, fclk=1e6, spr=200.0)
+    run(drv.move(10, 1000.0, 800.0, 50.0))
+    bank.log.clear()
+    run(drv.jog(-50.0, 1000.0, 800.0))
+    assert bank.regs[offset("SEGMENT")] == REGISTERS_BY_NAME["SEGMENT"].field("ENDLESS").mask
+    assert bank.regs[offset("STEPS")] == 0xFFFF_FFFF, "a jog's STEPS gives its direction only: -1"
+    run(drv.move(10, 1000.0, 800.0, 50.0))
+    assert all(bank.regs[a] == 0 for a, _ in segment_writes(NO_SEGMENT)), "the move after a jog clears the segment"
 
 
 def test_invalid_move_writes_nothing() -> None:

@@ -155,9 +155,10 @@ class StepRamp:
         self.spr = spr
         self.prescale = prescale
         self.outputs = Outputs()
-        # SEGMENT .. HEAD_PROD_HI hold what a move from rest to rest needs (all 0: their reset values), so that
-        # program() need not write them; a jog sets them and the next program() clears them.
-        self._segment_clear = True
+        # Whether SEGMENT .. HEAD_PROD_HI are known to hold what a move from rest to rest needs (all 0), so that
+        # program() need not write them. Not at first: an earlier program (a restart without a core reset) or
+        # another master may have left them set, so the first program() writes them; a jog sets them again.
+        self._segment_clear = False
 
     async def check_id(self) -> int:
         """Read ID; raise StepRampError if this is not a stepramp core. Returns the version (major << 8 | minor)."""
