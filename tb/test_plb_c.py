@@ -112,7 +112,8 @@ def c_driver_writes(so: ctypes.CDLL, prof: Profile) -> list[Write]:
 @cocotb.test(timeout_time=PROFILES_LIMIT_US, timeout_unit="us")  # the same profiles, the same limit
 async def c_driver_writes_replayed(dut) -> None:
     """The C driver's own bus writes for each move, replayed on the bus: the motion registers (and, from a fresh
-    driver, the segment registers cleared to 0), then START as a byte write. The move matches the model, and the interrupt enables in CTRL byte 1 survive the START."""
+    driver, the segment registers cleared to 0), then START as a byte write. The move matches the model, and the
+    interrupt enables in CTRL byte 1 survive the START."""
     so = ctypes.CDLL(os.environ["STEPRAMP_C_LIB"])
     tb = await PeripheralTb.started(dut)
     drv = tb.driver()
