@@ -50,7 +50,7 @@ from cocotb.utils import get_sim_time
 from peripheral_tb import TOPS, PeripheralTb
 from stepramp.board.driver import Outputs, StepRamp
 from stepramp.board.plan import Plan
-from stepramp.board.regmap import ERROR_CODES, REGISTERS, REGISTERS_BY_NAME, RO, RW, WS, Register, offset
+from stepramp.board.regmap import ERROR_CODES, REGISTERS, REGISTERS_BY_NAME, RO, RW, STAGING, WS, Register, offset
 from stepramp.models.engine import ACCEL, DECEL, RUN
 from stepramp.models.engine import edges as model_edges
 from stepramp.models.engine import phases as model_phases
@@ -89,8 +89,9 @@ def merge(old: int, new: int, strobe: int) -> int:
 
 
 def is_motion(reg: Register) -> bool:
-    """STEPS .. STOP_RATIO: plain storage that may be written at any time (docs/registers.md)."""
-    return offset("STEPS") <= reg.offset <= offset("STOP_RATIO")
+    """The staging registers (STEPS .. STOP_RATIO, SEGMENT .. HEAD_PROD_HI): plain storage that may be written at
+    any time (docs/registers.md)."""
+    return reg.name in STAGING
 
 
 class EdgeClock:

@@ -46,7 +46,18 @@ from typing import Any
 
 from cocotb.triggers import FallingEdge
 
-from stepramp.board.regmap import ADDR_BITS, ERROR_CODES, REGISTERS, REGISTERS_BY_NAME, RO, RW, W1C, WS, Register
+from stepramp.board.regmap import (
+    ADDR_BITS,
+    ERROR_CODES,
+    REGISTERS,
+    REGISTERS_BY_NAME,
+    RO,
+    RW,
+    STAGING,
+    W1C,
+    WS,
+    Register,
+)
 from stepramp.sim.clocking import start_clock
 from stepramp.sim.runner import run_cocotb
 from tbutil import build_dir, cocotb, env_int
@@ -70,7 +81,7 @@ def _span(first: str, last: str) -> tuple[str, ...]:
     return tuple(r.name for r in REGISTERS if lo <= r.offset <= hi)
 
 
-MOTION = _span("STEPS", "STOP_RATIO") + _span("SEGMENT", "HEAD_PROD_HI")  # written at any time (latched at START)
+MOTION = STAGING  # written at any time (latched at START)
 CONFIG = _span("DRIVE", "STEP_SPACE")  # written only while stopped (CFG_BUSY)
 STORAGE = MOTION + CONFIG  # plain read/write storage
 CTRL = REGISTERS_BY_NAME["CTRL"]

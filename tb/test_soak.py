@@ -43,19 +43,14 @@ from cocotb.triggers import ClockCycles, RisingEdge, with_timeout
 from peripheral_tb import BAD_VALUES, TOPS, PeripheralTb, expect_rejected
 from stepramp.board.driver import MODES, Outputs, StepRamp, StepRampError
 from stepramp.board.plan import Plan, plan_move
-from stepramp.board.regmap import REGISTERS, REGISTERS_BY_NAME, RW, W1C, offset
+from stepramp.board.regmap import REGISTERS, REGISTERS_BY_NAME, RW, STAGING, W1C, offset
 from stepramp.models.engine import edges as model_edges
 from stepramp.models.engine import edges_with_stop
 from stepramp.sim.profiles import design_args
 from stepramp.sim.runner import run_cocotb
 from tbutil import build_dir, cocotb, edges_differ, env_int
 
-#: The staging registers (written at any time; the engine takes them at START): the move's and the segment's.
-MOTION = tuple(
-    r.name
-    for r in REGISTERS
-    if offset("STEPS") <= r.offset <= offset("STOP_RATIO") or offset("SEGMENT") <= r.offset <= offset("HEAD_PROD_HI")
-)
+MOTION = STAGING  # written at any time; the engine takes them at START
 CONFIG = ("DRIVE", "STEP_WIDTH", "DIR_TIMING", "PWM_PERIOD", "STEP_SPACE")
 READ_ONLY = ("ID", "CUR_DELAY", "STEP_COUNT")
 #: Operation weights.

@@ -95,6 +95,15 @@ def offset(name: str) -> int:
     return REGISTERS_BY_NAME[name].offset
 
 
+def _span(first: str, last: str) -> tuple[str, ...]:
+    return tuple(r.name for r in REGISTERS if offset(first) <= r.offset <= offset(last))
+
+
+#: The staging registers: plain storage written at any time, taken by the engine at START (the move's, then the
+#: segment's: docs/algorithm.md, "When the move is latched" and "Changes while moving").
+STAGING: tuple[str, ...] = _span("STEPS", "STOP_RATIO") + _span("SEGMENT", "HEAD_PROD_HI")
+
+
 def split_wide(value: int, width: int) -> tuple[int, int]:
     """A wide unsigned register value as its (LO, HI) 32-bit words."""
     if not 0 <= value < (1 << width):
