@@ -7,6 +7,7 @@ Random cases print their seed (STEPRAMP_SEED replays one); the bound is that of 
 
 from __future__ import annotations
 
+import bisect
 import math
 import os
 import random
@@ -18,6 +19,8 @@ from stepramp.board.change import DOWN, UP, Change, Segment, plan_change, speed_
 from stepramp.board.plan import FRAC_CRUISE, MIN_INTERVAL_CLKS, plan_move, plan_move_info
 from stepramp.models import ideal
 from stepramp.models.engine import (
+    change_edges,
+    change_pulse,
     interval_values,
     segment_stop_length,
     segment_stop_values,
@@ -25,6 +28,7 @@ from stepramp.models.engine import (
     segment_values,
     soft_stop_values,
 )
+from stepramp.models.engine import edges as model_edges
 from stepramp.sim.profiles import PROFILES
 
 BOUND_C0 = 0.008  # units of c0 of the slower ramp (a or d), as sw/tests/test_model.py holds a move
@@ -332,3 +336,44 @@ def _ticks(values: list[int]) -> list[int]:
         acc = s & ((1 << FRAC_CRUISE) - 1)
         times.append(t)
     return times
+
+
+@pytest.mark.parametrize("profile", [p for p in PROFILES if abs(p.steps) > 200][:6], ids=lambda p: p.name)
+def test_a_change_taken_over_at_a_pulse(profile) -> None:  # type: ignore[no-untyped-def]
+    """A change committed at clock edges in ACCEL, RUN and DECEL of a move (docs/algorithm.md, the take-over's
+    design): the pulse the driver names is at least 2 pulses and 400 clocks after the commit; pulses up to it are the
+    move's; after it every pulse lies within the bound (plus the tick the carried fraction may add) of the ideal
+    motion from there; the target is reached exactly."""
+    args = profile.args()
+    plan, info = plan_move_info(**args)
+    alpha = 2.0 * math.pi / args["spr"]
+    f_tick = args["fclk"] / args["prescale"]
+    before = model_edges(plan)
+    checked = 0
+    for commit in (before[len(before) // 10], before[len(before) // 2], before[(9 * len(before)) // 10]):
+        try:
+            p = change_pulse(before, commit)
+        except ValueError:
+            continue
+        assert p >= bisect.bisect_right(before, commit) + 1 and before[p] >= commit + 400
+        for factor in (1.5, 0.6):
+            speed = args["speed"] * factor
+            if math.floor(f_tick / (speed / alpha)) * args["prescale"] < MIN_INTERVAL_CLKS:
+                continue
+            case = Case.of(speed_at_pulse(info, p), info.length - p, args["accel"], args["decel"], speed,
+                           args["spr"], args["fclk"], args["prescale"])  # fmt: skip
+            change = case.plan()
+            if change.back is not None:
+                continue  # a stop and a move back: two motions (test_named_changes, test_changes_from_every_phase...)
+            edges = change_edges(Segment.of_move(plan), p, change.segment, args["prescale"])
+            assert edges[: p + 1] == before[: p + 1]
+            assert len(edges) == len(before), "the target is the move's own"
+            a, d, v = case.accel / alpha, case.decel / alpha, speed / alpha
+            judge = ideal.IdealSegment(change.start_speed, a, d, v, change.segment.length, f_tick)
+            c0_slow = f_tick * math.sqrt(2.0 / min(a, d))
+            t_p = (edges[p] - edges[0]) / args["prescale"]
+            for i, edge in enumerate(edges[p:]):
+                err = abs((edge - edges[0]) / args["prescale"] - t_p - judge.time_at(float(i)))
+                assert err <= BOUND_C0 * c0_slow + BOUND_TICKS + 1.0, (profile.name, p, i, err / c0_slow)
+            checked += 1
+    assert checked >= 2, f"{profile.name}: only {checked} changes could be taken over"

@@ -593,3 +593,34 @@ def segment_edges(
             raise ValueError(f"the soft stop at edge {request_edge} is ignored: the endless segment would not end")
         return normal
     return to_edges(values)
+
+
+def change_edges(running: Segment, p: int, seg: Segment, prescale: int) -> list[int]:
+    """Edges of a motion that starts as `running` (from START) and in which `seg` takes over at pulse p
+    (docs/algorithm.md, "Changes while moving", the take-over's design): intervals 1 .. p are the running
+    segment's, then the segment's 1 .. its length (an endless one is cut at its sa + 64), one accumulator throughout."""
+    if not 1 <= p <= (running.length if running.length is not None else MAX_CHANGE_PULSE):
+        raise ValueError(f"the take-over pulse {p} is not a pulse after pulse 0 of the running motion")
+    count = seg.length if seg.length is not None else seg.sa + 64
+    out, t, acc = [FIRST_PULSE_LATENCY], 0, 0
+    for value in segment_values(running, p) + segment_values(seg, count):
+        s = acc + value
+        t += s >> FRAC_CRUISE
+        acc = s & _FRAC_MASK
+        out.append(FIRST_PULSE_LATENCY + prescale * t)
+    return out
+
+
+MAX_CHANGE_PULSE = (1 << 31) - 1
+"""The largest pulse number a take-over can name (STEP_COUNT is 31 bits)."""
+
+
+def change_pulse(edges_so_far: list[int], commit_edge: int, lead_pulses: int = 2, lead_clocks: int = 400) -> int:
+    """The pulse the driver names for a change committed at clock edge commit_edge (the issue's rule): the first
+    pulse at least lead_pulses after the pulses emitted by then and at least lead_clocks after the commit. The
+    running motion's edges must reach that far (edges_so_far)."""
+    emitted = bisect.bisect_right(edges_so_far, commit_edge)
+    k = max(emitted + lead_pulses - 1, bisect.bisect_left(edges_so_far, commit_edge + lead_clocks))
+    if k >= len(edges_so_far):
+        raise ValueError("the running motion ends before the change could take over")
+    return k
