@@ -19,6 +19,7 @@ from stepramp.board.change import DOWN, UP, Change, Segment, plan_change, speed_
 from stepramp.board.plan import FRAC_CRUISE, MIN_INTERVAL_CLKS, plan_move, plan_move_info
 from stepramp.models import ideal
 from stepramp.models.engine import (
+    accumulate,
     change_edges,
     change_pulse,
     interval_values,
@@ -295,7 +296,7 @@ def test_a_soft_stop_in_a_down_head_goes_on_to_its_rest() -> None:
                 assert values is None  # the segment's own decel ends no later
                 continue
             assert values is not None and len(values) == k, (case, p)
-            ticks = _ticks(values)
+            ticks = accumulate(values)
             err = max(abs(t - x) for t, x in zip(ticks, judge, strict=True))
             assert err <= STOP_BOUND_C0 * c0_slow + BOUND_TICKS, (case, p, err / c0_slow)
             worst = max(worst, err / c0_slow)
@@ -326,16 +327,6 @@ def test_a_soft_stop_takes_the_stop_distance(head: str) -> None:
             assert values is not None and len(values) == p + m
             if m >= 2:
                 assert values[p] >= segment_values(seg, p + 1)[p], (case, p)
-
-
-def _ticks(values: list[int]) -> list[int]:
-    times, t, acc = [0], 0, 0
-    for value in values:
-        s = acc + value
-        t += s >> FRAC_CRUISE
-        acc = s & ((1 << FRAC_CRUISE) - 1)
-        times.append(t)
-    return times
 
 
 @pytest.mark.parametrize("profile", [p for p in PROFILES if abs(p.steps) > 200][:6], ids=lambda p: p.name)

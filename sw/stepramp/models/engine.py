@@ -89,19 +89,24 @@ def value_runs(plan: Plan) -> Iterator[tuple[int, int]]:
         i += 1
 
 
-def tick_times(plan: Plan) -> list[int]:
-    """Pulse times T_k in ticks, k = 0 .. N-1 (T_0 = 0), through the 32-bit fractional accumulator."""
-    if plan.steps == 0:
-        return []
+def accumulate(values: Iterable[int], acc: int = 0) -> list[int]:
+    """Pulse times in ticks through the 32-bit fractional accumulator: 0 for the first pulse, then the pulse ending
+    each Q32.32 interval value; acc is the fraction the accumulator starts with (0 at a START)."""
     times = [0]
     t = 0
-    acc = 0
-    for value in interval_values(plan):
+    for value in values:
         s = acc + value
         t += s >> FRAC_CRUISE
         acc = s & _FRAC_MASK
         times.append(t)
     return times
+
+
+def tick_times(plan: Plan) -> list[int]:
+    """Pulse times T_k in ticks, k = 0 .. N-1 (T_0 = 0), through the 32-bit fractional accumulator."""
+    if plan.steps == 0:
+        return []
+    return accumulate(interval_values(plan))
 
 
 def edges(plan: Plan) -> list[int]:
@@ -376,15 +381,7 @@ def soft_stop_values(plan: Plan, p: int) -> list[int] | None:
 
 def _edges_of_values(plan: Plan, values: Iterable[int]) -> list[int]:
     """Edges of pulse 0 and of the pulse ending each interval value, through the fractional accumulator."""
-    out = [FIRST_PULSE_LATENCY]
-    t = 0
-    acc = 0
-    for value in values:
-        s = acc + value
-        t += s >> FRAC_CRUISE
-        acc = s & _FRAC_MASK
-        out.append(FIRST_PULSE_LATENCY + plan.prescale * t)
-    return out
+    return [FIRST_PULSE_LATENCY + plan.prescale * t for t in accumulate(values)]
 
 
 def soft_stop_pulse(plan: Plan, request_edge: int) -> int | None:
@@ -502,14 +499,7 @@ def segment_values(seg: Segment, count: int) -> list[int]:
 def segment_ticks(seg: Segment, count: int, acc: int = 0) -> list[int]:
     """Tick times of the segment's pulses 0 .. count (pulse 0 is pulse P, at tick 0), through the fractional
     accumulator that starts at `acc` (the fraction the running plan left at pulse P)."""
-    times = [0]
-    t = 0
-    for value in segment_values(seg, count):
-        s = acc + value
-        t += s >> FRAC_CRUISE
-        acc = s & _FRAC_MASK
-        times.append(t)
-    return times
+    return accumulate(segment_values(seg, count), acc)
 
 
 def segment_stop_length(seg: Segment, p: int) -> int | None:
@@ -564,13 +554,7 @@ def segment_edges(
     An endless segment needs `count` or a stop that ends it."""
 
     def to_edges(values: list[int]) -> list[int]:
-        out, t, acc = [FIRST_PULSE_LATENCY], 0, 0
-        for value in values:
-            s = acc + value
-            t += s >> FRAC_CRUISE
-            acc = s & _FRAC_MASK
-            out.append(FIRST_PULSE_LATENCY + prescale * t)
-        return out
+        return [FIRST_PULSE_LATENCY + prescale * t for t in accumulate(values)]
 
     if stop is None:
         if seg.length is None and count is None:
@@ -602,13 +586,8 @@ def change_edges(running: Segment, p: int, seg: Segment, prescale: int) -> list[
     if not 1 <= p <= (running.length if running.length is not None else MAX_CHANGE_PULSE):
         raise ValueError(f"the take-over pulse {p} is not a pulse after pulse 0 of the running motion")
     count = seg.length if seg.length is not None else seg.sa + 64
-    out, t, acc = [FIRST_PULSE_LATENCY], 0, 0
-    for value in segment_values(running, p) + segment_values(seg, count):
-        s = acc + value
-        t += s >> FRAC_CRUISE
-        acc = s & _FRAC_MASK
-        out.append(FIRST_PULSE_LATENCY + prescale * t)
-    return out
+    values = segment_values(running, p) + segment_values(seg, count)
+    return [FIRST_PULSE_LATENCY + prescale * t for t in accumulate(values)]
 
 
 MAX_CHANGE_PULSE = (1 << 31) - 1
