@@ -91,10 +91,23 @@ int stepramp_init(stepramp_t *dev, uintptr_t base, double fclk, double spr, uint
 
 int stepramp_plan(const stepramp_t *dev, stepramp_plan_t *plan, int64_t steps, double accel, double decel, double speed)
 {
+    stepramp_plan_t out;
+    stepramp_info_t info;
+    int rc;
+
     if (dev == NULL || plan == NULL) {
         return STEPRAMP_ENULL;
     }
-    return (int)stepramp_plan_move(plan, steps, accel, decel, speed, dev->spr, dev->fclk, dev->prescale);
+    rc = (int)stepramp_plan_move_info(&out, &info, steps, accel, decel, speed, dev->spr, dev->fclk, dev->prescale);
+    if (rc != STEPRAMP_OK) {
+        return rc;
+    }
+    /* StepRamp.plan: the STEP width + space must fit the move's shortest interval, floor(min_interval) * prescale */
+    if (out.steps > 1u && (double)dev->min_gap > floor(info.min_interval) * (double)dev->prescale) {
+        return STEPRAMP_EGAP;
+    }
+    *plan = out;
+    return STEPRAMP_OK;
 }
 
 int stepramp_program(stepramp_t *dev, const stepramp_plan_t *plan)
@@ -362,8 +375,8 @@ const char *stepramp_strresult(int result)
         return "the jog speed must be a finite non-zero number of rad/s";
     }
     if (result == STEPRAMP_EGAP) {
-        return "STEP width + STEP space clocks does not fit the jog's shortest interval: lower the speed, the STEP "
-               "width or the space";
+        return "STEP width + STEP space clocks does not fit the shortest interval of the move or jog: lower the "
+               "speed, the STEP width or the space";
     }
     if (STEPRAMP_IS_ECORE(result)) {
         uint32_t code = STEPRAMP_ECORE_CODE(result);

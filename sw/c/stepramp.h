@@ -63,7 +63,7 @@ enum {
     STEPRAMP_EOUTPUTS = 66,   /**< stepramp_configure_outputs: NULL, mode > 4 or ustep_log2 > 7 */
     STEPRAMP_ENOIRQ = 67,     /**< stepramp_isr: neither STATUS.DONE nor STATUS.ERROR was set (not this core) */
     STEPRAMP_EJOG_SPEED = 68, /**< stepramp_jog: the jog speed is 0, inf or NaN */
-    STEPRAMP_EGAP = 69,       /**< stepramp_jog: STEP width + STEP space does not fit the jog's shortest interval */
+    STEPRAMP_EGAP = 69,       /**< STEP width + STEP space does not fit the move's or the jog's shortest interval */
     STEPRAMP_ECORE_BASE = 128 /**< STEPRAMP_ECORE(code): the core flagged STATUS.ERROR with ERR_CODE code */
 };
 
@@ -133,7 +133,9 @@ int stepramp_init(stepramp_t *dev, uintptr_t base, double fclk, double spr, uint
  *
  * @param plan  output, written only on success
  * @param steps signed step count; accel, decel in rad/s^2; speed in rad/s
- * @return STEPRAMP_OK or the stepramp_err_t of the first failed check; STEPRAMP_ENULL if dev or plan is NULL
+ * @return STEPRAMP_OK or the stepramp_err_t of the first failed check; STEPRAMP_EGAP when the STEP width + STEP
+ *         space (stepramp_configure_outputs) does not fit the move's shortest interval; STEPRAMP_ENULL if dev or
+ *         plan is NULL
  */
 int stepramp_plan(const stepramp_t *dev, stepramp_plan_t *plan, int64_t steps, double accel, double decel,
                   double speed);

@@ -606,6 +606,12 @@ static void test_jog_errors(void)
     CHECK_EQ(stepramp_jog(&dev, 19.9, 40.0, 40.0), STEPRAMP_OK); /* a little slower fits */
     CHECK_EQ(bus->writes, N_MOTION + N_SEGMENT + 1u);
 
+    /* a move that fast does not fit that STEP width + space either, and writes nothing; a slower one does */
+    stepramp_fakebus_clear_log();
+    CHECK_EQ(stepramp_move(&dev, 4000, 40.0, 40.0, 20.0), STEPRAMP_EGAP); /* a trapezoid: it cruises at 20 rad/s */
+    CHECK_EQ(bus->writes, 0u);
+    CHECK_EQ(stepramp_move(&dev, 4000, 40.0, 40.0, 19.9), STEPRAMP_OK);
+
     stepramp_fakebus_clear_log();
     CHECK_EQ(stepramp_plan_jog(NULL, &plan, &regs, 20.0, 40.0, 40.0), STEPRAMP_ENULL);
     CHECK_EQ(stepramp_plan_jog(&dev, NULL, &regs, 20.0, 40.0, 40.0), STEPRAMP_ENULL);

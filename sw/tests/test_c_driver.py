@@ -105,10 +105,11 @@ def _driver_result_names() -> dict[int, str]:
 
 DRIVER_RESULTS = _driver_result_names()
 
-#: The Python driver's own ValueErrors of plan_jog -> the C driver's results.
+#: The Python driver's own ValueErrors of plan_jog and plan -> the C driver's results.
 JOG_ERROR_KEYS = {
     "the jog speed must be a finite non-zero number": "STEPRAMP_EJOG_SPEED",
     "does not fit the jog's shortest interval": "STEPRAMP_EGAP",
+    "does not fit the shortest interval of the move": "STEPRAMP_EGAP",
 }
 
 
@@ -375,8 +376,7 @@ def random_jogs(seed: int, count: int) -> list[dict[str, Any]]:
 def test_jog_like_the_python_driver(lib: ctypes.CDLL) -> None:
     """stepramp_jog writes what StepRamp.jog writes (the plan's registers, the segment registers, START), and the
     moves after it what StepRamp.move writes (the segment registers cleared once); or both fail alike, writing
-    nothing. The moves are slow enough for the STEP width + space, which StepRamp.plan checks and the C move does
-    not (only the jog does)."""
+    nothing. The moves are slow enough for the STEP width + space (test_a_move_too_fast_for_the_step_gap)."""
     seed = 2026_0512
     print(f"seed {seed}")
     jogs = random_jogs(seed, RANDOM_COUNT)
@@ -393,6 +393,17 @@ def test_jog_like_the_python_driver(lib: ctypes.CDLL) -> None:
     assert not mismatches, f"{len(mismatches)} calls differ:\n" + "\n".join(mismatches[:5])
     assert {"jog OK", "jog EGAP", "jog ETOOFAST", "jog EJOG_SPEED"} <= set(results), results
     assert results["jog OK"] >= RANDOM_COUNT // 2 and results["move OK"] >= RANDOM_COUNT
+
+
+def test_a_move_too_fast_for_the_step_gap(lib: ctypes.CDLL) -> None:
+    """StepRamp.plan and stepramp_plan refuse a move whose shortest interval is below the STEP width + space, alike,
+    writing nothing; one clock more of interval (a slower cruise) passes in both."""
+    # 1 MHz, 400 steps/rev, PRESCALE 4: 20 rad/s cruises at 196 ticks = 784 clocks.
+    outputs = Outputs(mode="stepdir", step_width=684, step_space=101)
+    for speed, want in ((20.0, "STEPRAMP_EGAP"), (19.9, "STEPRAMP_OK")):
+        pair = Pair(lib, 1e6, 400.0, 4, outputs)
+        (py, py_writes), (c, c_writes) = pair.call("move", 4000, 40.0, 40.0, speed)
+        assert py == c == want and py_writes == c_writes, (speed, py, c)
 
 
 def test_core_error_texts_match_the_register_map(lib: ctypes.CDLL) -> None:
