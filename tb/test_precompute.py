@@ -81,6 +81,7 @@ from stepramp.models.engine import (
     tick_times,
 )
 from stepramp.models.engine import phases as model_phases
+from stepramp.sim.engine_bench import SEGMENT_INPUTS
 from stepramp.sim.profiles import PROFILES_BY_NAME, Profile
 from stepramp.sim.runner import run_cocotb
 from tbutil import CLK_PERIOD_NS, build_dir, cocotb, start_clock_and_reset
@@ -331,16 +332,11 @@ def rule_order_plans() -> list[Move]:
 MOVE_INPUTS = ("sa", "sd", "c_first", "c_last", "c_sa", "c_sd", "accel_seed", "decel_seed", "cruise", "stop_ratio")
 
 
-#: The segment inputs (docs/algorithm.md, "Changes while moving"): 0 for a move from rest to rest, which is what
-#: this bench plays (tb/test_engine_segments.py plays segments through the engine).
-SEGMENT_INPUTS = ("head_down", "endless", "head_index", "run_stop", "head_prod")
-
-
 def drive_move(dut: Any, plan: Plan) -> None:
     dut.l.value = (plan.steps - 1) % (1 << 31)  # the engine's p_l = steps - 1 (all ones for N = 0)
     for name in MOVE_INPUTS:
         getattr(dut, name).value = getattr(plan, name)
-    for name in SEGMENT_INPUTS:
+    for name in SEGMENT_INPUTS:  # 0: a move from rest (tb/test_engine_segments.py plays segments through the engine)
         getattr(dut, name).value = 0
 
 

@@ -22,7 +22,6 @@ from stepramp.models.engine import (
     accumulate,
     change_edges,
     change_pulse,
-    interval_values,
     segment_stop_length,
     segment_stop_values,
     segment_ticks,
@@ -113,14 +112,6 @@ def _random_case(rng: random.Random) -> Case | None:
     if fclk / max(v, u) < 80.0:  # faster than the engine allows (64 clocks): not a case the driver plans
         return None
     return Case.of(u, rng.choice([None, rng.randint(0, 3000)]), accel, decel, speed, spr, fclk)
-
-
-def test_a_move_from_rest_is_the_segment_with_head_up_at_index_0() -> None:
-    # The segment's rules reduce to those of a move (sw/tests/test_model.py judges those against physics).
-    for profile in PROFILES[:16]:
-        plan = plan_move(**profile.args())
-        seg = Segment.of_move(plan)
-        assert segment_values(seg, seg.length or 0) == list(interval_values(plan)), profile.name
 
 
 def test_the_judge_from_rest_is_the_ideal_move() -> None:

@@ -42,50 +42,64 @@ def value_runs(plan: Plan) -> Iterator[tuple[int, int]]:
     """interval_values run-length coded: (Q32.32 value, count) for intervals 1 .. L, in order.
 
     Every interval rule 7 gives (cruise, sa < i < sd) is in one run, the whole cruise at once; every other interval
-    is a run of one, from the recurrences as the spec runs them. Time and memory are those of the ramps.
+    is a run of one, from the recurrences as the spec runs them. Time and memory are those of the ramps. (A move
+    from rest is the segment with an up head at index 0: segment_runs.)
     """
-    length = plan.steps - 1
-    sa, sd = plan.sa, plan.sd
-    c_first = plan.c_first << _SHIFT
-    c_last = plan.c_last << _SHIFT
-    c_sa = plan.c_sa << _SHIFT
-    c_sd = plan.c_sd << _SHIFT
-    cruise = plan.cruise
-    # accel recurrence: acc_val = A_n, acc_r its remainder
-    acc_n, acc_val, acc_r = 0, plan.accel_seed, 0
-    # decel recurrence: dec_val = D_m (dec_m is None until the first decel value is emitted)
+    from stepramp.board.change import Segment  # the board layer's Segment; nothing there imports the models
+
+    return segment_runs(Segment.of_move(plan))
+
+
+def segment_runs(seg: Segment) -> Iterator[tuple[int, int]]:
+    """A segment's interval values run-length coded, by the rules of docs/algorithm.md ("Which value each interval
+    gets", and "Changes while moving" for the head and endless segments): c_first, c_last, c_sa, c_sd, the head (up:
+    A_(n0+i-1) from A_(n0) = accel_seed; down: D_(K-i) from D_(K-2) = accel_seed), the final decel D_(L-i), cruise.
+    An endless segment's cruise is one endless run of runs of 2^31 - 1."""
+    endless = seg.length is None
+    length = -1 if seg.length is None else seg.length  # -1: no interval is the last, none is past sd
+    sa, sd = seg.sa, (-1 if endless else seg.sd)
+    head_down = seg.head == "down"
+    head_n, head_val, head_r = seg.head_index, seg.accel_seed, 0  # up: A_n; down: D_(K-head_i)
+    head_i = 2
+    # the final decel recurrence: dec_val = D_m (dec_m is None until the first decel value is emitted)
     dec_m: int | None = None
-    dec_val, dec_r = plan.decel_seed, 0
+    dec_val, dec_r = seg.decel_seed, 0
     i = 1
-    while i <= length:
+    while endless or i <= length:
         if i == 1:
-            value = c_first
+            value = seg.c_first
         elif i == length:
-            value = c_last
+            value = seg.c_last
         elif i == sa:
-            value = c_sa
+            value = seg.c_sa
         elif i == sd:
-            value = c_sd
+            value = seg.c_sd
+        elif i < sa and not head_down:
+            while head_n < seg.head_index + i - 1:  # A_n from A_(n-1), den 4 n + 1 at the absolute index
+                head_n += 1
+                q, head_r = divmod(2 * head_val + head_r, 4 * head_n + 1)
+                head_val -= q
+            value = head_val
         elif i < sa:
-            while acc_n < i - 1:  # A_n from A_{n-1}
-                acc_n += 1
-                q, acc_r = divmod(2 * acc_val + acc_r, 4 * acc_n + 1)
-                acc_val -= q
-            value = acc_val << _SHIFT
-        elif i > sd:
+            while head_i < i:  # D_(m-1) from D_m, m = K - head_i
+                q, head_r = divmod(2 * head_val + head_r, 4 * (seg.head_index - head_i) - 1)
+                head_val += q
+                head_i += 1
+            value = head_val
+        elif not endless and i > sd:
             if dec_m is None:  # first decel value: D_{m0} = decel_seed, r = 0
                 dec_m = length - sd - 1
             while dec_m > length - i:  # D_{m-1} from D_m
                 q, dec_r = divmod(2 * dec_val + dec_r, 4 * dec_m - 1)
                 dec_val += q
                 dec_m -= 1
-            value = dec_val << _SHIFT
+            value = dec_val
         else:  # rule 7 holds for i .. min(sd, L) - 1 (i > sa, i > 1, and no rule before it matches up to there)
-            count = min(sd, length) - i
-            yield cruise, count
+            count = (1 << 31) - 1 if endless else min(sd, length) - i
+            yield seg.cruise, count
             i += count
             continue
-        yield value, 1
+        yield value << _SHIFT, 1
         i += 1
 
 
@@ -448,52 +462,8 @@ def first_space_fault(move_edges: Iterable[int], gap: int) -> int | None:
 
 
 def segment_values(seg: Segment, count: int) -> list[int]:
-    """The Q32.32 values of the segment's intervals 1 .. count (at most its length), by the rules of the spec:
-    c_first, c_last, c_sa, c_sd, the head (up: A_(n0+i-1); down: D_(K-i)), the final decel D_(L-i), cruise."""
-    if seg.length is not None:
-        count = min(count, seg.length)
-    length = seg.length if seg.length is not None else -1  # -1: no interval is the last, none is past sd
-    sa, sd = seg.sa, (seg.sd if seg.length is not None else -1)
-    head_down = seg.head == "down"
-    head_n, head_val, head_r = seg.head_index, seg.accel_seed, 0  # up: A_n; down: D_(K-head_i)
-    head_i = 2
-    dec_m: int | None = None
-    dec_val, dec_r = seg.decel_seed, 0
-    out = []
-    for i in range(1, count + 1):
-        if i == 1:
-            value = seg.c_first
-        elif i == length:
-            value = seg.c_last
-        elif i == sa:
-            value = seg.c_sa
-        elif i == sd:
-            value = seg.c_sd
-        elif i < sa and not head_down:
-            while head_n < seg.head_index + i - 1:  # A_n from A_(n-1), den 4 n + 1 at the absolute index
-                head_n += 1
-                q, head_r = divmod(2 * head_val + head_r, 4 * head_n + 1)
-                head_val -= q
-            value = head_val
-        elif i < sa:
-            while head_i < i:  # D_(m-1) from D_m, m = K - head_i
-                q, head_r = divmod(2 * head_val + head_r, 4 * (seg.head_index - head_i) - 1)
-                head_val += q
-                head_i += 1
-            value = head_val
-        elif sd >= 0 and i > sd:
-            if dec_m is None:  # first decel value: D_(m0) = decel_seed, r = 0
-                dec_m = length - sd - 1
-            while dec_m > length - i:  # D_(m-1) from D_m
-                q, dec_r = divmod(2 * dec_val + dec_r, 4 * dec_m - 1)
-                dec_val += q
-                dec_m -= 1
-            value = dec_val
-        else:
-            out.append(seg.cruise)
-            continue
-        out.append(value << _SHIFT)
-    return out
+    """The Q32.32 values of the segment's intervals 1 .. count (at most its length): segment_runs, expanded."""
+    return [value for value, n in _take_runs(segment_runs(seg), count) for _ in range(n)]
 
 
 def segment_ticks(seg: Segment, count: int, acc: int = 0) -> list[int]:
