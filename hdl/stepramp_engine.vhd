@@ -8,6 +8,7 @@ library ieee;
   use ieee.numeric_std.all;
 
 library work;
+  use work.stepramp_pkg.all;
   -- C_ERR_* (the err_code values): one source with STATUS.ERR_CODE, the C header and the docs.
   use work.stepramp_regs_pkg.all;
 
@@ -17,25 +18,31 @@ entity stepramp_engine is
     G_PRESCALE_WIDTH : positive := 16
   );
   port (
-    clk        : in    std_logic;
-    rst        : in    std_logic;
-    load       : in    std_logic;
-    start      : in    std_logic;
-    soft_stop  : in    std_logic;
-    hard_stop  : in    std_logic;
-    steps      : in    std_logic_vector(30 downto 0);
-    direction  : in    std_logic;
-    prescale   : in    std_logic_vector(G_PRESCALE_WIDTH - 1 downto 0);
-    c_first    : in    std_logic_vector(47 downto 0);
-    c_last     : in    std_logic_vector(47 downto 0);
-    sa         : in    std_logic_vector(30 downto 0);
-    c_sa       : in    std_logic_vector(47 downto 0);
-    sd         : in    std_logic_vector(30 downto 0);
-    c_sd       : in    std_logic_vector(47 downto 0);
-    accel_seed : in    std_logic_vector(47 downto 0);
-    decel_seed : in    std_logic_vector(47 downto 0);
-    cruise     : in    std_logic_vector(63 downto 0);
-    stop_ratio : in    std_logic_vector(31 downto 0);
+    clk       : in    std_logic;
+    rst       : in    std_logic;
+    load      : in    std_logic;
+    start     : in    std_logic;
+    soft_stop : in    std_logic;
+    hard_stop : in    std_logic;
+    -- A take-over: the staged segment (the move inputs) takes over at pulse change_at (docs/algorithm.md, "The
+    -- take-over, the queue and the script contract"). chg_pend: accepted and waiting; chg_refused: a strobe.
+    change      : in    std_logic;
+    change_at   : in    std_logic_vector(30 downto 0);
+    chg_pend    : out   std_logic;
+    chg_refused : out   std_logic;
+    steps       : in    std_logic_vector(30 downto 0);
+    direction   : in    std_logic;
+    prescale    : in    std_logic_vector(G_PRESCALE_WIDTH - 1 downto 0);
+    c_first     : in    std_logic_vector(47 downto 0);
+    c_last      : in    std_logic_vector(47 downto 0);
+    sa          : in    std_logic_vector(30 downto 0);
+    c_sa        : in    std_logic_vector(47 downto 0);
+    sd          : in    std_logic_vector(30 downto 0);
+    c_sd        : in    std_logic_vector(47 downto 0);
+    accel_seed  : in    std_logic_vector(47 downto 0);
+    decel_seed  : in    std_logic_vector(47 downto 0);
+    cruise      : in    std_logic_vector(63 downto 0);
+    stop_ratio  : in    std_logic_vector(31 downto 0);
     -- The segment (docs/algorithm.md, "Changes while moving"): all 0 for a move from rest to rest.
     head_down  : in    std_logic;
     endless    : in    std_logic;
@@ -128,6 +135,20 @@ architecture rtl of stepramp_engine is
   signal gap_left : unsigned(16 downto 0);
   -- A soft stop request waits for its pulse p (the first pulse edge after the edge that sampled it).
   signal sreq : std_logic;
+  -- Take-over: chg_pend_r an accepted change waits for its pulse P; chg_hit STEP_COUNT = P (registered: pulse P - 1
+  -- has been emitted); tk the take-over itself (two clocks after pulse P - 1's edge); tk_cur the interval now
+  -- counting is interval P (a soft stop is then decided at pulse P + 1); tk_d1 and tk_d2 delay tk until the parameter
+  -- check of the new segment is ready; cur_err the code the motion ends with at its last pulse (NONE but after a
+  -- take-over of a segment that failed the check).
+  signal chg_pend_r    : std_logic;
+  signal chg_hit       : std_logic;
+  signal tk            : std_logic;
+  signal pc_latch      : std_logic; -- the precompute latches c_first and the seeds (start or take-over)
+  signal tk_cur        : std_logic;
+  signal tk_d1         : std_logic;
+  signal tk_d2         : std_logic;
+  signal chg_refused_r : std_logic;
+  signal cur_err       : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
 
   -- Base timer.
   signal tmr_restart : std_logic;
@@ -242,6 +263,7 @@ begin
       rst        => rst,
       begin_move => d_begin,
       setup      => d_setup,
+      take       => tk,
       advance    => adv_r,
       take_alt   => alt_r,
       finish     => d_finish,
@@ -249,7 +271,7 @@ begin
       l          => std_logic_vector(p_l),
       sa         => std_logic_vector(p_sa),
       sd         => std_logic_vector(p_sd),
-      latch      => d_latch,
+      latch      => pc_latch,
       c_first    => c_first,
       c_last     => std_logic_vector(p_c_last),
       c_sa       => std_logic_vector(p_c_sa),
@@ -348,7 +370,7 @@ begin
   -- What this edge does, from registered state and the strobes only (no arithmetic): read by seq_proc and by the
   -- precompute, so that both act at the same edge.
   decide_proc : process (phase, chk_code, n_zero, n_one, sreq, tick, cnt_one, gap_nz, alt_kind_m, alt_ok, alt_code,
-                         cur_last, nxt_ok_m, nxt_code, hard_stop, busy_r, idle_r, start) is
+                         cur_last, cur_err, nxt_ok_m, nxt_code, hard_stop, busy_r, idle_r, start) is
 
     variable v_pulse  : std_logic;
     variable v_load   : std_logic;
@@ -428,6 +450,7 @@ begin
               start_if_ready(alt_ok, alt_code, v_alt);
             elsif (cur_last = '1') then
               v_finish := '1';
+              v_err    := cur_err;
             else
               start_if_ready(nxt_ok_m, nxt_code, v_load);
             end if;
@@ -459,14 +482,45 @@ begin
 
   end process decide_proc;
 
-  d_begin <= idle_r and start;
-  d_latch <= idle_r and (load or (start and not loaded));
-  d_setup <= '1' when phase = C_PH_SETUP else
-             '0';
+  d_begin  <= idle_r and start;
+  d_latch  <= idle_r and (load or (start and not loaded));
+  d_setup  <= '1' when phase = C_PH_SETUP else
+              '0';
+  tk       <= chg_hit and chg_pend_r;
+  pc_latch <= d_latch or tk;
 
   seq_proc : process (clk) is
 
     variable v_dir_all : unsigned(31 downto 0);
+
+    -- The move inputs (the staging registers) become the active copy: at a start, and at a take-over.
+
+    procedure latch_move is
+    begin
+
+      p_l <= unsigned(steps) - 1;
+      -- For the parameter check, off its path: sd - sa, and L - sd = N + not sd (= N - sd - 1).
+      p_sd_sa       <= ('0' & unsigned(sd)) - ('0' & unsigned(sa));
+      p_l_sd        <= ('0' & unsigned(steps)) + ('1' & not unsigned(sd));
+      p_prescale    <= unsigned(prescale);
+      p_c_first0    <= int_zero(c_first);
+      p_c_last      <= unsigned(c_last);
+      p_sa          <= unsigned(sa);
+      p_c_sa        <= unsigned(c_sa);
+      p_sd          <= unsigned(sd);
+      p_c_sd        <= unsigned(c_sd);
+      p_accel_seed0 <= int_zero(accel_seed);
+      p_decel_seed  <= unsigned(decel_seed);
+      p_cruise      <= unsigned(cruise);
+      p_stop_ratio  <= unsigned(stop_ratio);
+      -- The segment (head_index and head_prod go to the precompute only), and its check's two sums.
+      p_k_sa      <= ('0' & unsigned(head_index)) - ('0' & unsigned(sa));
+      p_n0_sa     <= ('0' & unsigned(head_index)) + ('0' & unsigned(sa)) - 1;
+      p_head_down <= head_down;
+      p_endless   <= endless;
+      p_run_stop  <= unsigned(run_stop);
+
+    end procedure latch_move;
 
     -- A pulse edge starts interval p + 1: its length in ticks, whether it is the last and its state.
 
@@ -509,33 +563,14 @@ begin
 
           if (d_latch = '1') then
             loaded <= '1';
-            p_l    <= unsigned(steps) - 1;
-            -- For the parameter check, off its path: sd - sa, and L - sd = N + not sd (= N - sd - 1).
-            p_sd_sa       <= ('0' & unsigned(sd)) - ('0' & unsigned(sa));
-            p_l_sd        <= ('0' & unsigned(steps)) + ('1' & not unsigned(sd));
-            p_prescale    <= unsigned(prescale);
-            p_c_first0    <= int_zero(c_first);
-            p_c_last      <= unsigned(c_last);
-            p_sa          <= unsigned(sa);
-            p_c_sa        <= unsigned(c_sa);
-            p_sd          <= unsigned(sd);
-            p_c_sd        <= unsigned(c_sd);
-            p_accel_seed0 <= int_zero(accel_seed);
-            p_decel_seed  <= unsigned(decel_seed);
-            p_cruise      <= unsigned(cruise);
-            p_stop_ratio  <= unsigned(stop_ratio);
-            -- The segment (head_index and head_prod go to the precompute only), and its check's two sums.
-            p_k_sa      <= ('0' & unsigned(head_index)) - ('0' & unsigned(sa));
-            p_n0_sa     <= ('0' & unsigned(head_index)) + ('0' & unsigned(sa)) - 1;
-            p_head_down <= head_down;
-            p_endless   <= endless;
-            p_run_stop  <= unsigned(run_stop);
+            latch_move;
           end if;
 
           if (start = '1') then
             dir_r        <= direction;
             busy_r       <= '1';
             err_code_r   <= C_ERR_NONE;
+            cur_err      <= C_ERR_NONE;
             step_count_r <= (others => '0');
             tmr_restart  <= '1';
             sreq         <= '0';
@@ -607,21 +642,62 @@ begin
 
       -- Soft stop request: taken while busy and no stop is in effect; a pulse consumes the request it decided on
       -- (a request sampled at a pulse edge is for the next pulse).
-      if (d_pulse = '1') then
+      -- (At pulse P of a take-over the request waits for pulse P + 1: tk_cur.)
+      if (d_pulse = '1' and tk_cur = '0') then
         sreq <= '0';
+      end if;
+      if (d_pulse = '1') then
+        tk_cur <= '0';
       end if;
       if (soft_stop = '1' and busy_r = '1' and stop_mode_m = '0' and d_alt = '0') then
         sreq <= '1';
       end if;
 
+      -- Take-over (docs/algorithm.md, "The take-over, the queue and the script contract"). A commit is accepted while
+      -- busy, with nothing pending, no soft stop requested or in effect (nor one in this write), and pulse P - 1 not
+      -- yet emitted (STEP_COUNT < P); else refused (the motion goes on).
+      chg_hit       <= to_sl(step_count_r = unsigned(change_at));
+      chg_refused_r <= '0';
+      tk_d1         <= tk;
+      tk_d2         <= tk_d1;
+      if (change = '1') then
+        if (busy_r = '1' and chg_pend_r = '0' and sreq = '0' and stop_mode_m = '0' and soft_stop = '0' and
+            step_count_r < unsigned(change_at) and d_finish = '0') then
+          chg_pend_r <= '1';
+        else
+          chg_refused_r <= '1';
+        end if;
+      end if;
+      -- A soft stop sampled before the take-over drops the change (it is decided as in the running segment).
+      if (soft_stop = '1' and chg_pend_r = '1' and tk = '0') then
+        chg_pend_r <= '0';
+      end if;
+      if (tk = '1') then
+        chg_pend_r <= '0';
+        tk_cur     <= '1';
+        latch_move;
+        -- Interval P was started as the running segment's last, or not: the new segment decides (tk_d2).
+        cur_last <= '0';
+        cur_err  <= C_ERR_NONE;
+      end if;
+      -- The new segment's parameter check is ready: a bad segment, or one of no interval, ends the motion at pulse P.
+      if (tk_d2 = '1' and (chk_code /= C_ERR_NONE or n_one = '1' or n_zero = '1')) then
+        cur_last <= '1';
+        cur_err  <= chk_code;
+      end if;
+
       if (d_finish = '1') then
-        done_r      <= '1';
-        busy_r      <= '0';
-        state_r     <= C_ST_STOP;
-        cur_delay_r <= (others => '0');
-        phase       <= C_PH_IDLE;
-        idle_r      <= '1';
-        sreq        <= '0';
+        -- A change still pending when the motion ends normally was never taken (its pulse was past the end).
+        chg_refused_r <= chg_pend_r and not hard_stop and to_sl(d_err = C_ERR_NONE);
+        chg_pend_r    <= '0';
+        tk_cur        <= '0';
+        done_r        <= '1';
+        busy_r        <= '0';
+        state_r       <= C_ST_STOP;
+        cur_delay_r   <= (others => '0');
+        phase         <= C_PH_IDLE;
+        idle_r        <= '1';
+        sreq          <= '0';
         if (d_err /= C_ERR_NONE) then
           error_r    <= '1';
           err_code_r <= d_err;
@@ -635,27 +711,34 @@ begin
       end if;
 
       if (rst = '1') then
-        phase        <= C_PH_IDLE;
-        idle_r       <= '1';
-        loaded       <= '0';
-        busy_r       <= '0';
-        done_r       <= '0';
-        error_r      <= '0';
-        gap_left     <= (others => '0');
-        gap_nz       <= '0';
-        err_code_r   <= C_ERR_NONE;
-        step_r       <= '0';
-        dir_r        <= '0';
-        state_r      <= C_ST_STOP;
-        position_r   <= (others => '0');
-        elec_pos_r   <= (others => '0');
-        step_count_r <= (others => '0');
-        cur_delay_r  <= (others => '0');
-        tmr_restart  <= '0';
-        adv_r        <= '0';
-        alt_r        <= '0';
-        taken_r      <= '0';
-        sreq         <= '0';
+        phase         <= C_PH_IDLE;
+        idle_r        <= '1';
+        loaded        <= '0';
+        busy_r        <= '0';
+        done_r        <= '0';
+        error_r       <= '0';
+        gap_left      <= (others => '0');
+        gap_nz        <= '0';
+        err_code_r    <= C_ERR_NONE;
+        step_r        <= '0';
+        dir_r         <= '0';
+        state_r       <= C_ST_STOP;
+        position_r    <= (others => '0');
+        elec_pos_r    <= (others => '0');
+        step_count_r  <= (others => '0');
+        cur_delay_r   <= (others => '0');
+        tmr_restart   <= '0';
+        adv_r         <= '0';
+        alt_r         <= '0';
+        taken_r       <= '0';
+        sreq          <= '0';
+        chg_pend_r    <= '0';
+        chg_hit       <= '0';
+        chg_refused_r <= '0';
+        tk_cur        <= '0';
+        tk_d1         <= '0';
+        tk_d2         <= '0';
+        cur_err       <= C_ERR_NONE;
         -- Not state, but it feeds the timer, which then runs defined (as P = 1) from reset on.
         p_prescale <= (others => '0');
       end if;
@@ -663,16 +746,18 @@ begin
 
   end process seq_proc;
 
-  step       <= step_r;
-  dir        <= dir_r;
-  busy       <= busy_r;
-  done       <= done_r;
-  error      <= error_r;
-  err_code   <= err_code_r;
-  state      <= state_r;
-  position   <= std_logic_vector(position_r);
-  elec_pos   <= std_logic_vector(elec_pos_r);
-  step_count <= std_logic_vector(step_count_r);
-  cur_delay  <= std_logic_vector(cur_delay_r);
+  chg_pend    <= chg_pend_r;
+  chg_refused <= chg_refused_r;
+  step        <= step_r;
+  dir         <= dir_r;
+  busy        <= busy_r;
+  done        <= done_r;
+  error       <= error_r;
+  err_code    <= err_code_r;
+  state       <= state_r;
+  position    <= std_logic_vector(position_r);
+  elec_pos    <= std_logic_vector(elec_pos_r);
+  step_count  <= std_logic_vector(step_count_r);
+  cur_delay   <= std_logic_vector(cur_delay_r);
 
 end architecture rtl;

@@ -22,10 +22,12 @@ entity stepramp_precompute is
     latch      : in    std_logic;
     begin_move : in    std_logic;
     setup      : in    std_logic;
-    advance    : in    std_logic;
-    take_alt   : in    std_logic;
-    finish     : in    std_logic;
-    cur_state  : in    std_logic_vector(1 downto 0);
+    -- A take-over (with latch): the segment's interval 1 is prepared next, from c_first and the fraction carried.
+    take      : in    std_logic;
+    advance   : in    std_logic;
+    take_alt  : in    std_logic;
+    finish    : in    std_logic;
+    cur_state : in    std_logic_vector(1 downto 0);
     -- The move (the engine's active copy).
     l          : in    std_logic_vector(30 downto 0);
     sa         : in    std_logic_vector(30 downto 0);
@@ -70,6 +72,7 @@ architecture rtl of stepramp_precompute is
 
   -- Precompute of the next interval (constants, not an enum, so that GHDL's VPI shows a plain vector).
   constant C_PC_IDLE   : std_logic_vector(2 downto 0) := "000";
+  constant C_PC_TAKE   : std_logic_vector(2 downto 0) := "001";
   constant C_PC_DECIDE : std_logic_vector(2 downto 0) := "010";
   constant C_PC_WAIT   : std_logic_vector(2 downto 0) := "011";
   constant C_PC_ADD    : std_logic_vector(2 downto 0) := "100";
@@ -335,6 +338,58 @@ begin
 
     end procedure prepare_unless_last;
 
+    -- The segment's first interval is prepared (at setup, or in a take-over): its ramp phase, the counters and flags
+    -- as after the DECIDE of interval 1, and the accel seed A_0 loaded through the unit (at index 0), like the decel
+    -- seed later: the unit sees the start of every value sequence, so a closed-form mode can take its constants
+    -- from the seeds.
+
+    procedure begin_segment is
+    begin
+
+      if (p_sa(30 downto 1) /= 0 and head_down = '1') then
+        nxt_state_r <= C_ST_DECEL;
+      elsif (p_sa(30 downto 1) /= 0) then
+        nxt_state_r <= C_ST_ACCEL;
+      elsif (p_sd(30 downto 1) /= 0 or endless = '1') then
+        nxt_state_r <= C_ST_RUN;
+      else
+        nxt_state_r <= C_ST_DECEL;
+      end if;
+
+      nxt_head_r <= to_sl(p_sa(30 downto 1) /= 0);
+      nxt_last_r <= to_sl(p_l = 1) and not endless;
+
+      pc_j <= to_unsigned(1, 31);
+      -- Interval 1 needs no DECIDE: the flags start as after it, (1 < sa) and (1 < sd).
+      le_sa <= '0';
+      le_sd <= '0';
+
+      if (p_sa(30 downto 1) /= 0) then
+        le_sa <= '1';
+      end if;
+
+      if (p_sd(30 downto 1) /= 0 or endless = '1') then
+        le_sd <= '1';
+      end if;
+
+      -- An endless move never counts pc_m down (until a soft stop sets it).
+      pc_m      <= p_l - 1;
+      pc_m_zero <= '0';
+
+      if (endless = '1') then
+        pc_m <= (others => '1');
+      end if;
+
+      head_started <= '0';
+      head_ctr     <= step_head(head_ctr, head_down);
+      dec_started  <= '0';
+      first_pend   <= '1';
+      request('1', '0', (others => '0'));
+      req_alt_r    <= '0';
+      seed_wait    <= '1';
+
+    end procedure begin_segment;
+
   begin
 
     if rising_edge(clk) then
@@ -379,6 +434,15 @@ begin
         when C_PC_IDLE =>
 
           null;
+
+        when C_PC_TAKE =>
+
+          -- Take-over, second clock: the segment's interval 1 is c_first (held in nxt_d and nxt_acc since latch)
+          -- through the accumulator step, so that the fraction after interval P carries on.
+          begin_segment;
+          v_r      <= nxt_d_r(31 downto 0) & nxt_acc;
+          v_range  <= '0';
+          pc_state <= C_PC_ADD;
 
         when C_PC_DECIDE =>
 
@@ -553,43 +617,7 @@ begin
         nxt_range <= '0';
         nxt_zero  <= '0';
         nxt_ok_r  <= '1';
-        if (p_sa(30 downto 1) /= 0 and head_down = '1') then
-          nxt_state_r <= C_ST_DECEL;
-        elsif (p_sa(30 downto 1) /= 0) then
-          nxt_state_r <= C_ST_ACCEL;
-        elsif (p_sd(30 downto 1) /= 0 or endless = '1') then
-          nxt_state_r <= C_ST_RUN;
-        else
-          nxt_state_r <= C_ST_DECEL;
-        end if;
-        nxt_head_r <= to_sl(p_sa(30 downto 1) /= 0);
-        nxt_last_r <= to_sl(p_l = 1) and not endless;
-
-        pc_j <= to_unsigned(1, 31);
-        -- Interval 1 needs no DECIDE: the flags start as after it, (1 < sa) and (1 < sd).
-        le_sa <= '0';
-        le_sd <= '0';
-        if (p_sa(30 downto 1) /= 0) then
-          le_sa <= '1';
-        end if;
-        if (p_sd(30 downto 1) /= 0 or endless = '1') then
-          le_sd <= '1';
-        end if;
-        -- An endless move never counts pc_m down (until a soft stop sets it).
-        pc_m      <= p_l - 1;
-        pc_m_zero <= '0';
-        if (endless = '1') then
-          pc_m <= (others => '1');
-        end if;
-        head_started <= '0';
-        head_ctr     <= step_head(head_ctr, head_down);
-        dec_started  <= '0';
-        first_pend   <= '1';
-        -- Load the accel seed A_0 through the unit (at index 0), like the decel seed later: the unit sees the
-        -- start of every value sequence, so a closed-form mode can take its constants from the seeds.
-        request('1', '0', (others => '0'));
-        req_alt_r <= '0';
-        seed_wait <= '1';
+        begin_segment;
       end if;
 
       -- Pulse edge: the next interval starts; an alternative still being prepared is dropped (the unit is flushed
@@ -679,6 +707,19 @@ begin
           stop_m   <= v_cur_prod(46 downto 16);
           stop_big <= v_prod_big;
         end if;
+      end if;
+
+      -- Take-over, first clock (two clocks after pulse P - 1's edge; latch is set too): whatever was prepared for
+      -- interval P + 1 is dropped, and no soft-stop alternative is prepared for pulse P (a request then waits for
+      -- pulse P + 1: stepramp_engine).
+      if (take = '1') then
+        nd_flush   <= '1';
+        req_r      <= '0';
+        seed_wait  <= '0';
+        nxt_ok_r   <= '0';
+        alt_kind_r <= C_ALT_IGNORE;
+        alt_ok_r   <= '0';
+        pc_state   <= C_PC_TAKE;
       end if;
 
       if (finish = '1') then

@@ -25,9 +25,13 @@ entity stepramp_regfile is
     err   : out   std_logic;
     irq   : out   std_logic;
     -- Engine commands and move registers.
-    start      : out   std_logic;
-    soft_stop  : out   std_logic;
-    hard_stop  : out   std_logic;
+    start     : out   std_logic;
+    soft_stop : out   std_logic;
+    hard_stop : out   std_logic;
+    -- A take-over commit (CTRL.CHANGE, checked here against idle, pending and direction; the engine checks the rest)
+    -- and its pulse (docs/algorithm.md, "The take-over, the queue and the script contract").
+    change     : out   std_logic;
+    change_at  : out   std_logic_vector(30 downto 0);
     steps      : out   std_logic_vector(30 downto 0);
     direction  : out   std_logic;
     prescale   : out   std_logic_vector(15 downto 0);
@@ -67,7 +71,10 @@ entity stepramp_regfile is
     eng_position   : in    std_logic_vector(31 downto 0);
     eng_step_count : in    std_logic_vector(30 downto 0);
     eng_cur_delay  : in    std_logic_vector(31 downto 0);
-    dir_fault      : in    std_logic
+    -- The engine holds an accepted change until its pulse (chg_pend), or refused one (chg_refused strobe).
+    eng_chg_pend    : in    std_logic;
+    eng_chg_refused : in    std_logic;
+    dir_fault       : in    std_logic
   );
 end entity stepramp_regfile;
 
@@ -83,7 +90,7 @@ architecture rtl of stepramp_regfile is
   constant C_FIRST_CFG_W  : natural := C_REG_DRIVE / 4;
   constant C_LAST_CFG_W   : natural := C_REG_STEP_SPACE / 4;
   constant C_FIRST_SEG_W  : natural := C_REG_SEGMENT / 4;
-  constant C_LAST_W       : natural := C_REG_HEAD_PROD_HI / 4;
+  constant C_LAST_W       : natural := C_REG_CHANGE_AT / 4;
   constant C_ERR_CODE_MSB : natural := C_STATUS_ERR_CODE_LSB + C_STATUS_ERR_CODE_W - 1;
   constant C_WORDS        : natural := 2 ** (C_ADDR_BITS - 2);
 
@@ -121,6 +128,11 @@ architecture rtl of stepramp_regfile is
   -- STEPS holds -2^31 (a START is then rejected), registered as STEPS is written, so that the START path reads a
   -- flip-flop instead of a 32-bit compare (the clock, issue 12).
   signal steps_bad : std_logic;
+  -- A take-over commit on its way to the engine, and a queued move (started at the engine's next done).
+  signal change_r : std_logic;
+  signal q_pend   : std_logic;
+  -- STATUS.PENDING: the staging registers are locked until the change is taken or the queued move started.
+  signal locked : std_logic;
 
   -- Word index of a byte offset.
   function word (
@@ -275,6 +287,7 @@ begin
       start_r     <= '0';
       soft_stop_r <= '0';
       hard_stop_r <= '0';
+      change_r    <= '0';
       pos_load_r  <= '0';
       mapped      := C_MAPPED_WORDS(w) = '1';
 
@@ -289,6 +302,10 @@ begin
         elsif (C_CONFIG_WORDS(w) = '1' and eng_busy = '1') then
           error_flag <= '1';
           err_code_r <= C_ERR_CFG_BUSY;
+        elsif (C_STORAGE_WORDS(w) = '1' and locked = '1') then
+          -- (configuration words are refused above: the core is busy while anything is pending)
+          error_flag <= '1';
+          err_code_r <= C_ERR_STAGED;
         elsif (C_STORAGE_WORDS(w) = '1') then
 
           for i in mem'range loop
@@ -323,6 +340,26 @@ begin
           end if;
           soft_stop_r <= new_ctrl(C_CTRL_SOFT_STOP_LSB);
           hard_stop_r <= new_ctrl(C_CTRL_HARD_STOP_LSB);
+
+          -- A stop drops a queued move, unless it comes with the QUEUE that stages the move after it.
+          if ((new_ctrl(C_CTRL_SOFT_STOP_LSB) = '1' or new_ctrl(C_CTRL_HARD_STOP_LSB) = '1') and
+              new_ctrl(C_CTRL_QUEUE_LSB) = '0') then
+            q_pend <= '0';
+          end if;
+
+          -- CHANGE and QUEUE need a running motion, nothing pending, and one of them; CHANGE keeps the direction.
+          if (new_ctrl(C_CTRL_CHANGE_LSB) = '1' or new_ctrl(C_CTRL_QUEUE_LSB) = '1') then
+            if (eng_busy = '0' or locked = '1' or (new_ctrl(C_CTRL_CHANGE_LSB) and new_ctrl(C_CTRL_QUEUE_LSB)) = '1' or
+                (new_ctrl(C_CTRL_CHANGE_LSB) = '1' and mem(word(C_REG_STEPS))(31) /= eng_dir) or
+                (new_ctrl(C_CTRL_QUEUE_LSB) = '1' and steps_bad = '1')) then
+              error_flag <= '1';
+              err_code_r <= C_ERR_CHANGE;
+            elsif (new_ctrl(C_CTRL_CHANGE_LSB) = '1') then
+              change_r <= '1';
+            else
+              q_pend <= '1';
+            end if;
+          end if;
         elsif (w = word(C_REG_STATUS)) then
           clr := merge(x"00000000", wdata, be);
         elsif (w = word(C_REG_POSITION)) then
@@ -368,6 +405,7 @@ begin
         stat_v(C_STATUS_DONE_LSB)                                := done_flag;
         stat_v(C_STATUS_ERROR_LSB)                               := error_flag;
         stat_v(C_STATUS_DIR_FAULT_LSB)                           := dir_fault;
+        stat_v(C_STATUS_PENDING_LSB)                             := locked;
         stat_v(C_ERR_CODE_MSB downto C_STATUS_ERR_CODE_LSB)      := err_code_r;
 
         rd_v := gate(reset_value(w), C_STORAGE_WORDS(w) = '1') or gate(C_ID_VALUE, w = word(C_REG_ID)) or
@@ -399,9 +437,20 @@ begin
         done_flag <= '1';
       end if;
 
+      -- The queued move starts at the engine's done, as a START written at this edge; an error drops it.
+      if (eng_done = '1' and q_pend = '1') then
+        q_pend  <= '0';
+        start_r <= not eng_error;
+      end if;
+
       if (eng_error = '1') then
         error_flag <= '1';
         err_code_r <= eng_err_code;
+      end if;
+
+      if (eng_chg_refused = '1') then
+        error_flag <= '1';
+        err_code_r <= C_ERR_CHANGE;
       end if;
 
       irq_r <= (done_flag and irq_done_en) or (error_flag and irq_error_en);
@@ -412,6 +461,8 @@ begin
         start_r      <= '0';
         soft_stop_r  <= '0';
         hard_stop_r  <= '0';
+        change_r     <= '0';
+        q_pend       <= '0';
         pos_load_r   <= '0';
         irq_r        <= '0';
         irq_done_en  <= '0';
@@ -443,7 +494,7 @@ begin
   -- word's first write since reset enables every lane, the disabled ones taking the reset value (what mem holds).
   ram_addr <= to_integer(unsigned(addr(C_ADDR_BITS - 1 downto 2)));
 
-  ram_wr_proc : process (wr, ram_addr, wdata, be, eng_busy, written) is
+  ram_wr_proc : process (wr, ram_addr, wdata, be, eng_busy, written, locked) is
 
     variable fresh : std_logic;
 
@@ -462,7 +513,8 @@ begin
     ram_wdata <= merge(reset_value(ram_addr), wdata, be) and storage_mask(ram_addr);
     ram_we    <= (others => '0');
 
-    if (wr = '1' and C_STORAGE_WORDS(ram_addr) = '1' and not (C_CONFIG_WORDS(ram_addr) = '1' and eng_busy = '1')) then
+    if (wr = '1' and C_STORAGE_WORDS(ram_addr) = '1' and not (C_CONFIG_WORDS(ram_addr) = '1' and eng_busy = '1') and
+        locked = '0') then
 
       for b in 0 to 3 loop
 
@@ -506,6 +558,8 @@ begin
   soft_stop <= soft_stop_r;
   hard_stop <= hard_stop_r;
   pos_load  <= pos_load_r;
+  change    <= change_r;
+  locked    <= change_r or eng_chg_pend or q_pend;
   pos_value <= pos_value_r;
 
   -- The signed step count as magnitude and direction (-2^31 is rejected at START above).
@@ -542,6 +596,7 @@ begin
   head_index <= mem(word(C_REG_HEAD_INDEX))(30 downto 0);
   run_stop   <= mem(word(C_REG_RUN_STOP))(30 downto 0);
   head_prod  <= mem(word(C_REG_HEAD_PROD_HI))(15 downto 0) & mem(word(C_REG_HEAD_PROD_LO));
+  change_at  <= mem(word(C_REG_CHANGE_AT))(30 downto 0);
   enable     <= enable_r;
   mode       <= mem(word(C_REG_DRIVE))(C_DRIVE_MODE_LSB + 2 downto C_DRIVE_MODE_LSB);
   ustep_log2 <= mem(word(C_REG_DRIVE))(C_DRIVE_USTEP_LOG2_LSB + 2 downto C_DRIVE_USTEP_LOG2_LSB);

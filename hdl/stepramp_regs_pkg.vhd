@@ -9,7 +9,7 @@ package stepramp_regs_pkg is
 
   -- Decoded address bits and the ID register's value.
   constant C_ADDR_BITS : natural                       := 8;
-  constant C_ID_VALUE  : std_logic_vector(31 downto 0) := x"53520004";
+  constant C_ID_VALUE  : std_logic_vector(31 downto 0) := x"53520005";
 
   -- Byte offsets.
   constant C_REG_ID            : natural := 16#00#;
@@ -47,6 +47,7 @@ package stepramp_regs_pkg is
   constant C_REG_RUN_STOP      : natural := 16#80#;
   constant C_REG_HEAD_PROD_LO  : natural := 16#84#;
   constant C_REG_HEAD_PROD_HI  : natural := 16#88#;
+  constant C_REG_CHANGE_AT     : natural := 16#8C#;
 
   -- Fields: lowest bit and width.
   constant C_CTRL_START_LSB        : natural := 0;
@@ -55,6 +56,10 @@ package stepramp_regs_pkg is
   constant C_CTRL_SOFT_STOP_W      : natural := 1;
   constant C_CTRL_HARD_STOP_LSB    : natural := 2;
   constant C_CTRL_HARD_STOP_W      : natural := 1;
+  constant C_CTRL_CHANGE_LSB       : natural := 3;
+  constant C_CTRL_CHANGE_W         : natural := 1;
+  constant C_CTRL_QUEUE_LSB        : natural := 4;
+  constant C_CTRL_QUEUE_W          : natural := 1;
   constant C_CTRL_IRQ_DONE_EN_LSB  : natural := 8;
   constant C_CTRL_IRQ_DONE_EN_W    : natural := 1;
   constant C_CTRL_IRQ_ERROR_EN_LSB : natural := 9;
@@ -73,6 +78,8 @@ package stepramp_regs_pkg is
   constant C_STATUS_ERROR_W        : natural := 1;
   constant C_STATUS_DIR_FAULT_LSB  : natural := 6;
   constant C_STATUS_DIR_FAULT_W    : natural := 1;
+  constant C_STATUS_PENDING_LSB    : natural := 7;
+  constant C_STATUS_PENDING_W      : natural := 1;
   constant C_STATUS_ERR_CODE_LSB   : natural := 8;
   constant C_STATUS_ERR_CODE_W     : natural := 5;
   constant C_DRIVE_MODE_LSB        : natural := 0;
@@ -107,6 +114,8 @@ package stepramp_regs_pkg is
   constant C_ERR_CFG_BUSY   : std_logic_vector(4 downto 0) := "01111";
   constant C_ERR_STEP_SPACE : std_logic_vector(4 downto 0) := "10000";
   constant C_ERR_SEGMENT    : std_logic_vector(4 downto 0) := "10001";
+  constant C_ERR_CHANGE     : std_logic_vector(4 downto 0) := "10010";
+  constant C_ERR_STAGED     : std_logic_vector(4 downto 0) := "10011";
 
   -- Per word offset: the bits a write can set (the RW fields) and the reset value (the register file's
   -- storage words).
@@ -150,12 +159,13 @@ package stepramp_regs_pkg is
     32     => x"7FFFFFFF",
     33     => x"FFFFFFFF",
     34     => x"0000FFFF",
+    35     => x"7FFFFFFF",
     others => x"00000000"
   );
 
   constant C_REG_RESET : t_reg_words :=
   (
-    0      => x"53520004",
+    0      => x"53520005",
     1      => x"00000000",
     2      => x"00000000",
     3      => x"00000000",
@@ -190,6 +200,7 @@ package stepramp_regs_pkg is
     32     => x"00000000",
     33     => x"00000000",
     34     => x"00000000",
+    35     => x"00000000",
     others => x"00000000"
   );
 

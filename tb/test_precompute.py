@@ -364,7 +364,7 @@ class Sequencer:
 
     async def init(self) -> None:
         dut = self.dut
-        for port in ("latch", "begin_move", "setup", "advance", "take_alt", "finish"):
+        for port in ("latch", "begin_move", "setup", "take", "advance", "take_alt", "finish"):
             getattr(dut, port).value = 0
         dut.cur_state.value = STOP_STATE
         drive_move(dut, plan_move(**PROFILES_BY_NAME["steps_0"].args()))

@@ -28,9 +28,9 @@ architecture sim of stepramp_plb_tb is
   constant C_STOP_RATIO : natural := 16#54#;
   constant C_POSITION   : natural := 16#58#;
   constant C_STEP_COUNT : natural := 16#60#;
-  constant C_UNMAPPED   : natural := 16#8C#;
+  constant C_UNMAPPED   : natural := 16#90#;
 
-  constant C_ID_VALUE : std_logic_vector(31 downto 0) := x"5352_0004";
+  constant C_ID_VALUE : std_logic_vector(31 downto 0) := x"5352_0005";
 
   type t_reg_write is record
     offset : natural;

@@ -100,8 +100,9 @@ def _span(first: str, last: str) -> tuple[str, ...]:
 
 
 #: The staging registers: plain storage written at any time, taken by the engine at START (the move's, then the
-#: segment's: docs/algorithm.md, "When the move is latched" and "Changes while moving").
-STAGING: tuple[str, ...] = _span("STEPS", "STOP_RATIO") + _span("SEGMENT", "HEAD_PROD_HI")
+#: segment's, and CHANGE_AT: docs/algorithm.md, "When the move is latched" and "Changes while moving"); locked while
+#: STATUS.PENDING.
+STAGING: tuple[str, ...] = _span("STEPS", "STOP_RATIO") + _span("SEGMENT", "CHANGE_AT")
 
 
 def split_wide(value: int, width: int) -> tuple[int, int]:

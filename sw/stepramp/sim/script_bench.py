@@ -1,0 +1,191 @@
+# SPDX-License-Identifier: MIT
+"""The cocotb side of `stepramp sim --script`: the driver's actions of command scripts played through a bus top.
+
+Runs inside the simulator (stepramp.sim.script_sim starts it). The request (STEPRAMP_SCRIPT_REQUEST) holds scripts,
+each as the actions the driver's planner made (stepramp.board.script.plan_script): register writes that prepare a
+commit, and the CTRL write that commits it, which the register file must sample at exactly the clock edge `at` of the
+script's clock axis. Every script starts from a reset of the top. The bench issues the preparing writes in the
+PREP_CLOCKS before the commit, then the committing write so that it lands on its edge (the bus master's latency is
+measured once, on a harmless write, and every commit is checked against the register file's own write strobe), and
+records every STEP rising edge with POSITION after it, and every error the core flags. Results go to
+STEPRAMP_SCRIPT_RESULT: per script {"edges", "positions", "core_errors": [[edge, code], ...], "commits": [...]}.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import cocotb
+from cocotb.triggers import First, ReadOnly, RisingEdge, Timer, ValueChange
+from cocotb.utils import get_sim_time
+
+from stepramp.board.regmap import offset
+from stepramp.sim.clocking import (
+    CLK_PERIOD_NS,
+    CLK_PERIOD_PS,
+    apply_reset,
+    now_cycles,
+    now_periods,
+    reset_held,
+    start_clock,
+)
+from stepramp.sim.ipif import IpifMaster
+
+CTRL = offset("CTRL")
+#: Clocks between the reset of a script and its clock 0 (its first commit's preparing writes fit in them).
+LEAD_CLOCKS = 400
+
+
+class _Axil:
+    """Register access over cocotbext-axi's AxiLiteMaster (whole words: the driver's actions write whole words or
+    byte 0 of CTRL)."""
+
+    def __init__(self, master: Any) -> None:
+        self.master = master
+
+    async def write(self, addr: int, value: int, strobe: int = 0xF) -> None:
+        data = (value & 0xFFFF_FFFF).to_bytes(4, "little")
+        lanes = [b for b in range(4) if strobe >> b & 1]
+        resp = await self.master.write(addr + lanes[0], data[lanes[0] : lanes[-1] + 1])
+        if int(resp.resp) != 0:
+            raise RuntimeError(f"write {addr:#x}: resp {int(resp.resp)}")
+
+
+async def _reset(dut: Any, top: str) -> Any:
+    """Reset the top and return its register access."""
+    if top == "stepramp_axil":
+        from cocotbext.axi import AxiLiteBus, AxiLiteMaster
+
+        async with reset_held(dut.aclk, dut.aresetn, active=0):
+            master = AxiLiteMaster(AxiLiteBus.from_prefix(dut, "s_axil"), dut.aclk, dut.aresetn, False)
+        return _Axil(master)
+    bus = IpifMaster(dut, dut.clk, CLK_PERIOD_NS)
+    await apply_reset(dut.clk, dut.rst)
+    return bus
+
+
+class _Recorder:
+    """STEP rising edges with POSITION after them, the register file's write strobes and the core's errors, as
+    absolute clock edges, from now on."""
+
+    def __init__(self, dut: Any, clk: Any) -> None:
+        self.dut, self.clk = dut, clk
+        self.edges: list[int] = []
+        self.positions: list[int] = []
+        self.writes: list[tuple[int, int]] = []  # (edge, byte offset)
+        self.errors: list[tuple[int, int]] = []
+        self.running = True
+        for coro in (self._steps(), self._writes(), self._errors()):
+            cocotb.start_soon(coro)
+
+    async def _steps(self) -> None:
+        core = self.dut.core_inst
+        while self.running:
+            await RisingEdge(self.dut.step)
+            self.edges.append(now_cycles(CLK_PERIOD_PS))
+            self.positions.append(core.position.value.to_signed())
+
+    async def _writes(self) -> None:
+        # wr rises after edge X; the register file samples the write at X + 1 (the commits are single writes).
+        regfile = self.dut.core_inst.regfile_inst
+        while self.running:
+            await RisingEdge(regfile.wr)
+            await ReadOnly()
+            # (wr may rise at a falling edge, from the bus's select: the last rising edge, floored, + 1)
+            self.writes.append((math.floor(now_periods(CLK_PERIOD_PS)) + 1, int(regfile.addr.value) & ~3))
+
+    async def _errors(self) -> None:
+        # ERROR is sticky (a script never clears it): a new error shows as a new ERR_CODE, or as ERROR rising.
+        regfile = self.dut.core_inst.regfile_inst
+        while self.running:
+            await First(RisingEdge(regfile.error_flag), ValueChange(regfile.err_code_r))
+            await ReadOnly()
+            if int(regfile.error_flag.value):
+                self.errors.append((now_cycles(CLK_PERIOD_PS), int(regfile.err_code_r.value)))
+
+
+async def _at_edge(clk: Any, edge: int) -> None:
+    """Return just after rising edge `edge` (absolute), as after `await RisingEdge(clk)` (the calibration's state: the
+    bus masters' own coroutines see the same edges then)."""
+    now = get_sim_time("ps")
+    assert now < edge * CLK_PERIOD_PS, f"edge {edge} has passed (now {now / CLK_PERIOD_PS:.2f})"
+    quarter = (edge - 1) * CLK_PERIOD_PS + CLK_PERIOD_PS // 4
+    if now < quarter:
+        await Timer(quarter - now, unit="ps")
+    await RisingEdge(clk)
+
+
+async def _latency(bus: Any, clk: Any, rec: _Recorder) -> int:
+    """Clock edges from the rising edge at which a write is called to the edge the register file samples it (a CTRL
+    write of byte 1 with the interrupt enables off: it changes nothing)."""
+    await RisingEdge(clk)
+    issued = now_cycles(CLK_PERIOD_PS)
+    seen = len(rec.writes)
+    await bus.write(CTRL, 0, strobe=0x2)
+    await Timer(5 * CLK_PERIOD_NS, unit="ns")
+    assert len(rec.writes) == seen + 1, "the calibration write was not seen once by the register file"
+    return rec.writes[seen][0] - issued
+
+
+async def _play(dut: Any, top: str, script: dict[str, Any]) -> dict[str, Any]:
+    clk = dut.aclk if top == "stepramp_axil" else dut.clk
+    bus = await _reset(dut, top)
+    rec = _Recorder(dut, clk)
+    latency = await _latency(bus, clk, rec)
+    origin = now_cycles(CLK_PERIOD_PS) + LEAD_CLOCKS
+    commits: list[int] = []
+    for action in script["actions"]:
+        at = origin + int(action["at"])
+        prep = at - int(script["prep_clocks"])
+        if action["writes"]:
+            await _at_edge(clk, prep)
+            for addr, value in action["writes"]:
+                await bus.write(int(addr), int(value))
+        issue = at - latency
+        assert get_sim_time("ps") < issue * CLK_PERIOD_PS, (
+            f"the preparing writes of the commit at {action['at']} ran past its issue clock ({len(action['writes'])} "
+            f"writes in {script['prep_clocks']} clocks)"
+        )
+        await _at_edge(clk, issue)
+        seen = len(rec.writes)
+        await bus.write(CTRL, int(action["ctrl"]), strobe=0x1)
+        await Timer(2 * CLK_PERIOD_NS, unit="ns")
+        committed = next((e for e, a in rec.writes[seen:] if a == CTRL), None)
+        assert committed == at, (
+            f"the commit meant for clock {action['at']} landed on {None if committed is None else committed - origin}"
+        )
+        commits.append(committed - origin)
+    await _at_edge(clk, origin + int(script["until"]) + 2)
+    rec.running = False
+    keep = [i for i, e in enumerate(rec.edges) if e - origin <= int(script["until"])]
+    return {
+        "edges": [rec.edges[i] - origin for i in keep],
+        "positions": [rec.positions[i] for i in keep],
+        "core_errors": [[e - origin, code] for e, code in rec.errors],
+        "commits": commits,
+    }
+
+
+def _backstop_ns() -> int:
+    path = os.environ.get("STEPRAMP_SCRIPT_REQUEST")
+    if not path or not Path(path).exists():
+        return 1_000_000_000
+    request = json.loads(Path(path).read_text())
+    clocks = sum(int(s["until"]) + 4 * LEAD_CLOCKS for s in request["scripts"])
+    return (clocks + 10_000) * CLK_PERIOD_NS
+
+
+@cocotb.test(timeout_time=_backstop_ns(), timeout_unit="ns")
+async def play_scripts(dut: Any) -> None:
+    """Play every script of the request, each from a reset, and write what the RTL did."""
+    request = json.loads(Path(os.environ["STEPRAMP_SCRIPT_REQUEST"]).read_text())
+    top = dut._name
+    start_clock(dut.aclk if top == "stepramp_axil" else dut.clk)
+    results = []
+    for script in request["scripts"]:
+        results.append(await _play(dut, top, script))
+    Path(os.environ["STEPRAMP_SCRIPT_RESULT"]).write_text(json.dumps({"results": results}))
