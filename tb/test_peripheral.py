@@ -28,6 +28,7 @@ from peripheral_tb import (
     profiles_limit_us,
     stop_cases,
 )
+from stepramp.board.change import plan_change
 from stepramp.board.driver import Outputs, StepRampError, plan_writes
 from stepramp.board.plan import Plan, plan_move
 from stepramp.board.regmap import ADDR_BITS, ERROR_CODES, ID_VALUE, REGISTERS, REGISTERS_BY_NAME, RW, offset
@@ -551,6 +552,57 @@ async def jog_through_the_bus(dut) -> None:
     tb.finish()
 
 
+@cocotb.test(timeout_time=40, timeout_unit="ms")
+async def change_and_queue_refusals(dut) -> None:
+    """CTRL.CHANGE and CTRL.QUEUE refused (docs/algorithm.md, "The take-over, the queue and the script contract"):
+    while idle (ERROR with code CHANGE, nothing moves); a CHANGE for a pulse already past and one against the running
+    direction (code CHANGE, the motion goes on exactly as the model says); a staging write while a QUEUE is pending
+    (code STAGED: the register keeps the staged value, STATUS.PENDING is set) and the queued move, which then starts
+    when the first ends and runs as the model says; POSITION the sum of both."""
+    tb = await PeripheralTb.started(dut)
+    drv = tb.driver()
+    plan = valid_plan()
+    ctrl = offset("CTRL")
+    for bit in ("CHANGE", "QUEUE"):
+        await drv.clear_flags()
+        await drv.access.write(ctrl, REGISTERS_BY_NAME["CTRL"].field(bit).mask, strobe=0x1)
+        st = await drv.status()
+        assert (st.error, st.err_name, st.busy, st.pending) == (True, "CHANGE", False, False), f"{bit} while idle: {st}"
+    n0, s0 = len(tb.step_edges), len(tb.start_edges)
+    await drv.clear_flags()
+    await drv.program(plan)
+    await drv.start()
+    while len(tb.step_edges) < n0 + 5:
+        await RisingEdge(dut.step)
+    prof = PROFILES_BY_NAME["trap_basic"]
+    seg = plan_change(0.0, 10, prof.accel, prof.decel, prof.speed, prof.spr, prof.fclk, prof.prescale).segment
+    for pulse, direction, what in ((2, 0, "a pulse already past"), (plan.steps - 2, 1, "the other direction")):
+        await drv.clear_flags()
+        await drv.change(seg, direction, pulse)
+        await ClockCycles(tb.clk, 4)  # the engine answers two clocks after the register file's strobe
+        st = await drv.status()
+        assert (st.error, st.err_name, st.busy) == (True, "CHANGE", True), f"CHANGE for {what}: {st}"
+    back = dataclasses.replace(plan, direction=1)
+    await drv.clear_flags()
+    await drv.queue(back)
+    st = await drv.status()
+    assert (st.error, st.pending) == (False, True), f"QUEUE while moving: {st}"
+    await drv.access.write(offset("STEPS"), 5)
+    st = await drv.status()
+    assert (st.error, st.err_name, st.pending) == (True, "STAGED", True), f"a staging write while pending: {st}"
+    assert await drv.access.read(offset("STEPS")) == -back.steps & 0xFFFF_FFFF, "the refused write changed STEPS"
+    await drv.clear_flags()
+    while len(tb.start_edges) < s0 + 2:
+        await RisingEdge(dut.core_inst.busy)
+    await drv.clear_flags()  # the first move's DONE
+    await drv.wait_done(idle=lambda: tb.irq_or(2000))
+    first, second = tb.edges_since(n0, s0)[: plan.steps], tb.edges_since(n0 + plan.steps, s0 + 1)
+    assert first == model_edges(plan), f"the move under refused changes: {edges_differ(first, model_edges(plan))}"
+    assert second == model_edges(back), f"the queued move: {edges_differ(second, model_edges(back))}"
+    assert await drv.position() == 0, "POSITION after a move and the queued move back"
+    tb.finish()
+
+
 REGISTER_TESTS = [
     "reset_values_and_id",
     "read_write_every_register",
@@ -568,6 +620,7 @@ REGISTER_TESTS = [
     "soft_and_hard_stop",
     "hard_stop_cancels_a_held_start",
     "jog_through_the_bus",
+    "change_and_queue_refusals",
 ]
 
 

@@ -208,6 +208,93 @@ int stepramp_jog(stepramp_t *dev, double speed, double accel, double decel)
     return STEPRAMP_OK;
 }
 
+int stepramp_change(stepramp_t *dev, const stepramp_segment_t *seg, uint32_t direction, uint32_t pulse)
+{
+    stepramp_plan_t plan;
+    stepramp_segment_regs_t regs;
+    int rc;
+
+    if (dev == NULL || seg == NULL) {
+        return STEPRAMP_ENULL;
+    }
+    if (pulse == 0u || pulse > STEPRAMP_MAX_PULSE) {
+        return STEPRAMP_EPULSE;
+    }
+    rc = stepramp_segment_registers(seg, direction, &plan, &regs);
+    if (rc != STEPRAMP_OK) {
+        return rc; /* nothing written */
+    }
+    (void)stepramp_program_segment(dev, &plan, &regs); /* the staging registers, in address order */
+    write_reg(dev, STEPRAMP_REG_CHANGE_AT, pulse);
+    command(dev, STEPRAMP_CTRL_CHANGE_MASK);
+    return STEPRAMP_OK;
+}
+
+int stepramp_change_to(stepramp_t *dev, uint32_t pulse, double u, int64_t remaining, double accel, double decel,
+                       double speed)
+{
+    stepramp_change_t ch;
+    stepramp_change_info_t info;
+    stepramp_status_t st;
+    double f_tick;
+    double shortest;
+    int rc;
+
+    if (dev == NULL) {
+        return STEPRAMP_ENULL;
+    }
+    if (pulse == 0u || pulse > STEPRAMP_MAX_PULSE) {
+        return STEPRAMP_EPULSE;
+    }
+    rc = stepramp_plan_change_info(&ch, &info, u, remaining, accel, decel, speed, dev->spr, dev->fclk, dev->prescale);
+    if (rc != STEPRAMP_OK) {
+        return rc;
+    }
+    if (ch.has_back) {
+        return STEPRAMP_EREVERSE;
+    }
+    /* the segment's shortest interval, in ticks: at its peak (t_cruise, f_tick / v_peak; 0.0 for a segment without
+     * one) or at its start speed, whichever is faster; the STEP width + space must fit it, as for a move or a jog */
+    f_tick = dev->fclk / (double)dev->prescale;
+    shortest = (info.t_cruise > 0.0) ? info.t_cruise : (double)INFINITY;
+    if (ch.start_speed > 0.0 && f_tick / ch.start_speed < shortest) {
+        shortest = f_tick / ch.start_speed;
+    }
+    if (isfinite(shortest) && (double)dev->min_gap > floor(shortest) * (double)dev->prescale) {
+        return STEPRAMP_EGAP;
+    }
+    /* the running direction, read last: the commit follows it as closely as the bus allows */
+    (void)stepramp_status(dev, &st);
+    if (!st.busy) {
+        return STEPRAMP_EIDLE;
+    }
+    if (st.pending) {
+        return STEPRAMP_EPENDING;
+    }
+    return stepramp_change(dev, &ch.segment, st.dir, pulse);
+}
+
+int stepramp_queue(stepramp_t *dev, const stepramp_plan_t *plan)
+{
+    if (dev == NULL || plan == NULL) {
+        return STEPRAMP_ENULL;
+    }
+    (void)stepramp_program(dev, plan); /* clears SEGMENT .. HEAD_PROD_HI too when a jog or a change set them */
+    command(dev, STEPRAMP_CTRL_QUEUE_MASK);
+    return STEPRAMP_OK;
+}
+
+int stepramp_queue_move(stepramp_t *dev, int64_t steps, double accel, double decel, double speed)
+{
+    stepramp_plan_t plan;
+    int rc = stepramp_plan(dev, &plan, steps, accel, decel, speed);
+
+    if (rc != STEPRAMP_OK) {
+        return rc; /* nothing written */
+    }
+    return stepramp_queue(dev, &plan);
+}
+
 void stepramp_soft_stop(const stepramp_t *dev)
 {
     command(dev, STEPRAMP_CTRL_SOFT_STOP_MASK);
@@ -259,6 +346,7 @@ uint32_t stepramp_status(const stepramp_t *dev, stepramp_status_t *status)
         status->done = (raw & STEPRAMP_STATUS_DONE_MASK) != 0u;
         status->error = (raw & STEPRAMP_STATUS_ERROR_MASK) != 0u;
         status->err_code = (raw & STEPRAMP_STATUS_ERR_CODE_MASK) >> STEPRAMP_STATUS_ERR_CODE_SHIFT;
+        status->pending = (raw & STEPRAMP_STATUS_PENDING_MASK) != 0u;
     }
     return raw;
 }
@@ -336,7 +424,12 @@ int stepramp_wait_done(const stepramp_t *dev, uint32_t max_polls)
     X(STEP_SPACE, "a pulse would have come less than STEP_WIDTH + STEP_SPACE clocks after the previous one (the two "  \
                   "would merge on the STEP pin); it was not emitted and the move stopped")                             \
     X(SEGMENT, "a down head with HEAD_INDEX < SA, or an up head whose index HEAD_INDEX + SA - 1 passes "               \
-               "2^31 - 1")
+               "2^31 - 1")                                                                                             \
+    X(CHANGE, "a CHANGE or QUEUE commit was refused (idle, something already pending, a soft stop requested, STEPS' "  \
+              "sign against the running direction, pulse CHANGE_AT - 1 already emitted or CHANGE_AT past the last "    \
+              "pulse); the motion goes on unchanged")                                                                  \
+    X(STAGED, "a staging register (STEPS .. STOP_RATIO, SEGMENT .. CHANGE_AT) was written while STATUS.PENDING; the "  \
+              "write was ignored")
 
 #define CORE_TABLE_SIZE 32u /* ERR_CODE is 5 bits */
 #define CAUSE(name, text) [STEPRAMP_ERR_##name] = text,
@@ -375,8 +468,21 @@ const char *stepramp_strresult(int result)
         return "the jog speed must be a finite non-zero number of rad/s";
     }
     if (result == STEPRAMP_EGAP) {
-        return "STEP width + STEP space clocks does not fit the shortest interval of the move or jog: lower the "
-               "speed, the STEP width or the space";
+        return "STEP width + STEP space clocks does not fit the shortest interval of the move, jog or change: lower "
+               "the speed, the STEP width or the space";
+    }
+    if (result == STEPRAMP_EPULSE) {
+        return "the take-over pulse must be in 1 .. 2^31 - 1";
+    }
+    if (result == STEPRAMP_EREVERSE) {
+        return "the target lies inside the stop distance or behind the motor: the change needs a move back (soft "
+               "stop and a queued move), not a take-over";
+    }
+    if (result == STEPRAMP_EIDLE) {
+        return "the core is idle: there is no motion to change";
+    }
+    if (result == STEPRAMP_EPENDING) {
+        return "a change or a queued move is pending (STATUS.PENDING): the staging registers are locked";
     }
     if (STEPRAMP_IS_ECORE(result)) {
         uint32_t code = STEPRAMP_ECORE_CODE(result);

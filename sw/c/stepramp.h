@@ -5,9 +5,9 @@
  * The same operations with the same register semantics as the Python driver: stepramp_program writes every
  * motion register (STEPS .. STOP_RATIO) in address order, like driver.plan_writes(), and the segment registers
  * (SEGMENT .. HEAD_PROD_HI, driver.segment_writes()) unless the driver knows them to hold 0 (they are written at the
- * first program after stepramp_init and after a jog); START, SOFT_STOP and HARD_STOP are written to byte 0 of CTRL
- * only, so the interrupt enables in byte 1 are kept; STATUS.DONE and STATUS.ERROR are cleared by writing 1. The
- * register map is docs/registers.md (stepramp_regs.h in C).
+ * first program after stepramp_init and after a jog or a change); START, SOFT_STOP, HARD_STOP, CHANGE and QUEUE are
+ * written to byte 0 of CTRL only, so the interrupt enables in byte 1 are kept; STATUS.DONE and STATUS.ERROR are
+ * cleared by writing 1. The register map is docs/registers.md (stepramp_regs.h in C).
  *
  * C99, no malloc, no stdio. Register access goes through three macros, which stepramp.c defines to the Xilinx
  * standalone BSP's functions (and includes "xil_io.h") unless they are already defined -- on the compiler's
@@ -36,6 +36,10 @@
  *   if (rc == STEPRAMP_OK) rc = stepramp_wait_done(&motor, 100000000u);
  *   if (rc != STEPRAMP_OK) puts(stepramp_strresult(rc));
  *   rc = stepramp_jog(&motor, -20.0, 40.0, 40.0);            (signed rad/s, rad/s^2, rad/s^2): until a stop
+ *
+ * While a motion runs: stepramp_change_to(&motor, p, u, remaining, accel, decel, speed) takes a new plan over at
+ * pulse p (u: the speed there, stepramp_speed_at_pulse), stepramp_queue_move(&motor, steps, ...) starts a move when
+ * the running one ends.
  */
 #ifndef STEPRAMP_H
 #define STEPRAMP_H
@@ -63,9 +67,19 @@ enum {
     STEPRAMP_EOUTPUTS = 66,   /**< stepramp_configure_outputs: NULL, mode > 4 or ustep_log2 > 7 */
     STEPRAMP_ENOIRQ = 67,     /**< stepramp_isr: neither STATUS.DONE nor STATUS.ERROR was set (not this core) */
     STEPRAMP_EJOG_SPEED = 68, /**< stepramp_jog: the jog speed is 0, inf or NaN */
-    STEPRAMP_EGAP = 69,       /**< STEP width + STEP space does not fit the move's or the jog's shortest interval */
+    STEPRAMP_EGAP = 69,       /**< STEP width + STEP space does not fit the shortest interval of the move, the jog or
+                                   the change */
+    STEPRAMP_EPULSE = 70,     /**< stepramp_change: the take-over pulse is 0 or does not fit CHANGE_AT's 31 bits */
+    STEPRAMP_EREVERSE = 71,   /**< stepramp_change_to: the target lies inside the stop distance or behind the motor,
+                                   the change would need a move back (SOFT_STOP + QUEUE, not a take-over) */
+    STEPRAMP_EIDLE = 72,      /**< stepramp_change_to: STATUS.BUSY is 0, there is no motion to take over */
+    STEPRAMP_EPENDING = 73,   /**< stepramp_change_to: STATUS.PENDING, a change or a queued move is pending (the
+                                   staging registers are locked) */
     STEPRAMP_ECORE_BASE = 128 /**< STEPRAMP_ECORE(code): the core flagged STATUS.ERROR with ERR_CODE code */
 };
+
+/** The largest pulse a take-over can name (CHANGE_AT and STEP_COUNT are 31 bits). */
+#define STEPRAMP_MAX_PULSE UINT32_C(0x7FFFFFFF)
 
 /** The result for a core error: STATUS.ERR_CODE code (0 .. 31) offset by STEPRAMP_ECORE_BASE. */
 #define STEPRAMP_ECORE(code) (STEPRAMP_ECORE_BASE + (int)(code))
@@ -111,6 +125,8 @@ typedef struct {
     int done;          /**< sticky: a move ended (normally, stopped or rejected) */
     int error;         /**< sticky: a move was rejected or stopped on an error */
     uint32_t err_code; /**< cause of the last error, STEPRAMP_ERR_* of stepramp_regs.h (kept after clearing) */
+    int pending;       /**< STATUS.PENDING: a CHANGE or a QUEUE is pending, the staging registers are locked until
+                            it is taken (or dropped) */
 } stepramp_status_t;
 
 /**
@@ -201,6 +217,68 @@ int stepramp_plan_jog(const stepramp_t *dev, stepramp_plan_t *plan, stepramp_seg
  * @return STEPRAMP_OK, or stepramp_plan_jog's error -- then no register has been written
  */
 int stepramp_jog(stepramp_t *dev, double speed, double accel, double decel);
+
+/**
+ * Take a segment over at pulse `pulse` of the running motion (docs/algorithm.md, "The take-over, the queue and the
+ * script contract"): its registers into the staging registers, as stepramp_segment_registers(seg, direction) gives
+ * them (STEPS = its length + 1 with the sign of direction, or +-1 for an endless segment) through
+ * stepramp_program_segment (STEPS .. STOP_RATIO, then SEGMENT .. HEAD_PROD_HI, in address order), then CHANGE_AT =
+ * pulse and CTRL.CHANGE (byte 0 of CTRL only). Pulse `pulse` is the segment's pulse 0, the segment's interval 1
+ * follows it; STEP_COUNT and POSITION carry on.
+ *
+ * The driver checks the arguments only; the core checks the rest at the commit and refuses it (nothing changes in
+ * the motion; STATUS.ERROR with ERR_CODE CHANGE) when it is idle, a change or a queued move is pending, direction is
+ * not the running motion's (STATUS.DIR), a soft stop is requested, pulse - 1 is already emitted (STEP_COUNT >=
+ * pulse) or pulse lies past the running positioning segment's last pulse. Staging writes while STATUS.PENDING are
+ * ignored (ERR_CODE STAGED). So the pulse should leave the bus writes time: stepramp.models.engine.change_pulse
+ * names one at least 2 pulses and 400 clocks after the commit. seg->prescale should be the running motion's.
+ *
+ * @param seg       the segment (stepramp_plan_change's out->segment, planned from the speed at pulse)
+ * @param direction the running motion's direction, STATUS.DIR (0: position counts up, 1: down; nonzero is 1)
+ * @param pulse     the take-over pulse, counted as STEP_COUNT counts (1 .. STEPRAMP_MAX_PULSE)
+ * @return STEPRAMP_OK; STEPRAMP_EPULSE for a pulse of 0 or above STEPRAMP_MAX_PULSE; STEPRAMP_ESTEPS for a segment of
+ *         length 2^31 - 1 (STEPS would not fit); STEPRAMP_ENULL if dev or seg is NULL -- then nothing is written
+ */
+int stepramp_change(stepramp_t *dev, const stepramp_segment_t *seg, uint32_t direction, uint32_t pulse);
+
+/**
+ * Plan a change and commit it at pulse `pulse` in the running direction: stepramp_plan_change from speed u with
+ * the device's spr, fclk and prescale, then one STATUS read and stepramp_change(dev, segment, STATUS.DIR, pulse).
+ *
+ * @param pulse     the take-over pulse (1 .. STEPRAMP_MAX_PULSE), far enough ahead (see stepramp_change)
+ * @param u         the running motion's speed at pulse, steps/s (stepramp_speed_at_pulse of its stepramp_info_t)
+ * @param remaining steps from pulse to the new target in the running direction (0 .. 2^31 - 1), or
+ *                  STEPRAMP_ENDLESS: no target, hold speed until a stop (a jog); as stepramp_plan_change takes it
+ * @param accel     new acceleration, decel new deceleration (rad/s^2), speed new speed (rad/s)
+ * @return STEPRAMP_OK; STEPRAMP_EPULSE (as stepramp_change); stepramp_plan_change's error; STEPRAMP_EREVERSE when the
+ *         target lies inside the stop distance from u (the plan has a move back: reverse with stepramp_soft_stop and
+ *         a queued move instead); STEPRAMP_EGAP when the STEP width + space (dev->min_gap) does not fit the
+ *         segment's shortest interval, floor(f_tick / max(start speed, peak speed)) * prescale clocks;
+ *         STEPRAMP_EIDLE when STATUS.BUSY is 0; STEPRAMP_EPENDING when STATUS.PENDING is set; STEPRAMP_ENULL if dev
+ *         is NULL. On any error nothing is written (STATUS is read only after the plan passed).
+ */
+int stepramp_change_to(stepramp_t *dev, uint32_t pulse, double u, int64_t remaining, double accel, double decel,
+                       double speed);
+
+/**
+ * Queue a move after the running one: stepramp_program(plan) into the staging registers (with SEGMENT ..
+ * HEAD_PROD_HI cleared when they may hold a segment, e.g. after a jog or a change) and CTRL.QUEUE (byte 0 of CTRL
+ * only). The core keeps it (STATUS.PENDING, staging locked) and starts it when the running motion ends without
+ * error, exactly as a START written at that edge (its DONE is still raised: stepramp_wait_done returns at the end
+ * of the running motion, the queued move then runs). It refuses the QUEUE (STATUS.ERROR, ERR_CODE CHANGE) when it
+ * is idle or something is pending; a soft or hard stop, or an error of the running motion, drops the queued move.
+ *
+ * @return STEPRAMP_OK; STEPRAMP_ENULL (nothing written) if dev or plan is NULL
+ */
+int stepramp_queue(stepramp_t *dev, const stepramp_plan_t *plan);
+
+/**
+ * Plan a move (stepramp_plan) and queue it after the running motion (stepramp_queue).
+ *
+ * @param steps signed step count from where the running motion ends; accel, decel in rad/s^2; speed in rad/s
+ * @return STEPRAMP_OK, or stepramp_plan's error -- then no register has been written
+ */
+int stepramp_queue_move(stepramp_t *dev, int64_t steps, double accel, double decel, double speed);
 
 /** SOFT_STOP: decelerate at the programmed decel to zero, then DONE. Byte 0 of CTRL only. */
 void stepramp_soft_stop(const stepramp_t *dev);

@@ -60,7 +60,8 @@ enum {
     O_HEAD_INDEX = 0x7C,
     O_RUN_STOP = 0x80,
     O_HEAD_PROD_LO = 0x84,
-    O_HEAD_PROD_HI = 0x88
+    O_HEAD_PROD_HI = 0x88,
+    O_CHANGE_AT = 0x8C
 };
 
 #define N_MOTION 19 /* STEPS .. STOP_RATIO: (0x54 - 0x0C) / 4 + 1 */
@@ -623,30 +624,307 @@ static void test_jog_errors(void)
     CHECK(strstr(stepramp_strresult(STEPRAMP_ESEGMENT), "2^31 - 1") != NULL);
 }
 
+/* log entry i is a CTRL command: bits in byte 0 of CTRL only */
+static void check_command(uint32_t i, uint32_t bits)
+{
+    CHECK_EQ(bus->log[i].offset, O_CTRL);
+    CHECK_EQ(bus->log[i].be, 0x1u);
+    CHECK_EQ(bus->log[i].value, bits);
+}
+
+/* log entry i is CHANGE_AT = pulse, a full-word write. The fake bank maps the registers up to HEAD_PROD_HI only:
+ * while it does not know CHANGE_AT the write counts as its one bus error, once it does the register holds pulse. */
+static void check_change_at(uint32_t i, uint32_t pulse)
+{
+    CHECK_EQ(bus->log[i].offset, O_CHANGE_AT);
+    CHECK_EQ(bus->log[i].value, pulse);
+    CHECK_EQ(bus->log[i].be, 0xFu);
+    CHECK_EQ(bus->bus_errors, reg(O_CHANGE_AT) == pulse ? 0u : 1u);
+}
+
+/* STEPS of a segment staged in direction dir: its length + 1 (1 when endless), negated for direction 1 */
+static uint32_t segment_steps_word(const stepramp_segment_t *seg, uint32_t dir)
+{
+    int64_t steps = seg->endless ? 1 : (int64_t)seg->length + 1;
+
+    return (uint32_t)(dir ? (uint64_t)(4294967296LL - steps) : (uint64_t)steps);
+}
+
+/* the whole log of a change: the segment's motion and segment words, CHANGE_AT, then CTRL.CHANGE (bit 3) */
+static void check_change_log(const stepramp_segment_t *seg, uint32_t dir, uint32_t pulse)
+{
+    stepramp_plan_t plan;
+    stepramp_segment_regs_t regs;
+
+    CHECK_EQ(stepramp_segment_registers(seg, dir, &plan, &regs), STEPRAMP_OK);
+    CHECK_EQ(bus->writes, N_MOTION + N_SEGMENT + 2u);
+    check_program_log(&plan, 0u);
+    check_segment_log(&regs, N_MOTION);
+    check_change_at(N_MOTION + N_SEGMENT, pulse);
+    check_command(N_MOTION + N_SEGMENT + 1u, 0x8u);
+    CHECK(bus->starts + bus->soft_stops + bus->hard_stops == 0u);
+    /* spelled out: STEPS carries the direction, SEGMENT the head and endless bits */
+    CHECK_EQ(reg(O_STEPS), segment_steps_word(seg, dir));
+    CHECK_EQ(reg(O_SEGMENT), seg->head + 2u * seg->endless);
+    CHECK(reg(O_HEAD_INDEX) == seg->head_index && reg(O_RUN_STOP) == seg->run_stop && reg(O_SA) == seg->sa &&
+          reg(O_SD) == seg->sd && reg(O_PRESCALE) == seg->prescale);
+}
+
+/* the continuations stepramp_change and stepramp_change_to are tested with */
+static const struct {
+    double u;          /* steps/s at the pulse */
+    int64_t remaining; /* steps from the pulse to the target, or STEPRAMP_ENDLESS */
+    double accel, decel, speed, spr, fclk;
+    uint32_t prescale;
+    uint32_t pulse;
+} changes[] = {
+    {3000.0, 5000, 40.0, 40.0, 20.0, 400.0, 1e6, 1u, 77u},              /* down head, to a target */
+    {500.0, 2000, 60.0, 30.0, 20.0, 400.0, 1e6, 1u, 0x7FFFFFFFu},       /* up head, the last pulse */
+    {1000.0, STEPRAMP_ENDLESS, 40.0, 25.0, 5.0, 6400.0, 50e6, 50u, 1u}, /* endless (a jog), pulse 1 */
+    {0.0, 300, 100.0, 100.0, 10.0, 200.0, 1e6, 4u, 4u},                 /* from rest */
+    {3000.0, 1767, 40.0, 40.0, 20.0, 400.0, 1e6, 1u, 9u},               /* to rest at the stop distance */
+};
+#define N_CHANGES (sizeof changes / sizeof changes[0])
+
+/* stepramp_change: the segment's registers in address order, CHANGE_AT, CTRL.CHANGE; argument errors write nothing */
+static void test_change_writes(void)
+{
+    size_t i;
+
+    for (i = 0; i < N_CHANGES; i++) {
+        stepramp_t dev = fresh(changes[i].fclk, changes[i].spr, changes[i].prescale);
+        stepramp_change_t ch;
+        uint32_t dir;
+
+        CHECK_EQ(stepramp_plan_change(&ch, changes[i].u, changes[i].remaining, changes[i].accel, changes[i].decel,
+                                      changes[i].speed, changes[i].spr, changes[i].fclk, changes[i].prescale),
+                 STEPRAMP_OK);
+        CHECK_EQ(ch.has_back, 0);
+        for (dir = 0; dir < 2u; dir++) {
+            stepramp_fakebus_clear_log();
+            CHECK_EQ(stepramp_change(&dev, &ch.segment, dir, changes[i].pulse), STEPRAMP_OK);
+            check_change_log(&ch.segment, dir, changes[i].pulse);
+        }
+        /* any nonzero direction is 1 */
+        stepramp_fakebus_clear_log();
+        CHECK_EQ(stepramp_change(&dev, &ch.segment, 7u, changes[i].pulse), STEPRAMP_OK);
+        check_change_log(&ch.segment, 1u, changes[i].pulse);
+        /* the next program clears them unless they are all 0 (a positioning up head from index 0) */
+        CHECK_EQ(dev.segment_dirty,
+                 (ch.segment.head | ch.segment.endless | ch.segment.head_index | ch.segment.run_stop) != 0u);
+    }
+    {
+        stepramp_t dev = fresh(1e6, 400.0, 1u);
+        stepramp_change_t ch;
+        stepramp_segment_t longest;
+
+        CHECK_EQ(stepramp_plan_change(&ch, 1000.0, 100, 40.0, 40.0, 20.0, 400.0, 1e6, 1u), STEPRAMP_OK);
+        stepramp_fakebus_clear_log();
+        CHECK_EQ(stepramp_change(&dev, &ch.segment, 0u, 0u), STEPRAMP_EPULSE);
+        CHECK_EQ(stepramp_change(&dev, &ch.segment, 0u, 0x80000000u), STEPRAMP_EPULSE);
+        CHECK_EQ(stepramp_change(&dev, &ch.segment, 1u, 0xFFFFFFFFu), STEPRAMP_EPULSE);
+        CHECK_EQ(stepramp_change(NULL, &ch.segment, 0u, 10u), STEPRAMP_ENULL);
+        CHECK_EQ(stepramp_change(&dev, NULL, 0u, 10u), STEPRAMP_ENULL);
+        longest = ch.segment; /* STEPS = 2^31 does not fit */
+        longest.length = 0x7FFFFFFFu;
+        CHECK_EQ(stepramp_change(&dev, &longest, 0u, 10u), STEPRAMP_ESTEPS);
+        CHECK_EQ(bus->writes, 0u);
+        CHECK_EQ(bus->reads, 0u);
+        CHECK(dev.segment_dirty == 1u); /* untouched: nothing was written */
+        CHECK(strstr(stepramp_strresult(STEPRAMP_EPULSE), "pulse") != NULL);
+    }
+}
+
+/* stepramp_change_to: plans as stepramp_plan_change with the device's spr, fclk and prescale, reads STATUS once and
+ * commits in STATUS.DIR; refusals write nothing */
+static void test_change_to(void)
+{
+    size_t i;
+
+    for (i = 0; i < N_CHANGES; i++) {
+        uint32_t dir;
+
+        for (dir = 0; dir < 2u; dir++) {
+            stepramp_t dev = fresh(changes[i].fclk, changes[i].spr, changes[i].prescale);
+            stepramp_change_t ch;
+
+            CHECK_EQ(stepramp_plan_change(&ch, changes[i].u, changes[i].remaining, changes[i].accel, changes[i].decel,
+                                          changes[i].speed, changes[i].spr, changes[i].fclk, changes[i].prescale),
+                     STEPRAMP_OK);
+            stepramp_fakebus_set_status(STEPRAMP_STATE_RUN, 1u, dir, 0u, 0u);
+            CHECK_EQ(stepramp_change_to(&dev, changes[i].pulse, changes[i].u, changes[i].remaining, changes[i].accel,
+                                        changes[i].decel, changes[i].speed),
+                     STEPRAMP_OK);
+            CHECK(bus->reads == 1u && bus->status_reads == 1u);
+            check_change_log(&ch.segment, dir, changes[i].pulse);
+        }
+    }
+    {
+        stepramp_t dev = fresh(1e6, 400.0, 1u);
+
+        stepramp_fakebus_set_status(STEPRAMP_STATE_RUN, 1u, 0u, 0u, 0u);
+        /* argument and plan errors: no access at all */
+        CHECK_EQ(stepramp_change_to(&dev, 0u, 1000.0, 100, 40.0, 40.0, 20.0), STEPRAMP_EPULSE);
+        CHECK_EQ(stepramp_change_to(&dev, 0x80000000u, 1000.0, 100, 40.0, 40.0, 20.0), STEPRAMP_EPULSE);
+        CHECK_EQ(stepramp_change_to(NULL, 10u, 1000.0, 100, 40.0, 40.0, 20.0), STEPRAMP_ENULL);
+        CHECK_EQ(stepramp_change_to(&dev, 10u, NAN, 100, 40.0, 40.0, 20.0), STEPRAMP_ECHANGE_SPEED);
+        CHECK_EQ(stepramp_change_to(&dev, 10u, -1.0, 100, 40.0, 40.0, 20.0), STEPRAMP_ECHANGE_SPEED);
+        CHECK_EQ(stepramp_change_to(&dev, 10u, 1000.0, -2, 40.0, 40.0, 20.0), STEPRAMP_EREMAINING);
+        CHECK_EQ(stepramp_change_to(&dev, 10u, 1000.0, INT64_C(2147483648), 40.0, 40.0, 20.0), STEPRAMP_EREMAINING);
+        CHECK_EQ(stepramp_change_to(&dev, 10u, 1000.0, 100, 0.0, 40.0, 20.0), STEPRAMP_EACCEL);
+        CHECK_EQ(stepramp_change_to(&dev, 10u, 1000.0, 100, 40.0, 40.0, INFINITY), STEPRAMP_ESPEED);
+        /* 3000 steps/s stops in 3000^2 / (2 * 40 * 400 / 2 pi) = 1767 steps: a target 10 ahead needs a move back */
+        CHECK_EQ(stepramp_change_to(&dev, 10u, 3000.0, 10, 40.0, 40.0, 20.0), STEPRAMP_EREVERSE);
+        CHECK_EQ(stepramp_change_to(&dev, 10u, 3000.0, 1766, 40.0, 40.0, 20.0), STEPRAMP_EREVERSE);
+        CHECK_EQ(bus->reads, 0u);
+        CHECK_EQ(bus->writes, 0u);
+        /* the core idle, or something pending: STATUS read, nothing written */
+        stepramp_fakebus_set_status(STEPRAMP_STATE_STOP, 0u, 1u, 0u, STEPRAMP_STATUS_DONE_MASK);
+        CHECK_EQ(stepramp_change_to(&dev, 10u, 1000.0, 1000, 40.0, 40.0, 20.0), STEPRAMP_EIDLE);
+        stepramp_fakebus_set_status(STEPRAMP_STATE_RUN, 1u, 1u, 0u, 0u);
+        bus->regs[O_STATUS / 4u] |= 0x80u; /* STATUS.PENDING */
+        CHECK_EQ(stepramp_change_to(&dev, 10u, 1000.0, 1000, 40.0, 40.0, 20.0), STEPRAMP_EPENDING);
+        CHECK_EQ(bus->status_reads, 2u);
+        CHECK_EQ(bus->writes, 0u);
+        CHECK(strstr(stepramp_strresult(STEPRAMP_EREVERSE), "move back") != NULL);
+        CHECK(strstr(stepramp_strresult(STEPRAMP_EIDLE), "idle") != NULL);
+        CHECK(strstr(stepramp_strresult(STEPRAMP_EPENDING), "PENDING") != NULL);
+        /* the target exactly at the stop distance is a take-over (the stop segment), not a reversal */
+        bus->regs[O_STATUS / 4u] &= ~0x80u;
+        CHECK_EQ(stepramp_change_to(&dev, 10u, 3000.0, 1767, 40.0, 40.0, 20.0), STEPRAMP_OK);
+    }
+    {
+        /* STEP width + space: up to the segment's shortest interval, at its start speed (a down head from 3000
+         * steps/s) or at its peak (an up head to 20 rad/s = 1273 steps/s), not one clock more */
+        static const double starts[2] = {3000.0, 500.0};
+        size_t k;
+
+        for (k = 0; k < 2u; k++) {
+            stepramp_t dev = fresh(1e6, 400.0, 4u);
+            stepramp_outputs_t out = {0u, 0u, 1u, 0u, 0u, 0u, 1u};
+            stepramp_change_t ch;
+            stepramp_change_info_t info;
+            double f_tick = 1e6 / 4.0;
+            double peak;
+            double fastest;
+            uint32_t shortest;
+
+            CHECK_EQ(stepramp_plan_change_info(&ch, &info, starts[k], 4000, 40.0, 40.0, 20.0, 400.0, 1e6, 4u),
+                     STEPRAMP_OK);
+            peak = f_tick / info.t_cruise; /* steps/s */
+            fastest = ch.start_speed > peak ? ch.start_speed : peak;
+            shortest = (uint32_t)floor(f_tick / fastest) * 4u; /* clocks */
+            CHECK(k == 0u ? ch.start_speed > peak : ch.start_speed < peak);
+            CHECK(shortest > 200u && shortest < 65535u);
+            out.step_width = (uint16_t)(shortest - 100u);
+            out.step_space = 100u;
+            CHECK_EQ(stepramp_configure_outputs(&dev, &out), STEPRAMP_OK);
+            stepramp_fakebus_set_status(STEPRAMP_STATE_RUN, 1u, 0u, 0u, 0u);
+            stepramp_fakebus_clear_log();
+            CHECK_EQ(stepramp_change_to(&dev, 10u, starts[k], 4000, 40.0, 40.0, 20.0), STEPRAMP_OK);
+            CHECK_EQ(bus->writes, N_MOTION + N_SEGMENT + 2u);
+            stepramp_fakebus_set_status(STEPRAMP_STATE_STOP, 0u, 0u, 0u, 0u);
+            out.step_space = 101u;
+            CHECK_EQ(stepramp_configure_outputs(&dev, &out), STEPRAMP_OK);
+            stepramp_fakebus_set_status(STEPRAMP_STATE_RUN, 1u, 0u, 0u, 0u);
+            stepramp_fakebus_clear_log();
+            CHECK_EQ(stepramp_change_to(&dev, 10u, starts[k], 4000, 40.0, 40.0, 20.0), STEPRAMP_EGAP);
+            CHECK(bus->writes == 0u && bus->reads == 0u);
+        }
+    }
+}
+
+/* stepramp_queue: the plan's registers (with the segment registers cleared when a change or a jog may have set
+ * them), then CTRL.QUEUE (bit 4); stepramp_queue_move plans first and writes nothing on error */
+static void test_queue_writes(void)
+{
+    stepramp_t dev = fresh(1e6, 400.0, 1u);
+    stepramp_plan_t plan;
+    stepramp_change_t ch;
+
+    CHECK_EQ(stepramp_plan_move(&plan, -3000, 40.0, 25.0, 20.0, 400.0, 1e6, 1u), STEPRAMP_OK);
+    /* the first program after init clears the segment registers */
+    CHECK_EQ(stepramp_queue(&dev, &plan), STEPRAMP_OK);
+    CHECK_EQ(bus->writes, N_MOTION + N_SEGMENT + 1u);
+    check_program_log(&plan, 0u);
+    check_segment_log(&no_segment, N_MOTION);
+    check_command(N_MOTION + N_SEGMENT, 0x10u);
+    CHECK(bus->starts + bus->soft_stops + bus->hard_stops == 0u && bus->bus_errors == 0u);
+    CHECK_EQ(reg(O_STEPS), 0xFFFFF448u); /* -3000 */
+    /* then they are known to be 0 */
+    stepramp_fakebus_clear_log();
+    CHECK_EQ(stepramp_queue_move(&dev, -3000, 40.0, 25.0, 20.0), STEPRAMP_OK);
+    CHECK_EQ(bus->writes, N_MOTION + 1u);
+    check_program_log(&plan, 0u);
+    check_command(N_MOTION, 0x10u);
+    /* after a change they hold its segment: the queued move clears them */
+    CHECK_EQ(stepramp_plan_change(&ch, 800.0, STEPRAMP_ENDLESS, 40.0, 40.0, 20.0, 400.0, 1e6, 1u), STEPRAMP_OK);
+    CHECK_EQ(stepramp_change(&dev, &ch.segment, 0u, 100u), STEPRAMP_OK);
+    CHECK_EQ(reg(O_SEGMENT) & 2u, 2u);
+    stepramp_fakebus_clear_log();
+    CHECK_EQ(stepramp_queue_move(&dev, 1, 40.0, 25.0, 20.0), STEPRAMP_OK);
+    CHECK_EQ(stepramp_plan_move(&plan, 1, 40.0, 25.0, 20.0, 400.0, 1e6, 1u), STEPRAMP_OK);
+    CHECK_EQ(bus->writes, N_MOTION + N_SEGMENT + 1u);
+    check_program_log(&plan, 0u);
+    check_segment_log(&no_segment, N_MOTION);
+    check_command(N_MOTION + N_SEGMENT, 0x10u);
+    CHECK_EQ(dev.segment_dirty, 0u);
+    /* errors: nothing written, nothing read */
+    stepramp_fakebus_clear_log();
+    CHECK_EQ(stepramp_queue(NULL, &plan), STEPRAMP_ENULL);
+    CHECK_EQ(stepramp_queue(&dev, NULL), STEPRAMP_ENULL);
+    CHECK_EQ(stepramp_queue_move(NULL, 100, 40.0, 25.0, 20.0), STEPRAMP_ENULL);
+    CHECK_EQ(stepramp_queue_move(&dev, 100, 0.0, 25.0, 20.0), STEPRAMP_EACCEL);
+    CHECK_EQ(stepramp_queue_move(&dev, INT64_C(2147483648), 40.0, 25.0, 20.0), STEPRAMP_ESTEPS);
+    CHECK_EQ(stepramp_queue_move(&dev, 100, 1e6, 1e6, 1e4), STEPRAMP_ETOOFAST);
+    CHECK(bus->writes == 0u && bus->reads == 0u);
+    /* the STEP gap as for a move: 20 rad/s cruises at 785 clocks */
+    {
+        stepramp_outputs_t out = {0u, 0u, 700u, 0u, 0u, 0u, 86u};
+        CHECK_EQ(stepramp_configure_outputs(&dev, &out), STEPRAMP_OK);
+        stepramp_fakebus_clear_log();
+        CHECK_EQ(stepramp_queue_move(&dev, 4000, 40.0, 25.0, 20.0), STEPRAMP_EGAP);
+        CHECK_EQ(bus->writes, 0u);
+        CHECK_EQ(stepramp_queue_move(&dev, 4000, 40.0, 25.0, 19.9), STEPRAMP_OK);
+        CHECK_EQ(bus->writes, N_MOTION + 1u);
+    }
+}
+
 static void test_status_decoding(void)
 {
     stepramp_t dev = fresh(1e6, 200.0, 1u);
-    uint32_t state, busy, dir, done, error, code;
+    uint32_t state, busy, dir, done, error, pending, code;
 
     for (state = 0; state < 4u; state++) {
         for (busy = 0; busy < 2u; busy++) {
             for (dir = 0; dir < 2u; dir++) {
                 for (done = 0; done < 2u; done++) {
                     for (error = 0; error < 2u; error++) {
-                        for (code = 0; code < 16u; code++) {
-                            stepramp_status_t st;
-                            uint32_t raw = state | busy << 2 | dir << 3 | done << 4 | error << 5 | code << 8;
+                        for (pending = 0; pending < 2u; pending++) {
+                            for (code = 0; code < 32u; code++) {
+                                stepramp_status_t st;
+                                uint32_t raw =
+                                    state | busy << 2 | dir << 3 | done << 4 | error << 5 | pending << 7 | code << 8;
 
-                            bus->regs[O_STATUS / 4u] = raw;
-                            memset(&st, 0xA5, sizeof st);
-                            CHECK_EQ(stepramp_status(&dev, &st), raw);
-                            CHECK(st.raw == raw && st.state == state && st.busy == (int)busy && st.dir == dir &&
-                                  st.done == (int)done && st.error == (int)error && st.err_code == code);
+                                bus->regs[O_STATUS / 4u] = raw;
+                                memset(&st, 0xA5, sizeof st);
+                                CHECK_EQ(stepramp_status(&dev, &st), raw);
+                                CHECK(st.raw == raw && st.state == state && st.busy == (int)busy && st.dir == dir &&
+                                      st.done == (int)done && st.error == (int)error && st.err_code == code &&
+                                      st.pending == (int)pending);
+                            }
                         }
                     }
                 }
             }
         }
+    }
+    /* DIR_FAULT (bit 6) is in raw only */
+    bus->regs[O_STATUS / 4u] = 0x40u;
+    {
+        stepramp_status_t st;
+        CHECK_EQ(stepramp_status(&dev, &st), 0x40u);
+        CHECK(st.state == 0u && !st.busy && st.dir == 0u && !st.done && !st.error && !st.pending && st.err_code == 0u);
     }
     CHECK_EQ(stepramp_status(&dev, NULL), bus->regs[O_STATUS / 4u]);
     CHECK_EQ(bus->writes, 0u); /* reading STATUS clears nothing */
@@ -848,7 +1126,7 @@ static void test_error_texts(void)
                  "POSITION written while a move runs (the write was ignored)") == 0);
     CHECK(strcmp(stepramp_corename(STEPRAMP_ERR_LATE), "LATE") == 0);
     CHECK(strcmp(stepramp_corename(STEPRAMP_ERR_ZERO_TICKS), "ZERO_TICKS") == 0);
-    for (a = 0; a <= STEPRAMP_ERR_SEGMENT; a++) {
+    for (a = 0; a <= STEPRAMP_ERR_STAGED; a++) {
         CHECK(strcmp(stepramp_strcoreerror(a), "unknown error code") != 0);
         CHECK(strcmp(stepramp_corename(a), "UNKNOWN") != 0);
         CHECK(strstr(stepramp_strresult(STEPRAMP_ECORE(a)), stepramp_strcoreerror(a)) != NULL);
@@ -857,7 +1135,10 @@ static void test_error_texts(void)
             CHECK(strcmp(stepramp_strcoreerror(a), stepramp_strcoreerror(b)) != 0);
         }
     }
-    CHECK(strcmp(stepramp_strcoreerror(STEPRAMP_ERR_SEGMENT + 1u), "unknown error code") == 0);
+    CHECK(strcmp(stepramp_strcoreerror(STEPRAMP_ERR_STAGED + 1u), "unknown error code") == 0);
+    CHECK(strcmp(stepramp_corename(STEPRAMP_ERR_CHANGE), "CHANGE") == 0);
+    CHECK(strcmp(stepramp_corename(STEPRAMP_ERR_STAGED), "STAGED") == 0);
+    CHECK(strstr(stepramp_strresult(STEPRAMP_ECORE(STEPRAMP_ERR_STAGED)), "STATUS.PENDING") != NULL);
     CHECK(strcmp(stepramp_strcoreerror(31u), "unknown error code") == 0);
     CHECK(strcmp(stepramp_strcoreerror(UINT32_MAX), "unknown error code") == 0);
     CHECK(strcmp(stepramp_corename(99u), "UNKNOWN") == 0);
@@ -874,6 +1155,14 @@ static void test_error_texts(void)
     /* the driver's results do not collide with the plan's errors */
     CHECK((int)STEPRAMP_ENULL < STEPRAMP_EID && STEPRAMP_EID != STEPRAMP_ETIMEOUT);
     CHECK(STEPRAMP_ETIMEOUT < STEPRAMP_ECORE(0));
+    for (a = (uint32_t)STEPRAMP_EID; a <= (uint32_t)STEPRAMP_EPENDING; a++) {
+        CHECK(strcmp(stepramp_strresult((int)a), "unknown error") != 0);
+        for (b = (uint32_t)STEPRAMP_EID; b < a; b++) {
+            CHECK(strcmp(stepramp_strresult((int)a), stepramp_strresult((int)b)) != 0);
+        }
+    }
+    CHECK(strcmp(stepramp_strresult(STEPRAMP_EPENDING + 1), "unknown error") == 0);
+    CHECK(STEPRAMP_EPENDING < STEPRAMP_ECORE_BASE);
 }
 
 int main(void)
@@ -887,6 +1176,9 @@ int main(void)
     test_program_segment();
     test_first_program_clears_segment();
     test_jog_errors();
+    test_change_writes();
+    test_change_to();
+    test_queue_writes();
     test_status_decoding();
     test_clear_flags();
     test_wait_done();

@@ -100,11 +100,15 @@ class Segment:
 class Change:
     """What plan_change returns: the segment taken over at pulse P, the speed it starts at (steps/s, snapped to its
     head ramp) and, when the target lies inside the stop distance, the move from rest back to it (signed steps
-    relative to the segment's direction: always negative), else None."""
+    relative to the segment's direction: always negative), else None. pieces: the segment's ideal profile."""
 
     segment: Segment
     start_speed: float
     back: Plan | None
+    #: The segment's ideal profile (the one its exact intervals come from, from the snapped start speed): pieces
+    #: (x_start, x_end, s0, slope) in which the squared speed (steps/s)^2 is s0 + slope * x, x in steps from pulse P
+    #: (speed_at_segment_pulse). The stop before a move back is one piece; empty for a segment of length 0.
+    pieces: tuple[tuple[float, float, float, float], ...] = ()
 
 
 def speed_at_pulse(info: MoveInfo, p: int) -> float:
@@ -117,6 +121,16 @@ def speed_at_pulse(info: MoveInfo, p: int) -> float:
     if x <= info.x_d:
         return info.v_peak
     return math.sqrt(2.0 * info.d * (info.length - x))
+
+
+def speed_at_segment_pulse(change: Change, j: int) -> float:
+    """Speed (steps/s) of a segment's ideal profile (Change.pieces) at its pulse j (j steps after pulse P): the u of
+    a later plan_change that takes over in this segment; 0 at and after its end."""
+    x = float(j)
+    for x_start, x_end, s0, slope in change.pieces:
+        if x_start <= x <= x_end:
+            return math.sqrt(max(s0 + slope * x, 0.0))
+    return 0.0
 
 
 def _sum_products(lo: int, hi: int) -> float:
@@ -182,7 +196,8 @@ def plan_change(
             back = plan_move(-(k - remaining), accel, decel, speed, spr, fclk, prescale)
         except ValueError as err:
             raise ValueError(f"the target lies {k - remaining} steps behind the stop; the move back: {err}") from err
-        return Change(_stop_segment(k, d, f_tick, prescale, ratio), math.sqrt(2.0 * d * k), back)
+        stop = ((0.0, float(k), 2.0 * d * k, -2.0 * d),) if k >= 1 else ()
+        return Change(_stop_segment(k, d, f_tick, prescale, ratio), math.sqrt(2.0 * d * k), back, stop)
     if remaining == 0:
         return Change(_stop_segment(0, d, f_tick, prescale, ratio), 0.0, None)
 
@@ -262,6 +277,7 @@ def plan_change(
         ),
         math.sqrt(start2),
         None,
+        tuple(profile.pieces),
     )
 
 

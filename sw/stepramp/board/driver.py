@@ -49,6 +49,7 @@ class Status:
     done: bool
     error: bool
     err_code: int
+    pending: bool = False  # a CHANGE or QUEUE waits (the staging registers are locked)
 
     @property
     def err_name(self) -> str:
@@ -69,6 +70,7 @@ class Status:
             bool(get("DONE")),
             bool(get("ERROR")),
             get("ERR_CODE"),
+            bool(get("PENDING")),
         )
 
 
@@ -248,6 +250,23 @@ class StepRamp:
         await self.program(plan)
         await self.start()
         return plan
+
+    async def change(self, segment: Segment, direction: int, pulse: int) -> None:
+        """Take `segment` over at pulse `pulse` of the running motion (docs/algorithm.md, "The take-over"): stage its
+        registers, CHANGE_AT, then CTRL.CHANGE (byte 0). The core refuses it (STATUS.ERROR, code CHANGE) when pulse
+        - 1 has been emitted, the core is idle or something is pending; the driver picks the pulse with
+        stepramp.models.engine.change_pulse and the segment with stepramp.board.change.plan_change."""
+        if isinstance(pulse, bool) or not isinstance(pulse, int) or not 1 <= pulse < 1 << 31:
+            raise ValueError(f"the take-over pulse must be in 1 .. 2^31 - 1, got {pulse!r}")
+        plan, regs = segment.registers(direction)
+        await self.program(plan, regs)
+        await self.access.write(offset("CHANGE_AT"), pulse)
+        await self.access.write(offset("CTRL"), _bit("CTRL", "CHANGE"), strobe=0x1)
+
+    async def queue(self, plan: Plan, segment: dict[str, int] | None = None) -> None:
+        """Start `plan` (and segment) when the running motion ends, as a START at its last pulse (CTRL.QUEUE)."""
+        await self.program(plan, segment)
+        await self.access.write(offset("CTRL"), _bit("CTRL", "QUEUE"), strobe=0x1)
 
     async def soft_stop(self) -> None:
         """Decelerate at the programmed decel to zero, then done."""

@@ -94,6 +94,12 @@ class CDriver:
             "stepramp_program": ([dev, ctypes.POINTER(plan)], ctypes.c_int),
             "stepramp_start": ([dev], None),
             "stepramp_move": ([dev, ctypes.c_int64, *(ctypes.c_double,) * 3], ctypes.c_int),
+            "stepramp_change_to": (
+                [dev, ctypes.c_uint32, ctypes.c_double, ctypes.c_int64, *(ctypes.c_double,) * 3],
+                ctypes.c_int,
+            ),
+            "stepramp_queue": ([dev, ctypes.POINTER(plan)], ctypes.c_int),
+            "stepramp_queue_move": ([dev, ctypes.c_int64, *(ctypes.c_double,) * 3], ctypes.c_int),
             "stepramp_soft_stop": ([dev], None),
             "stepramp_hard_stop": ([dev], None),
             "stepramp_enable_irq": ([dev, ctypes.c_int, ctypes.c_int], None),

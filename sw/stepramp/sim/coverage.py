@@ -12,7 +12,10 @@ The bins (docs/verification.md, "Functional coverage"):
   start back for DIR setup;
 * ``stepramp.error.code``: every error code STATUS.ERR_CODE can report;
 * ``stepramp.bus.write``: every register written while idle and while busy;
-* ``stepramp.drive.mode_dir``: every DRIVE mode in both directions (a STEP pulse seen in that mode and direction).
+* ``stepramp.drive.mode_dir``: every DRIVE mode in both directions (a STEP pulse seen in that mode and direction);
+* ``stepramp.change.taken``: a take-over (CTRL.CHANGE) in each state of the running motion: ACCEL, RUN, DECEL;
+* ``stepramp.change.queue``: a queued move started in the same and in the opposite direction, and a jog through
+  zero (a queued move against the direction of an endless motion, after its stop).
 
 Monitors watch the entities' own ports and signals (engine, stepping logic, register file), wherever they sit: the
 engine bench's top, or inside stepramp_core. They wait for value changes of slow signals (state, strobes, error
@@ -58,6 +61,7 @@ STOP_KINDS = ("soft", "hard")
 ERROR_NAMES = tuple(name for name in ERROR_CODES if name != "NONE")
 REGISTER_NAMES = tuple(r.name for r in REGISTERS)
 DRIVE_MODES = tuple(MODES)
+QUEUE_KINDS = ("same direction", "opposite direction", "jog through zero")
 
 _PREFIX = "stepramp"
 
@@ -105,6 +109,16 @@ def sample_drive(mode: str, direction: int) -> None:
 
 
 _export_registered = False
+
+
+@CoverPoint(f"{_PREFIX}.change.taken", vname="state", bins=[ACCEL, RUN, DECEL])
+def sample_change(state: str) -> None:
+    """A take-over, and the state of the interval it lands in (interval P)."""
+
+
+@CoverPoint(f"{_PREFIX}.change.queue", vname="kind", bins=list(QUEUE_KINDS))
+def sample_queue(kind: str) -> None:
+    """A queued move started."""
 
 
 def enabled() -> bool:
@@ -266,6 +280,34 @@ def watch_stepper(stepper: Any) -> None:
         cocotb.start_soon(_watch_held(stepper, kind))
 
 
+async def _watch_change(engine: Any) -> None:
+    from cocotb.triggers import RisingEdge
+
+    while True:
+        await RisingEdge(engine.tk)
+        state = _int(engine.state)
+        if state in (1, 2, 3):
+            sample_change(STATE_NAMES[state])
+
+
+async def _watch_queue(regfile: Any, engine: Any) -> None:
+    """A queued move starts at the engine's done: its direction (STEPS' sign) against the motion that ended."""
+    from cocotb.triggers import ReadOnly, RisingEdge
+
+    while True:
+        await RisingEdge(regfile.eng_done)
+        await ReadOnly()
+        if _int(regfile.q_pend) != 1 or _int(regfile.eng_error) != 0:
+            continue
+        new_dir, old_dir = _int(regfile.direction), _int(regfile.eng_dir)
+        if new_dir == old_dir:
+            sample_queue("same direction")
+        elif _int(engine.p_endless) == 1:
+            sample_queue("jog through zero")
+        else:
+            sample_queue("opposite direction")
+
+
 def watch_core(core: Any) -> None:
     """All monitors on a stepramp_core handle: its engine, stepping logic and register file (the error codes only
     the register file raises: STEPS, POS_BUSY, CFG_BUSY)."""
@@ -281,6 +323,15 @@ def watch_core(core: Any) -> None:
     if regfile is not None and _has(regfile, "error_flag", "err_code_r"):
         _register_export()
         cocotb.start_soon(_watch_error(regfile.error_flag, regfile.err_code_r))
+    if engine is not None and _has(engine, "tk", "state"):
+        cocotb.start_soon(_watch_change(engine))
+    if (
+        engine is not None
+        and regfile is not None
+        and _has(regfile, "eng_done", "q_pend", "eng_error", "direction", "eng_dir")
+        and _has(engine, "p_endless")
+    ):
+        cocotb.start_soon(_watch_queue(regfile, engine))
 
 
 class CoveredBus:

@@ -322,8 +322,18 @@ def _backstop_ns() -> int:
 async def play_moves(dut: Any) -> None:
     """Play every move of the request, back to back, and write what was observed."""
     request = json.loads(Path(os.environ["STEPRAMP_SIM_REQUEST"]).read_text())
-    for name in ("start", "load", "soft_stop", "hard_stop", "change", "change_at", "pos_load", "pos_value", *INPUTS,
-                 *SEGMENT_INPUTS):
+    for name in (
+        "start",
+        "load",
+        "soft_stop",
+        "hard_stop",
+        "change",
+        "change_at",
+        "pos_load",
+        "pos_value",
+        *INPUTS,
+        *SEGMENT_INPUTS,
+    ):
         getattr(dut, name).value = 0
     dut.min_gap.value = 2
     await start_clock_and_reset(dut.clk, dut.rst, settle=2)

@@ -33,6 +33,7 @@ from stepramp.sim.clocking import (
     reset_held,
     start_clock,
 )
+from stepramp.sim.coverage import watch_core
 from stepramp.sim.ipif import IpifMaster
 
 CTRL = offset("CTRL")
@@ -185,6 +186,7 @@ async def play_scripts(dut: Any) -> None:
     request = json.loads(Path(os.environ["STEPRAMP_SCRIPT_REQUEST"]).read_text())
     top = dut._name
     start_clock(dut.aclk if top == "stepramp_axil" else dut.clk)
+    watch_core(dut.core_inst)
     results = []
     for script in request["scripts"]:
         results.append(await _play(dut, top, script))

@@ -1,0 +1,92 @@
+# SPDX-License-Identifier: MIT
+"""Command scripts on the RTL through both bus tops, against the model (issue 15).
+
+The driver's planner (stepramp.board.script.plan_script) turns a script into register writes and commits on the
+script's clock axis and predicts every STEP edge and POSITION after it; stepramp.sim.script_sim plays the same
+commits on stepramp_plb or stepramp_axil (each commit checked to land on its clock edge) and records what the RTL
+does. Every edge and position must be equal, and the core must flag no error (the planner never commits what the
+core would refuse).
+
+* test_named_scripts: stepramp.board.script.NAMED_SCRIPTS (speed up and slow down in RUN, a change in ACCEL and in
+  DECEL, a retarget inside the stop distance and behind the motor, jog through zero, queued moves in the same and
+  in the opposite direction, a soft and a hard stop during a jog), through each top;
+* test_random_scripts: SCRIPT_COUNT (100) random scripts per chunk and top (stepramp.board.script.random_script),
+  two chunks per top: 200 scripts through each top. SCRIPT_SEED (printed; random unless set) seeds them: replay a
+  failure with SCRIPT_SEED=<seed> .venv/bin/pytest tb/test_script_rtl.py -k random;
+* test_cli_sim_and_model_agree: `stepramp sim --script` and `stepramp model --script` on two named scripts print the
+  same edges and positions.
+"""
+
+from __future__ import annotations
+
+import json
+import random
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from stepramp.board.script import NAMED_SCRIPTS, ScriptResult, load_script, plan_script, random_script
+from stepramp.sim.script_sim import simulate_planned
+from tbutil import build_dir, edges_differ, env_int
+
+TOPS = ("plb", "axil")
+CHUNKS = 2
+
+
+def _check(name: str, planned: ScriptResult, rtl: dict[str, Any]) -> None:
+    assert rtl["core_errors"] == [], f"{name}: the core flagged errors (edge, code): {rtl['core_errors']}"
+    assert rtl["edges"] == planned.edges, f"{name}: STEP edges: {edges_differ(rtl['edges'], planned.edges)}"
+    assert rtl["positions"] == planned.positions, f"{name}: positions differ from the model"
+
+
+@pytest.mark.parametrize("top", TOPS)
+def test_named_scripts(top: str) -> None:
+    names = sorted(NAMED_SCRIPTS)
+    planned = [plan_script(load_script(NAMED_SCRIPTS[n])) for n in names]
+    for name, p in zip(names, planned, strict=True):
+        assert p.edges, f"{name}: the script moves nothing"
+    results = simulate_planned(planned, build_dir(f"script_named_{top}"), top)
+    assert len(results) == len(planned)
+    for name, p, r in zip(names, planned, results, strict=True):
+        _check(name, p, r)
+
+
+def _seed() -> int:
+    seed = env_int("SCRIPT_SEED", random.SystemRandom().randrange(1 << 32))
+    print(f"SCRIPT_SEED={seed}", file=sys.stderr)
+    return seed
+
+
+SEED = _seed()
+
+
+@pytest.mark.parametrize("chunk", range(CHUNKS))
+@pytest.mark.parametrize("top", TOPS)
+def test_random_scripts(top: str, chunk: int) -> None:
+    count = env_int("SCRIPT_COUNT", 100)
+    rng = random.Random(f"{SEED}:{top}:{chunk}")
+    scripts = [random_script(rng) for _ in range(count)]
+    planned = [plan_script(load_script(s)) for s in scripts]
+    results = simulate_planned(planned, build_dir(f"script_random_{top}_{chunk}"), top)
+    assert len(results) == count
+    for i, (s, p, r) in enumerate(zip(scripts, planned, results, strict=True)):
+        _check(f"SCRIPT_SEED={SEED} {top} chunk {chunk} script {i}: {json.dumps(s)}", p, r)
+
+
+def test_cli_sim_and_model_agree(tmp_path: Path) -> None:
+    from stepramp.tools.cli import main
+
+    for name in ("jog_through_zero", "retarget_behind"):
+        script = tmp_path / f"{name}.json"
+        script.write_text(json.dumps(NAMED_SCRIPTS[name]))
+        out = {}
+        for tool in ("model", "sim"):
+            target = tmp_path / f"{name}_{tool}.json"
+            extra = ["--build", str(build_dir(f"script_cli_{name}"))] if tool == "sim" else []
+            assert main([tool, "--script", str(script), "--json", str(target), *extra]) == 0, f"{tool} {name}"
+            out[tool] = json.loads(target.read_text())
+        for key in ("edges", "positions"):
+            assert out["sim"][key] == out["model"][key], f"{name}: {key} of sim and model differ"
+        assert out["model"]["edges"], f"{name}: no edges"
