@@ -17,7 +17,10 @@ driver's own view:
 - c_driver_status_fields: stepramp_status in the middle of ACCEL, RUN and DECEL: its fields equal the register map's
   decoding of the raw word, the state is the model's phase there;
 - c_driver_jog: stepramp_jog forwards ended by stepramp_soft_stop, backwards by stepramp_hard_stop, both in RUN:
-  edges as stepramp.models.engine.segment_edges of change.py's segment; a stepramp_move after them as the model's.
+  edges as stepramp.models.engine.segment_edges of change.py's segment; a stepramp_move after them as the model's;
+- c_driver_change_and_queue: stepramp_change_to in RUN at pulse STEP_COUNT + 4 (faster, to a new target), then
+  stepramp_queue_move back while it runs: edges as stepramp.models.engine.change_edges, then the queued move's as the
+  model's from its own start, which the start gate gives at the first motion's last pulse; STATUS.PENDING; POSITION.
 """
 
 from __future__ import annotations
@@ -32,11 +35,12 @@ import pytest
 from cocotb.triggers import ClockCycles, First, RisingEdge
 
 from peripheral_tb import TOPS, PeripheralTb, profiles_limit_us
-from stepramp.board.change import plan_change
-from stepramp.board.plan import Plan, plan_move
-from stepramp.board.regmap import ERROR_CODES, ID_VALUE, REGISTERS_BY_NAME
+from stepramp.board.change import Segment, plan_change, speed_at_pulse
+from stepramp.board.plan import Plan, plan_move, plan_move_info
+from stepramp.board.regmap import ERROR_CODES, ID_VALUE, REGISTERS_BY_NAME, offset
+from stepramp.models.engine import change_edges, edges_with_stop, phase_of, segment_edges
 from stepramp.models.engine import edges as model_edges
-from stepramp.models.engine import edges_with_stop, phase_of, segment_edges
+from stepramp.models.stepping import gate_timing
 from stepramp.sim.cdriver import CDriver
 from stepramp.sim.profiles import PROFILES_BY_NAME, Profile
 from stepramp.sim.runner import run_cocotb
@@ -290,7 +294,80 @@ async def c_driver_jog(dut) -> None:
     tb.finish()
 
 
-C_TESTS = ["c_driver_moves_by_polling", "c_driver_isr", "c_driver_stops", "c_driver_status_fields", "c_driver_jog"]
+@cocotb.test(timeout_time=3, timeout_unit="ms")  # measured 0.98 ms
+async def c_driver_change_and_queue(dut) -> None:
+    """stepramp_change_to in RUN, at pulse P = STEP_COUNT + 4, to a faster speed and a new target: every edge of the
+    motion as change_edges says of change.py's segment for the same u (the C plan is bit-identical); while it runs,
+    stepramp_queue_move back: it starts at the motion's last pulse (through the start gate: DIR changes), its edges
+    the model's from its own start edge; STATUS.PENDING while each is pending; POSITION the sum."""
+    prof = PROFILES_BY_NAME["trap_basic"]
+    tb, cdrv = await c_bench(dut, prof)
+    plan, info = plan_move_info(**prof.args())
+    st = cdrv.status
+    n0, s0 = len(tb.step_edges), len(tb.start_edges)
+    await c_move(cdrv, prof)
+    await until_pulses(tb, n0 + plan.sa + 10)
+    await cdrv.dev_call("stepramp_status", ctypes.byref(st))
+    assert st.state == STATE_CODES["RUN"] and not st.pending, f"state {st.state}, pending {st.pending} in the cruise"
+    # the change: faster, harder accel, softer decel, to a target `remaining` steps past pulse P
+    p = await tb.bus.read(offset("STEP_COUNT")) + 4
+    u = speed_at_pulse(info, p)
+    accel, decel, speed, remaining = 1.2 * prof.accel, 0.7 * prof.decel, 1.5 * prof.speed, 250
+    change = plan_change(u, remaining, accel, decel, speed, prof.spr, prof.fclk, prof.prescale)
+    assert change.back is None and change.segment.length == remaining
+    pulses_before = len(tb.step_edges) - n0
+    rc = await cdrv.dev_call("stepramp_change_to", p, u, remaining, accel, decel, speed)
+    assert rc == OK, f"stepramp_change_to: {await cdrv.call('stepramp_strresult', rc)}"
+    dut._log.info("change at pulse %d: the C call ran from pulse %d to %d", p, pulses_before, len(tb.step_edges) - n0)
+    await cdrv.dev_call("stepramp_status", ctypes.byref(st))
+    assert st.pending and st.busy and not st.error, f"the change was not accepted: {status_fields(st.raw)}"
+    # PENDING falls two clocks after pulse P - 1's engine edge: by pulse P's STEP edge
+    await until_pulses(tb, n0 + p + 1)
+    await cdrv.dev_call("stepramp_status", ctypes.byref(st))
+    assert not st.pending and st.busy and not st.error, f"after pulse {p}: {status_fields(st.raw)}"
+    # the queued move back, staged while the changed motion runs
+    back = dataclasses.replace(prof, name="trap_basic_back", steps=-120)
+    rc = await cdrv.dev_call("stepramp_queue_move", back.steps, back.accel, back.decel, back.speed)
+    assert rc == OK, f"stepramp_queue_move: {await cdrv.call('stepramp_strresult', rc)}"
+    await cdrv.dev_call("stepramp_status", ctypes.byref(st))
+    assert st.pending and st.busy and not st.error, f"the queue was not accepted: {status_fields(st.raw)}"
+    assert cdrv.dev.segment_dirty == 0, "stepramp_queue_move left the change's segment registers set"
+    for which in ("the changed motion", "the queued move"):
+        rc = await cdrv.dev_call("stepramp_wait_done", 100_000)
+        assert rc == OK, f"{which}: stepramp_wait_done: {await cdrv.call('stepramp_strresult', rc)}"
+    await cdrv.dev_call("stepramp_status", ctypes.byref(st))
+    assert not st.busy and not st.pending and st.dir == 1, f"after the queued move: {status_fields(st.raw)}"
+    # the changed motion: intervals 1 .. P of the move, then the segment's, one accumulator
+    want = change_edges(Segment.of_move(plan), p, change.segment, prof.prescale)
+    assert len(want) == p + 1 + remaining
+    edges = tb.edges_since(n0, s0)[: len(want)]
+    assert edges == want, f"the change at pulse {p}: {edges_differ(edges, want)}"
+    # the queued move: its own start, after the first motion's last pulse, as the start gate times a START whose
+    # request is sampled one clock after that STEP edge (DIR changes: hold, then setup, at their reset values)
+    assert len(tb.start_edges) == s0 + 2, f"{len(tb.start_edges) - s0} engine starts, expected 2"
+    n1 = n0 + len(want)
+    last = tb.step_edges[n1 - 1]
+    gate = gate_timing(last + 1, True, last, dir_hold=0, dir_setup=0)
+    assert tb.step_edges[n1] == gate.first_step_edge, (
+        f"the queued move's first STEP edge is {tb.step_edges[n1] - last} clocks after the last one, expected "
+        f"{gate.first_step_edge - last}"
+    )
+    assert tb.pins is not None
+    edges, want = tb.pins.since(n1, s0 + 1), model_edges(plan_move(**back.args()))
+    assert edges == want, f"the queued move: {edges_differ(edges, want)}"
+    position = p + 1 + remaining + back.steps
+    assert await cdrv.dev_call("stepramp_position") == position, f"POSITION is not {position}"
+    tb.finish()
+
+
+C_TESTS = [
+    "c_driver_moves_by_polling",
+    "c_driver_isr",
+    "c_driver_stops",
+    "c_driver_status_fields",
+    "c_driver_jog",
+    "c_driver_change_and_queue",
+]
 
 
 @pytest.mark.parametrize("top", TOPS)

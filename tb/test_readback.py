@@ -12,7 +12,7 @@ the moves, a sweep reads every register of stepramp.board.regmap. Each read is c
 * the bit-exact model (stepramp.models.engine.edges / phases, the plan's PRESCALE) for STATUS.STATE / BUSY / DIR,
   POSITION, CUR_DELAY and STEP_COUNT, at the exact clock edge at which the register file sampled the read;
 * the sticky-flag rules of docs/stepramp_plb.md for DONE, ERROR and ERR_CODE (a POSITION write during the second
-  move sets ERROR with POS_BUSY);
+  move sets ERROR with POS_BUSY); PENDING 0 (no CHANGE or QUEUE is written);
 * the last value written, masked to the register's RW fields (stepramp.board.regmap), for every storage register and
   CTRL (its WS bits read 0); the reset value for constant read-only registers (ID).
 
@@ -89,8 +89,8 @@ def merge(old: int, new: int, strobe: int) -> int:
 
 
 def is_motion(reg: Register) -> bool:
-    """The staging registers (STEPS .. STOP_RATIO, SEGMENT .. HEAD_PROD_HI): plain storage that may be written at
-    any time (docs/registers.md)."""
+    """The staging registers (STEPS .. STOP_RATIO, SEGMENT .. CHANGE_AT): plain storage that may be written at any
+    time while nothing is pending (docs/registers.md; this test never writes CHANGE or QUEUE, so never PENDING)."""
     return reg.name in STAGING
 
 
@@ -290,6 +290,7 @@ class Expected:
                 "BUSY": int(view.busy),
                 "DIR": view.direction,
                 "DIR_FAULT": 0,
+                "PENDING": 0,  # no CHANGE or QUEUE is ever written here (write() allows START only)
                 **self.sticky(sample),
             }
             missing = [f.name for f in reg.fields if f.name not in want]

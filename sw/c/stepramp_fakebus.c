@@ -74,7 +74,7 @@ static long window_offset(uintptr_t addr)
 
 static int mapped(uint32_t word)
 {
-    return word <= WORD(HEAD_PROD_HI);
+    return word <= WORD(CHANGE_AT);
 }
 
 static uint32_t merge(uint32_t old, uint32_t data, uint32_t be)

@@ -5,7 +5,7 @@
  * writes (little-endian lanes: byte address offset b is bits 8b+7:8b), ID and the status fields read only,
  * CTRL command bits act on write and read 0, STATUS.DONE / ERROR cleared by writing 1, POSITION writes
  * ignored (ERROR, POS_BUSY) while busy, bus errors counted for addresses outside the 256-byte window (or past
- * HEAD_PROD_HI, the last register) -- and
+ * CHANGE_AT, the last register) -- and
  * a log of every write and a count of the driver's STEPRAMP_IDLE() calls. The "core" side is driven by the test:
  * stepramp_fakebus_set_status() and stepramp_fakebus_finish_after().
  *

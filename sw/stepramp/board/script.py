@@ -871,3 +871,6 @@ def random_script(rng: random.Random, n_commands: int = 6) -> dict[str, Any]:
         commands.append(cmd)
     until = min(at + rng.randint(20_000, 120_000), RANDOM_SPAN)
     return {"fclk": RANDOM_FCLK, "spr": RANDOM_SPR, "prescale": 1, "commands": commands, "until": until}
+
+
+NAMED_SCRIPTS: dict[str, dict[str, Any]] = {}
