@@ -307,6 +307,9 @@ static int plan_segment(stepramp_segment_t *seg, stepramp_change_info_t *raw, do
     }
     sa = boundary(x_h, positioning ? (double)remaining : MAX_STEPS_D);
     sd = positioning ? boundary(x_c, (double)remaining) : 0;
+    if (positioning && sd < sa) { /* sa <= sd for the engine's BOUNDS check (a triangle's x_h may round past x_c) */
+        sd = sa;
+    }
     t_first = profile_interval(&prof, 1);
     head_seed(head, index, sa - 2, args, &seed, &t_first);
     /* Segment(...): its arguments in Python's order, then __post_init__ */

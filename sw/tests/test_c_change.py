@@ -267,6 +267,16 @@ def test_random_changes_bit_for_bit(lib: ctypes.CDLL) -> None:
     assert min(kinds.values()) >= 30, kinds
 
 
+def test_a_triangle_whose_boundaries_round_apart(lib: ctypes.CDLL) -> None:
+    """A change in the final decel to a farther target (a triangle): x_h rounds past x_c, and both drivers keep
+    sa <= sd (sd = sa) the same way."""
+    case = {"u": 718.0961047225787, "remaining": 87, "accel": 300.0, "decel": 300.0, "speed": 60.0, "spr": 200.0}
+    case |= {"fclk": 1e6, "prescale": 1}
+    _compare(lib, [case])
+    seg = plan_change(**case).segment
+    assert seg.sa == seg.sd == 31, seg
+
+
 # extreme but finite values: a, d, v in steps units that underflow to 0 or overflow to inf, huge ramp indices
 _EXTREME: dict[str, tuple[float | int | None, ...]] = {
     "u": (0.0, 5e-324, 1e-3, 1e6, 1e9, 1e150, 1e200, 1.7976931348623157e308),

@@ -131,6 +131,22 @@ def _shape(length: int, a: float, d: float, v: float) -> tuple[float, float, flo
     return x_p, x_p, math.sqrt(2 * a * x_p), True
 
 
+def test_positioning_segments_keep_the_engine_bounds() -> None:
+    # The engine refuses (BOUNDS) a segment with sa < 1, sd < sa or sd > L (docs/registers.md, STATUS.ERR_CODE): a
+    # change in the final decel of a move to a farther target at the same speed gave sa = 31 > sd = 30 (a triangle whose
+    # x_h rounds past x_c); and 2,000 random changes.
+    cases = [Case.of(718.0961047225787, 87, 300.0, 300.0, 60.0, 200.0, 1e6)]
+    rng = random.Random(SEED)
+    while len(cases) < 2000:
+        case = _random_case(rng)
+        if case is not None and case.remaining:
+            cases.append(case)
+    for case in cases:
+        seg = plan_change(case.u, case.remaining, **case.args).segment
+        if seg.length is not None and seg.length >= 1:
+            assert 1 <= seg.sa <= seg.sd <= seg.length, f"{case}: {seg}"
+
+
 def test_random_segments_against_physics() -> None:
     rng = random.Random(SEED)
     print(f"seed {SEED} (STEPRAMP_SEED={SEED} replays it)")

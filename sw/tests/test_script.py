@@ -13,6 +13,7 @@ their seed (STEPRAMP_SEED replays one).
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import os
@@ -31,7 +32,6 @@ from stepramp.board.script import (
     CHANGE,
     HARD_STOP,
     NAMED_SCRIPTS,
-    PREP_CLOCKS,
     QUEUE,
     SOFT_STOP,
     START,
@@ -42,7 +42,15 @@ from stepramp.board.script import (
     random_script,
 )
 from stepramp.models import ideal
-from stepramp.models.engine import change_edges, change_pulse, edges_with_stop, segment_edges
+from stepramp.models.engine import (
+    accumulate,
+    change_edges,
+    change_pulse,
+    edges_with_stop,
+    segment_edges,
+    segment_stop_values,
+    segment_values,
+)
 from stepramp.models.engine import edges as model_edges
 from stepramp.tools.cli import main
 
@@ -169,12 +177,96 @@ def test_one_change_is_change_edges_after_the_start_timing() -> None:
         assert got.edges != before  # the change does change the motion
 
 
+def test_a_change_at_the_last_pulse_is_a_segment_of_length_0() -> None:
+    """A set whose P is the move's last pulse (L): the speed there is 0, the target is P's own position, so the
+    segment has length 0 (STEPS = 1) and the motion ends with pulse P, exactly as the move would have."""
+    plain = _plain(300)
+    at = next(w for w in range(plain[-3] - 600, plain[-1]) if _pulse_or_none(plain, w) == 299)
+    got = run(script({"at": 0, "op": "move", "steps": 300, **MOVE}, {"at": at, "op": "set", "speed": 150.0}))
+    assert got.rejected == [] and got.edges == plain
+    regs = dict(got.actions[1].writes)
+    assert got.actions[1].ctrl == CHANGE and regs[offset("STEPS")] == 1 and regs[offset("CHANGE_AT")] == 299
+
+
+def _pulse_or_none(edges: list[int], at: int) -> int | None:
+    try:
+        return change_pulse(edges, at)
+    except ValueError:
+        return None
+
+
+def test_a_soft_stop_and_a_pending_change() -> None:
+    """A soft stop sampled up to E + 1 (E: pulse P - 1's engine edge) drops the pending change and is decided as in
+    the move; one sampled after the take-over (E + 2 on) is not decided at pulse P but at the segment's pulse 1, by
+    the segment's rules; one within a few clocks of the take-over is refused (the boundary is the RTL's)."""
+    plan, info = plan_move_info(300, **MOVE, spr=200.0, fclk=1e6)
+    plain = _plain(300)
+    at = 80_000
+    p = change_pulse(plain, at)
+    took = plain[p - 1] - 1  # E
+    change = plan_change(speed_at_pulse(info, p), info.length - p, 2000.0, 2000.0, 150.0, 200.0, 1e6)
+    move = {"at": 0, "op": "move", "steps": 300, **MOVE}
+    commit = {"at": at, "op": "set", "speed": 150.0}
+    # dropped: sampled at E - 3, decided at pulse P by the move's own rules
+    got = run(script(move, commit, {"at": took - 4, "op": "soft_stop"}))
+    assert got.rejected == [] and got.edges == [e + 3 for e in edges_with_stop(plan, "soft", took - 3 - 2)]
+    # deferred: sampled at E + 5, before pulse P's engine edge: decided at P + 1 by the segment's rules
+    assert plain[p] - 1 > took + 5
+    got = run(script(move, commit, {"at": took + 4, "op": "soft_stop"}))
+    values = segment_stop_values(change.segment, 1)
+    assert got.rejected == [] and values is not None
+    want = accumulate(segment_values(Segment.of_move(plan), p) + values)
+    assert got.edges == [t + 5 for t in want]
+    # at the take-over itself: refused, nothing changes
+    for sample in (took - 2, took + 1, took + 2, took + 4):
+        got = run(script(move, commit, {"at": sample - 1, "op": "soft_stop"}))
+        assert [r["op"] for r in got.rejected] == ["soft_stop"] and "taken over" in got.rejected[0]["reason"]
+        assert got.edges == run(script(move, commit)).edges
+
+
+def test_refusals_and_commands_without_an_action() -> None:
+    move = {"at": 0, "op": "move", "steps": 300, **MOVE}
+    jog = {"at": 0, "op": "jog", "speed": 100.0, "accel": 2000.0, "decel": 2000.0}
+    cases: list[tuple[list[dict[str, Any]], str]] = [
+        ([move, {"at": 20_000, "op": "move", "steps": 5, **MOVE}], "moving"),
+        ([move, {"at": 299, "op": "set", "speed": 50.0}], "overlap the action at 0"),
+        ([move, {"at": 15, "op": "soft_stop"}], "less than 16 clocks"),
+        ([move, {"at": 20_000, "op": "set", "speed": 50.0}, {"at": 20_400, "op": "set", "speed": 40.0}], "pending"),
+        ([move, {"at": 20_000, "op": "queue", "steps": 5, **MOVE}, {"at": 40_000, "op": "set", "speed": 9.0}], "queue"),
+        ([jog, {"at": 20_000, "op": "queue", "steps": 5, **MOVE}], "behind a jog"),
+        ([move, {"at": 143_000, "op": "set", "speed": 50.0}], "ends before the change"),
+        ([jog, {"at": 20_000, "op": "jog", "speed": 5000.0}], "speed too high"),
+        ([{"at": 0, "op": "move_to", "position": 10}], "no speed or accel or decel given yet"),
+        ([{"at": 0, "op": "move", "steps": 10_000, **MOVE, "speed": 1e4}], "speed too high"),
+    ]
+    for commands, reason in cases:
+        got = run(script(*commands, until=400_000))
+        assert len(got.rejected) == 1 and reason in got.rejected[0]["reason"], (commands[-1], got.rejected)
+        assert got.rejected[0]["at"] == commands[-1]["at"] and got.rejected[0]["op"] == commands[-1]["op"]
+        assert [a.command for a in got.actions] == list(range(len(commands) - 1)), "a refused command acted"
+    # nothing to do: stops when idle, a jog at 0 when idle, a move_to where the motor is, a move of 0, a set
+    idle = [
+        {"at": 0, "op": "soft_stop"}, {"at": 10, "op": "hard_stop"}, {"at": 20, "op": "jog", "speed": 0.0},
+        {"at": 30, "op": "move_to", "position": 0}, {"at": 40, "op": "move", "steps": 0, **MOVE},
+        {"at": 50, "op": "set", "speed": 30.0},
+    ]  # fmt: skip
+    got = run(script(*idle))
+    assert got.actions == [] and got.rejected == [] and got.edges == []
+    # the set is in force for what follows: a move_to with no values of its own runs at 30 rad/s
+    got = run(script(*idle, {"at": 400, "op": "move_to", "position": 300}))
+    assert abs(min(_intervals(got.edges)) - _period(30.0)) <= 1.0 and got.positions[-1] == 300
+
+
 def test_stops_are_the_engine_models_stops() -> None:
     """A soft stop written at W is sampled at the move's edge W + 1 - (s + 1) and a hard stop at W: exactly
     edges_with_stop in the move's numbering (tb/peripheral_tb.py's stop_after), also for a jog (segment_edges)."""
     plan = plan_move(300, **MOVE, spr=200.0, fclk=1e6)
+    plain = _plain(300)
     start_edge = 1  # a START at 0: the gate passes the request of edge 1 at once
-    for at in (3_000, 30_000, 80_000, 125_000, 140_000):
+    # around pulses' edges (STEP edge - 1 is the engine's): a soft stop sampled at pulse k's engine edge is decided at
+    # pulse k + 1, one sampled a clock earlier at pulse k; a hard stop at W keeps a pulse whose engine edge is W
+    around = [plain[k] + dw for k in (10, 150) for dw in (-3, -2, -1, 0)]
+    for at in (3_000, 30_000, 80_000, 125_000, 140_000, *around):
         for kind, op in (("soft", "soft_stop"), ("hard", "hard_stop")):
             got = run(script({"at": 0, "op": "move", "steps": 300, **MOVE}, {"at": at, "op": op}))
             request = at + 1 - (start_edge + 1) if kind == "soft" else at - start_edge
@@ -271,7 +363,7 @@ def check_physics(obj: dict[str, Any], got: ScriptResult) -> dict[str, int]:
     counts = {"pulses": 0, "changes": 0, "queued": 0, "starts": 0}
     assert all(e <= got.until for e in edges)
     # the pins: rising edges at least STEP width + space (2 clocks) apart, POSITION +-1 per edge
-    assert all(b - a >= 2 for a, b in zip(edges, edges[1:], strict=False)), "two STEP edges closer than 2 clocks"
+    assert all(b - a >= 2 for a, b in itertools.pairwise(edges)), "two STEP edges closer than 2 clocks"
     steps = [b - a for a, b in zip([0, *positions], positions, strict=False)]
     assert all(s in (1, -1) for s in steps), "POSITION moves by other than one step per edge"
     values = _values(obj, got)
@@ -279,7 +371,7 @@ def check_physics(obj: dict[str, Any], got: ScriptResult) -> dict[str, int]:
     rates = [c[k] / ALPHA for c in obj["commands"] for k in ("accel", "decel") if k in c]
     starts = _motion_starts(got)
     bounds = [*starts, len(edges)]
-    for b, e in zip(bounds, bounds[1:], strict=False):
+    for b, e in itertools.pairwise(bounds):
         # one direction per motion, and a queued START 5 clocks after the last pulse (7 with a DIR change)
         assert len(set(steps[b:e])) == 1, f"the direction changes within the motion from edge {edges[b]}"
         started = any(a.ctrl & START and edges[b] - a.at in (5, 7) for a in got.actions)
@@ -378,9 +470,7 @@ def _judge_motion(
     return judged
 
 
-def _matching_change(
-    u: float, length: int | None, args: tuple[float, ...], direction: int, action: Action
-) -> Change:
+def _matching_change(u: float, length: int | None, args: tuple[float, ...], direction: int, action: Action) -> Change:
     """plan_change from the ideal speed u at P, as the action's registers hold it: u or one of its nearest doubles
     (the snap floor(u^2 / (2 d)) is not continuous where P lies in a cruise at a snapped speed, and the ideal speed
     is computed in another order of operations than the driver's)."""
@@ -438,6 +528,7 @@ def test_random_scripts_against_physics() -> None:
     totals = {"pulses": 0, "changes": 0, "queued": 0, "starts": 0, "goals": 0}
     ctrls: set[int] = set()
     ops: set[str] = set()
+    jog_cases = {"reversals": 0, "soft": 0, "hard": 0}
     for n in range(200):
         obj = random_script(rng)
         got = run(obj)
@@ -453,8 +544,202 @@ def test_random_scripts_against_physics() -> None:
         except AssertionError as err:
             raise AssertionError(f"script {n} of seed {SEED}: {err}\n{json.dumps(obj)}") from err
         ctrls |= {a.ctrl for a in got.actions}
+        for before, action in itertools.pairwise(got.actions):
+            jogging = bool(before.writes) and _steps_register(before)[1]
+            if jogging and action.ctrl == SOFT_STOP | QUEUE and _steps_register(action)[1]:
+                jog_cases["reversals"] += 1  # a jog through zero: stop, then the jog the other way
+            elif jogging and action.ctrl in (SOFT_STOP, HARD_STOP):
+                jog_cases["soft" if action.ctrl == SOFT_STOP else "hard"] += 1
         ops |= {c["op"] for c in obj["commands"]}
-    print(f"200 scripts: {totals}")
+    print(f"200 scripts: {totals}, in jogs: {jog_cases}")
+    assert min(jog_cases.values()) >= 5, jog_cases
     assert ops == {"move", "move_to", "jog", "set", "queue", "soft_stop", "hard_stop"}
     assert ctrls == {START, CHANGE, QUEUE, SOFT_STOP, HARD_STOP, SOFT_STOP | QUEUE}
     assert totals["changes"] >= 100 and totals["queued"] >= 50 and totals["goals"] >= 40, totals
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# (e) the named scripts
+# ---------------------------------------------------------------------------------------------------------------
+
+F_TICK = BASE["fclk"]
+
+
+def _period(speed: float) -> float:
+    """Clocks a step at `speed` rad/s (prescale 1)."""
+    return F_TICK / (speed / ALPHA)
+
+
+def _cd0(decel: float) -> float:
+    """The last step of a decel at `decel` rad/s^2 to rest, clocks: f sqrt(2 / d)."""
+    return F_TICK * math.sqrt(2.0 / (decel / ALPHA))
+
+
+def _intervals(edges: list[int]) -> list[int]:
+    return [b - a for a, b in itertools.pairwise(edges)]
+
+
+def _reversals(positions: list[int]) -> list[int]:
+    """Indices of the edges at which the direction of the count changes."""
+    steps = [b - a for a, b in itertools.pairwise([0, *positions])]
+    return [i for i in range(1, len(steps)) if steps[i] != steps[i - 1]]
+
+
+def _plain(steps: int) -> list[int]:
+    """The STEP edges of a move from rest STARTed at 0 (no DIR change: the request of edge 1 passes at once, STEP
+    rises 4 clocks after the engine's start)."""
+    plan = plan_move(steps, **MOVE, spr=200.0, fclk=1e6)
+    return [e + 3 for e in model_edges(plan)]
+
+
+def _named(name: str) -> ScriptResult:
+    got = run(NAMED_SCRIPTS[name])
+    assert got.rejected == [], (name, got.rejected)
+    check_physics(NAMED_SCRIPTS[name], got)
+    return got
+
+
+def _change_at(got: ScriptResult) -> int:
+    (action,) = [a for a in got.actions if a.ctrl == CHANGE]
+    return dict(action.writes)[offset("CHANGE_AT")]
+
+
+def test_named_speed_up_and_slow_down_in_run() -> None:
+    plain = _plain(600)
+    for name, speed in (("speed_up_in_run", 150.0), ("slow_down_in_run", 50.0)):
+        got = _named(name)
+        p = _change_at(got)
+        assert 80 < p < 520, "the change lands in RUN (ramps of 80 steps)"
+        assert got.edges[: p + 1] == plain[: p + 1], "the pulses up to P are the move's"
+        assert got.positions[-1] == 600
+        after = _intervals(got.edges[p:])
+        cruise = [i for i in after if abs(i - _period(speed)) <= 1.0]
+        assert len(cruise) >= 100, f"{name}: no cruise at {speed} rad/s ({_period(speed):.1f} clocks)"
+        assert min(after) >= math.floor(_period(max(speed, 100.0))) - 1, f"{name}: faster than commanded"
+        assert (got.edges[-1] < plain[-1]) == (speed > 100.0), "a faster motion ends sooner, a slower one later"
+
+
+def test_named_changes_in_accel_and_in_decel() -> None:
+    plain = _plain(600)
+    got = _named("change_in_accel")
+    p = _change_at(got)
+    assert 2 <= p < 80 and got.edges[: p + 1] == plain[: p + 1]
+    ramp = _intervals(got.edges[p:])
+    top = ramp.index(min(ramp))
+    assert all(b <= a + 1 for a, b in itertools.pairwise(ramp[:top])), "the accel does not go on up to the speed"
+    assert abs(min(ramp) - _period(150.0)) <= 1.0 and got.positions[-1] == 600
+    # the new ramp: twice the accel, so the speed grows faster than in the plain move after P
+    assert got.edges[p + 20] - got.edges[p] < plain[p + 20] - plain[p]
+    got = _named("change_in_decel")
+    p = _change_at(got)
+    assert 520 < p < 599 and got.edges[: p + 1] == plain[: p + 1] and got.positions[-1] == 600
+    last = _intervals(got.edges)[-1]
+    assert abs(last - _cd0(4000.0)) <= 0.01 * _cd0(4000.0), f"last step {last}, not that of the new decel"
+    assert abs(_intervals(plain)[-1] - _cd0(2000.0)) <= 0.01 * _cd0(2000.0)
+    assert min(_intervals(got.edges[p:])) >= math.floor(_period(100.0)) - 1
+
+
+@pytest.mark.parametrize(("name", "target"), [("retarget_inside_stop_distance", 270), ("retarget_behind", 100)])
+def test_named_retargets_reverse_and_end_on_the_target(name: str, target: int) -> None:
+    """The motor cannot stop at (or go back to) the target from its speed: a soft stop at the decel, DIR changes,
+    and a move back ends exactly on the target."""
+    got = _named(name)
+    assert [a.ctrl for a in got.actions] == [START, SOFT_STOP | QUEUE]
+    (turn,) = _reversals(got.positions)
+    stop_at = got.positions[turn - 1]
+    stood = [p for e, p in zip(got.edges, got.positions, strict=True) if e <= 100_000][-1]
+    # it stops the stop distance v^2 / (2 d) (80 steps at 100 rad/s and 2000 rad/s^2) beyond where it was
+    assert abs(stop_at - stood - 80) <= 3 and stop_at > target
+    assert got.edges[turn] - got.edges[turn - 1] == 7, "the move back starts after DIR setup (7 clocks)"
+    before = _intervals(got.edges[:turn])
+    assert abs(before[-1] - _cd0(2000.0)) <= 0.01 * _cd0(2000.0), "the motor is not at rest before reversing"
+    assert got.positions[turn:] == list(range(stop_at - 1, target - 1, -1)), "not counting down to the target"
+
+
+def test_named_jog_through_zero() -> None:
+    got = _named("jog_through_zero")
+    (turn,) = _reversals(got.positions)
+    up, down = got.positions[:turn], got.positions[turn:]
+    assert up == list(range(1, turn + 1)) and all(b == a - 1 for a, b in itertools.pairwise([up[-1], *down]))
+    assert got.edges[turn] - got.edges[turn - 1] == 7, "DIR changes between the two jogs"
+    before, after = _intervals(got.edges[:turn]), _intervals(got.edges[turn:])
+    assert abs(before[-1] - _cd0(2000.0)) <= 0.01 * _cd0(2000.0), "not at rest before reversing"
+    assert abs(min(before) - _period(100.0)) <= 1.0 and abs(min(after) - _period(100.0)) <= 1.0
+    assert abs(after[-1] - _cd0(2000.0)) <= 0.01 * _cd0(2000.0), "the soft stop does not end at rest"
+    assert down[-1] < 0, "the way down goes through zero"
+
+
+def test_named_jog_changes_end_on_the_target() -> None:
+    got = _named("jog_changes")
+    assert [a.ctrl for a in got.actions] == [START, CHANGE, CHANGE, CHANGE]
+    steps = _intervals(got.edges)
+    assert abs(min(steps) - _period(150.0)) <= 1.0
+    assert sum(1 for i in steps if abs(i - _period(60.0)) <= 1.0) >= 50
+    assert got.positions == list(range(1, 901))
+
+
+def test_named_queued_moves() -> None:
+    """The queued move starts exactly as a START written at the running move's last STEP edge: its request one clock
+    later, STEP 4 clocks after the gate lets it through (same direction: at once; DIR change: DIR at the next edge,
+    the start one clock after)."""
+    for name, steps, gap, final in (("queue_same_direction", 200, 5, 500), ("queue_opposite_direction", -200, 7, 100)):
+        got = _named(name)
+        assert [a.ctrl for a in got.actions] == [START, QUEUE]
+        assert got.edges[:300] == _plain(300)
+        last = got.edges[299]
+        second = plan_move(steps, **MOVE, spr=200.0, fclk=1e6)
+        assert got.edges[300:] == [last + gap - 2 + e for e in model_edges(second)]
+        assert got.positions[-1] == final and len(_reversals(got.positions)) == (steps < 0)
+
+
+def test_named_stops_in_a_jog() -> None:
+    got = _named("soft_stop_in_jog")
+    decided = next(i for i, e in enumerate(got.edges) if e - 1 > 120_001)  # the first engine edge after the sample
+    stop = math.ceil((100.0 / ALPHA) ** 2 / (2.0 * 2000.0 / ALPHA))  # the stop distance from 100 rad/s, 80 steps
+    assert len(got.edges) == decided + 1 + stop
+    tail = _intervals(got.edges[decided:])
+    assert all(b >= a - 1 for a, b in itertools.pairwise(tail)), "the speed rises in the stop"
+    assert abs(tail[-1] - _cd0(2000.0)) <= 0.01 * _cd0(2000.0)
+    got = _named("hard_stop_in_jog")
+    assert got.edges[-1] <= 120_001 < got.edges[-1] + math.ceil(_period(100.0)) + 1
+    assert got.positions == list(range(-1, -len(got.edges) - 1, -1))
+
+
+def test_named_scripts_are_all_tested() -> None:
+    tested = {
+        "speed_up_in_run", "slow_down_in_run", "change_in_accel", "change_in_decel", "retarget_inside_stop_distance",
+        "retarget_behind", "jog_through_zero", "jog_changes", "queue_same_direction", "queue_opposite_direction",
+        "soft_stop_in_jog", "hard_stop_in_jog",
+    }  # fmt: skip
+    assert set(NAMED_SCRIPTS) == tested
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# the command line
+# ---------------------------------------------------------------------------------------------------------------
+
+
+def test_model_script_on_the_command_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "script.json"
+    path.write_text(json.dumps(NAMED_SCRIPTS["retarget_behind"]))
+    out = tmp_path / "out.json"
+    assert main(["model", "--script", str(path), "--json", str(out)]) == 0
+    got = json.loads(out.read_text())
+    assert list(got) == ["tool", "script", "edges", "positions", "rejected", "error"]
+    planned = run(NAMED_SCRIPTS["retarget_behind"])
+    assert got["tool"] == "model" and got["script"] == NAMED_SCRIPTS["retarget_behind"] and got["error"] is None
+    assert got["edges"] == planned.edges and got["positions"] == planned.positions and got["rejected"] == []
+    assert got["positions"][-1] == 100
+    # invalid scripts: exit 2 with the reason, nothing planned
+    path.write_text(json.dumps({**BASE, "commands": [{"at": 0, "op": "spin"}]}))
+    assert main(["model", "--script", str(path)]) == 2
+    got = json.loads(capsys.readouterr().out)
+    assert "unknown op 'spin'" in got["error"] and got["edges"] == []
+    path.write_text("{not json")
+    assert main(["model", "--script", str(path)]) == 2
+    assert "cannot read the script" in json.loads(capsys.readouterr().out)["error"]
+    # the move options: required without --script, refused with it
+    assert main(["model", "--steps", "10"]) == 2
+    assert "required (without --script): --accel" in capsys.readouterr().err
+    assert main(["model", "--script", str(path), "--steps", "10"]) == 2
+    assert "--script takes no move options (--steps)" in capsys.readouterr().err

@@ -243,7 +243,8 @@ def plan_change(
         return min(max(math.floor(min(x, last)) + 1, 1), last)
 
     sa = boundary(x_h)
-    sd = boundary(x_c) if positioning else 0
+    # sa <= sd, as the engine's BOUNDS check needs: in a triangle x_h and x_c meet, and rounding may put x_h past x_c
+    sd = max(boundary(x_c), sa) if positioning else 0
     t_first = profile.interval(1)
     n = sa - 2  # the head's recurrence intervals 2 .. sa - 1
     if head == UP:

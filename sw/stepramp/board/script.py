@@ -22,7 +22,6 @@ from __future__ import annotations
 import bisect
 import math
 import random
-import random
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any, cast
@@ -411,7 +410,10 @@ class _Run:
         return self.motions[-1].end_position() if self.motions else 0
 
     def last_step_edge(self) -> int | None:
+        """The last STEP rising edge of the motions that have ended (None: none since reset)."""
         for motion in reversed(self.motions):
+            if motion.endless:
+                continue
             edges = motion.all_edges()
             if edges:
                 return edges[-1]
@@ -668,6 +670,10 @@ class _Run:
                 running.changed()
 
             return _Proposal([], HARD_STOP, hard)
+        if op == "jog" and cmd.speed == 0 and (cur is None or cur.stopping(w)):
+            return None  # nothing to stop
+        if op == "move_to" and cur is None and cmd.position == self.position():
+            return None  # already there
         needs = {"set": (), "jog": ("accel", "decel")}.get(op, _PHYSICAL)
         v = self.values(cmd, needs)
         if op == "set":
@@ -735,6 +741,7 @@ class _Run:
         return _Proposal(writes, START, lambda: self.motions.append(motion))
 
     def command(self, n: int, cmd: Command) -> None:
+        """Command n: its action (and the model's change), or its refusal."""
         try:
             prop = self.proposal(cmd)
             if prop is not None:
@@ -873,4 +880,72 @@ def random_script(rng: random.Random, n_commands: int = 6) -> dict[str, Any]:
     return {"fclk": RANDOM_FCLK, "spr": RANDOM_SPR, "prescale": 1, "commands": commands, "until": until}
 
 
-NAMED_SCRIPTS: dict[str, dict[str, Any]] = {}
+_NAMED_BASE: dict[str, Any] = {"fclk": 1e6, "spr": 200.0, "prescale": 1}
+_MOVE: dict[str, float] = {"accel": 2000.0, "decel": 2000.0, "speed": 100.0}
+"""100 rad/s (3183 steps/s, 314 clocks a step), ramps of 80 steps (50,000 clocks) at 2000 rad/s^2: a 600-step move is
+in ACCEL until about edge 50,000 (pulse 80), in RUN until about 188,000 (pulse 520), in DECEL until 238,000."""
+_JOG: dict[str, float] = {"accel": 2000.0, "decel": 2000.0}
+
+
+def _named(*commands: dict[str, Any], until: int | None = None) -> dict[str, Any]:
+    out: dict[str, Any] = {**_NAMED_BASE, "commands": list(commands)}
+    if until is not None:
+        out["until"] = until
+    return out
+
+
+#: The issue's cases as scripts (the RTL tests play them too), each with what must happen (sw/tests/test_script.py
+#: asserts it from physics).
+NAMED_SCRIPTS: dict[str, dict[str, Any]] = {
+    # a 600-step move, faster (150 rad/s) in RUN: the same pulses up to P, 209 clocks a step after, ends sooner at 600
+    "speed_up_in_run": _named(
+        {"at": 0, "op": "move", "steps": 600, **_MOVE}, {"at": 80_000, "op": "set", "speed": 150.0}
+    ),
+    # slower (50 rad/s) in RUN: never faster than before, 628 clocks a step, ends later at 600
+    "slow_down_in_run": _named(
+        {"at": 0, "op": "move", "steps": 600, **_MOVE}, {"at": 80_000, "op": "set", "speed": 50.0}
+    ),
+    # in ACCEL (pulse 14 of 80): a faster speed at twice the accel, the ramp goes on to 150 rad/s, ends at 600
+    "change_in_accel": _named(
+        {"at": 0, "op": "move", "steps": 600, **_MOVE},
+        {"at": 20_000, "op": "set", "speed": 150.0, "accel": 4000.0},
+    ),
+    # in DECEL (pulse 554): a decel twice as strong, the last step that of the new decel, ends at 600
+    "change_in_decel": _named(
+        {"at": 0, "op": "move", "steps": 600, **_MOVE}, {"at": 200_000, "op": "set", "decel": 4000.0}
+    ),
+    # at 100,000 (position 239) to 270, inside the 80-step stop distance: stop beyond it, reverse, end on 270
+    "retarget_inside_stop_distance": _named(
+        {"at": 0, "op": "move", "steps": 600, **_MOVE}, {"at": 100_000, "op": "move_to", "position": 270}
+    ),
+    # to 100, behind the motor: stop, reverse, end exactly on 100
+    "retarget_behind": _named(
+        {"at": 0, "op": "move", "steps": 600, **_MOVE}, {"at": 100_000, "op": "move_to", "position": 100}
+    ),
+    # jog up, then down at the same speed: decel to rest, DIR changes once, the count goes down through zero; a
+    # soft stop ends it
+    "jog_through_zero": _named(
+        {"at": 0, "op": "jog", "speed": 100.0, **_JOG},
+        {"at": 100_000, "op": "jog", "speed": -100.0},
+        {"at": 300_000, "op": "soft_stop"},
+    ),
+    # a jog faster in its ACCEL, slower (and a weaker decel) in RUN, then to a target ahead: ends on 900
+    "jog_changes": _named(
+        {"at": 0, "op": "jog", "speed": 100.0, **_JOG},
+        {"at": 30_000, "op": "jog", "speed": 150.0},
+        {"at": 100_000, "op": "set", "speed": 60.0, "decel": 1000.0},
+        {"at": 160_000, "op": "move_to", "position": 900},
+    ),
+    # 300 steps, then 200 more queued: the second starts 5 clocks after the first's last pulse, ends at 500
+    "queue_same_direction": _named(
+        {"at": 0, "op": "move", "steps": 300, **_MOVE}, {"at": 50_000, "op": "queue", "steps": 200, **_MOVE}
+    ),
+    # 300 steps, then 200 back queued: DIR changes, the second starts 7 clocks after the first's last pulse, ends at 100
+    "queue_opposite_direction": _named(
+        {"at": 0, "op": "move", "steps": 300, **_MOVE}, {"at": 50_000, "op": "queue", "steps": -200, **_MOVE}
+    ),
+    # a soft stop in a jog's RUN: ceil(v^2 / (2 d)) = 80 steps after the pulse that decides it
+    "soft_stop_in_jog": _named({"at": 0, "op": "jog", "speed": 100.0, **_JOG}, {"at": 120_000, "op": "soft_stop"}),
+    # a hard stop in a jog (down): no pulse after the write's next edge
+    "hard_stop_in_jog": _named({"at": 0, "op": "jog", "speed": -100.0, **_JOG}, {"at": 120_000, "op": "hard_stop"}),
+}

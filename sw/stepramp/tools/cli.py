@@ -4,6 +4,8 @@
     stepramp sim   --steps N --accel A --decel D --speed V --spr S --fclk F [--prescale P] [--waves FILE] [--json FILE]
                    [--summary]
     stepramp model (same options, no --waves)
+    stepramp sim   --script FILE [--json OUT] [--waves W] [--build DIR] [--top plb|axil]
+    stepramp model --script FILE [--json OUT]
     stepramp plot FILE.json [-o FILE.png]
     stepramp shell [--model] [--waves FILE.ghw] [--build DIR]   (the AVR446 demo's commands, from stdin)
 
@@ -16,6 +18,11 @@ valid move. --summary writes "summary" (pulse count, last edge, move time, peak 
 ideal, checksum of the edges; docs/algorithm.md, "Long moves") in place of "edges". What would not fit the memory
 budget (`stepramp sim` beyond SIM_MAX_PULSES pulses, `stepramp plot` of a too large move) exits with status 2 and
 the reason.
+
+With --script FILE (a JSON command script, docs/algorithm.md "The script contract") the move options are not taken;
+the object is {"tool", "script": the input, "edges": STEP rising edges on the commands' clock axis, "positions":
+POSITION after each, "rejected": the refused commands, "error"}: `model` from stepramp.board.script.plan_script,
+`sim` from the RTL (stepramp.sim.script_sim, either bus top).
 """
 
 from __future__ import annotations
@@ -49,17 +56,24 @@ EdgeChunks = Iterable[list[int]]
 """A move's edges, in order, in lists (stepramp.models.engine.edge_chunks, or the RTL's one list)."""
 
 
+#: The move options: required unless --script is given (main checks, as argparse cannot say "unless").
+MOVE_OPTIONS = ("steps", "accel", "decel", "speed", "spr", "fclk")
+
+
 def _move_args(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--steps", type=int, required=True, help="signed step count (microsteps)")
-    parser.add_argument("--accel", type=float, required=True, help="acceleration, rad/s^2")
-    parser.add_argument("--decel", type=float, required=True, help="deceleration, rad/s^2")
-    parser.add_argument("--speed", type=float, required=True, help="maximum speed, rad/s")
-    parser.add_argument("--spr", type=float, required=True, help="steps per revolution, microsteps included")
-    parser.add_argument("--fclk", type=float, required=True, help="core clock, Hz")
-    parser.add_argument("--prescale", type=int, default=1, help="base timer period in clocks (default 1)")
+    parser.add_argument("--steps", type=int, help="signed step count (microsteps); --steps .. --fclk: without --script")
+    parser.add_argument("--accel", type=float, help="acceleration, rad/s^2")
+    parser.add_argument("--decel", type=float, help="deceleration, rad/s^2")
+    parser.add_argument("--speed", type=float, help="maximum speed, rad/s")
+    parser.add_argument("--spr", type=float, help="steps per revolution, microsteps included")
+    parser.add_argument("--fclk", type=float, help="core clock, Hz")
+    parser.add_argument("--prescale", type=int, help="base timer period in clocks (default 1)")
     parser.add_argument("--json", type=Path, help="write the JSON here instead of stdout")
     parser.add_argument(
         "--summary", action="store_true", help='write "summary" (counts, times, deviation, checksum) instead of "edges"'
+    )
+    parser.add_argument(
+        "--script", type=Path, help="run a command script (JSON) instead of one move; the move options are not taken"
     )
 
 
@@ -70,6 +84,7 @@ def build_parser() -> argparse.ArgumentParser:
     _move_args(sim)
     sim.add_argument("--waves", type=Path, help="write a waveform (.ghw, or .fst)")
     sim.add_argument("--build", type=Path, help="simulation build directory (default: a temporary one)")
+    sim.add_argument("--top", choices=("plb", "axil"), default="plb", help="the bus top a --script runs on")
     model = sub.add_parser("model", help="the same move from the bit-exact Python model")
     _move_args(model)
     plot = sub.add_parser("plot", help="draw a `stepramp sim` or `stepramp model` JSON file to a PNG")
@@ -168,6 +183,51 @@ def run_move(tool: str, args: argparse.Namespace) -> tuple[dict[str, Any], int, 
     return out, 0, chunks
 
 
+def _check_options(args: argparse.Namespace) -> str | None:
+    """The options' combination: the reason it is refused, or None (argparse checks each option alone)."""
+    given = [f"--{name}" for name in (*MOVE_OPTIONS, "prescale") if getattr(args, name) is not None]
+    if args.script is not None:
+        if given or args.summary:
+            return f"--script takes no move options ({', '.join([*given, *(['--summary'] if args.summary else [])])})"
+        return None
+    missing = [f"--{name}" for name in MOVE_OPTIONS if getattr(args, name) is None]
+    if missing:
+        return f"the following arguments are required (without --script): {', '.join(missing)}"
+    if args.prescale is None:
+        args.prescale = 1
+    return None
+
+
+def run_script(tool: str, args: argparse.Namespace) -> tuple[dict[str, Any], int]:
+    """Plan (model) or simulate (sim) a command script: the JSON object and the exit status (2: invalid script,
+    nothing simulated)."""
+    from stepramp.board.script import load_script, plan_script
+
+    out: dict[str, Any] = {"tool": tool, "script": None, "edges": [], "positions": [], "rejected": [], "error": None}
+    try:
+        obj = json.loads(args.script.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        out["error"] = f"cannot read the script {args.script}: {exc}"
+        return out, 2
+    out["script"] = obj
+    try:
+        planned = plan_script(load_script(obj))
+    except ValueError as exc:
+        out["error"] = str(exc)
+        return out, 2
+    if tool == "model":
+        out |= {"edges": planned.edges, "positions": planned.positions, "rejected": planned.rejected}
+        return out, 0
+
+    from stepramp.sim.script_sim import simulate_script  # needs cocotb and GHDL, the model does not
+
+    with tempfile.TemporaryDirectory(prefix="stepramp-sim-") as tmp:
+        build = args.build or Path(tmp)
+        result = simulate_script(obj, build, top=args.top, waves=args.waves)
+    out |= {key: result[key] for key in ("edges", "positions", "rejected")}
+    return out, 0
+
+
 def write_move(write: Callable[[str], object], out: dict[str, Any], chunks: EdgeChunks) -> None:
     """Write the JSON object and a newline, the edges chunk by chunk in the place of out["edges"].
 
@@ -218,7 +278,15 @@ def main(argv: list[str] | None = None) -> int:
 
         return shell_main(model=args.model, waves=args.waves, build=args.build)
     if args.command in ("sim", "model"):
-        out, status, chunks = run_move(args.command, args)
+        refused = _check_options(args)
+        if refused is not None:
+            print(f"stepramp {args.command}: {refused}", file=sys.stderr)
+            return 2
+        if args.script is not None:
+            out, status = run_script(args.command, args)
+            chunks: EdgeChunks = []
+        else:
+            out, status, chunks = run_move(args.command, args)
         try:
             _emit(out, chunks, args.json)
         except BrokenPipeError:
