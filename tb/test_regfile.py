@@ -1208,9 +1208,9 @@ def random_inputs(rng: random.Random, tb: Bench) -> dict[str, int]:
         drive["wdata"] = STEPS_REJECTED
     elif offset == off("CTRL"):
         kind = rng.random()
-        if kind < 0.3:
+        if kind < 0.4:
             drive["wdata"] |= CTRL.field("START").mask
-        elif kind < 0.85:  # one command mix (QUEUE and CHANGE mostly), the other command bits 0
+        elif kind < 0.9:  # one command mix (QUEUE and CHANGE mostly), the other command bits 0
             drive["wdata"] = (drive["wdata"] & ~access_mask(CTRL, WS)) | rng.choice(COMMAND_MIXES)
     elif offset == off("STATUS"):
         drive["wdata"] = rng.choice((WORD, 0, drive["wdata"]))

@@ -31,6 +31,7 @@ from stepramp.board.regmap import offset
 from stepramp.board.script import (
     CHANGE,
     HARD_STOP,
+    NAMED_SCALE,
     NAMED_SCRIPTS,
     QUEUE,
     SOFT_STOP,
@@ -579,16 +580,20 @@ def _intervals(edges: list[int]) -> list[int]:
     return [b - a for a, b in itertools.pairwise(edges)]
 
 
+K = NAMED_SCALE  # the named scripts run K times faster than their comments say (stepramp.board.script)
+NAMED_MOVE = {"accel": 2000.0 * K**2, "decel": 2000.0 * K**2, "speed": 100.0 * K}
+
+
 def _reversals(positions: list[int]) -> list[int]:
     """Indices of the edges at which the direction of the count changes."""
     steps = [b - a for a, b in itertools.pairwise([0, *positions])]
     return [i for i in range(1, len(steps)) if steps[i] != steps[i - 1]]
 
 
-def _plain(steps: int) -> list[int]:
+def _plain(steps: int, move: dict[str, float] = MOVE) -> list[int]:
     """The STEP edges of a move from rest STARTed at 0 (no DIR change: the request of edge 1 passes at once, STEP
     rises 4 clocks after the engine's start)."""
-    plan = plan_move(steps, **MOVE, spr=200.0, fclk=1e6)
+    plan = plan_move(steps, **move, spr=200.0, fclk=1e6)
     return [e + 3 for e in model_edges(plan)]
 
 
@@ -605,7 +610,7 @@ def _change_at(got: ScriptResult) -> int:
 
 
 def test_named_speed_up_and_slow_down_in_run() -> None:
-    plain = _plain(600)
+    plain = _plain(600, NAMED_MOVE)
     for name, speed in (("speed_up_in_run", 150.0), ("slow_down_in_run", 50.0)):
         got = _named(name)
         p = _change_at(got)
@@ -613,30 +618,30 @@ def test_named_speed_up_and_slow_down_in_run() -> None:
         assert got.edges[: p + 1] == plain[: p + 1], "the pulses up to P are the move's"
         assert got.positions[-1] == 600
         after = _intervals(got.edges[p:])
-        cruise = [i for i in after if abs(i - _period(speed)) <= 1.0]
-        assert len(cruise) >= 100, f"{name}: no cruise at {speed} rad/s ({_period(speed):.1f} clocks)"
-        assert min(after) >= math.floor(_period(max(speed, 100.0))) - 1, f"{name}: faster than commanded"
+        cruise = [i for i in after if abs(i - _period(speed * K)) <= 1.0]
+        assert len(cruise) >= 100, f"{name}: no cruise at {speed} rad/s ({_period(speed * K):.1f} clocks)"
+        assert min(after) >= math.floor(_period(max(speed, 100.0) * K)) - 1, f"{name}: faster than commanded"
         assert (got.edges[-1] < plain[-1]) == (speed > 100.0), "a faster motion ends sooner, a slower one later"
 
 
 def test_named_changes_in_accel_and_in_decel() -> None:
-    plain = _plain(600)
+    plain = _plain(600, NAMED_MOVE)
     got = _named("change_in_accel")
     p = _change_at(got)
     assert 2 <= p < 80 and got.edges[: p + 1] == plain[: p + 1]
     ramp = _intervals(got.edges[p:])
     top = ramp.index(min(ramp))
     assert all(b <= a + 1 for a, b in itertools.pairwise(ramp[:top])), "the accel does not go on up to the speed"
-    assert abs(min(ramp) - _period(150.0)) <= 1.0 and got.positions[-1] == 600
+    assert abs(min(ramp) - _period(150.0 * K)) <= 1.0 and got.positions[-1] == 600
     # the new ramp: twice the accel, so the speed grows faster than in the plain move after P
     assert got.edges[p + 20] - got.edges[p] < plain[p + 20] - plain[p]
     got = _named("change_in_decel")
     p = _change_at(got)
     assert 520 < p < 599 and got.edges[: p + 1] == plain[: p + 1] and got.positions[-1] == 600
     last = _intervals(got.edges)[-1]
-    assert abs(last - _cd0(4000.0)) <= 0.01 * _cd0(4000.0), f"last step {last}, not that of the new decel"
-    assert abs(_intervals(plain)[-1] - _cd0(2000.0)) <= 0.01 * _cd0(2000.0)
-    assert min(_intervals(got.edges[p:])) >= math.floor(_period(100.0)) - 1
+    assert abs(last - _cd0(4000.0 * K**2)) <= 0.01 * _cd0(4000.0 * K**2), f"last step {last}, not that of the new decel"
+    assert abs(_intervals(plain)[-1] - _cd0(2000.0 * K**2)) <= 0.01 * _cd0(2000.0 * K**2)
+    assert min(_intervals(got.edges[p:])) >= math.floor(_period(100.0 * K)) - 1
 
 
 @pytest.mark.parametrize(("name", "target"), [("retarget_inside_stop_distance", 270), ("retarget_behind", 100)])
@@ -647,12 +652,13 @@ def test_named_retargets_reverse_and_end_on_the_target(name: str, target: int) -
     assert [a.ctrl for a in got.actions] == [START, SOFT_STOP | QUEUE]
     (turn,) = _reversals(got.positions)
     stop_at = got.positions[turn - 1]
-    stood = [p for e, p in zip(got.edges, got.positions, strict=True) if e <= 100_000][-1]
+    stood = [p for e, p in zip(got.edges, got.positions, strict=True) if e <= 100_000 // K][-1]
     # it stops the stop distance v^2 / (2 d) (80 steps at 100 rad/s and 2000 rad/s^2) beyond where it was
     assert abs(stop_at - stood - 80) <= 3 and stop_at > target
     assert got.edges[turn] - got.edges[turn - 1] == 7, "the move back starts after DIR setup (7 clocks)"
     before = _intervals(got.edges[:turn])
-    assert abs(before[-1] - _cd0(2000.0)) <= 0.01 * _cd0(2000.0), "the motor is not at rest before reversing"
+    rest = _cd0(2000.0 * K**2)
+    assert abs(before[-1] - rest) <= 0.01 * rest, "the motor is not at rest before reversing"
     assert got.positions[turn:] == list(range(stop_at - 1, target - 1, -1)), "not counting down to the target"
 
 
@@ -663,9 +669,9 @@ def test_named_jog_through_zero() -> None:
     assert up == list(range(1, turn + 1)) and all(b == a - 1 for a, b in itertools.pairwise([up[-1], *down]))
     assert got.edges[turn] - got.edges[turn - 1] == 7, "DIR changes between the two jogs"
     before, after = _intervals(got.edges[:turn]), _intervals(got.edges[turn:])
-    assert abs(before[-1] - _cd0(2000.0)) <= 0.01 * _cd0(2000.0), "not at rest before reversing"
-    assert abs(min(before) - _period(100.0)) <= 1.0 and abs(min(after) - _period(100.0)) <= 1.0
-    assert abs(after[-1] - _cd0(2000.0)) <= 0.01 * _cd0(2000.0), "the soft stop does not end at rest"
+    assert abs(before[-1] - _cd0(2000.0 * K**2)) <= 0.01 * _cd0(2000.0 * K**2), "not at rest before reversing"
+    assert abs(min(before) - _period(100.0 * K)) <= 1.0 and abs(min(after) - _period(100.0 * K)) <= 1.0
+    assert abs(after[-1] - _cd0(2000.0 * K**2)) <= 0.01 * _cd0(2000.0 * K**2), "the soft stop does not end at rest"
     assert down[-1] < 0, "the way down goes through zero"
 
 
@@ -673,8 +679,8 @@ def test_named_jog_changes_end_on_the_target() -> None:
     got = _named("jog_changes")
     assert [a.ctrl for a in got.actions] == [START, CHANGE, CHANGE, CHANGE]
     steps = _intervals(got.edges)
-    assert abs(min(steps) - _period(150.0)) <= 1.0
-    assert sum(1 for i in steps if abs(i - _period(60.0)) <= 1.0) >= 50
+    assert abs(min(steps) - _period(150.0 * K)) <= 1.0
+    assert sum(1 for i in steps if abs(i - _period(60.0 * K)) <= 1.0) >= 50
     assert got.positions == list(range(1, 901))
 
 
@@ -685,23 +691,24 @@ def test_named_queued_moves() -> None:
     for name, steps, gap, final in (("queue_same_direction", 200, 5, 500), ("queue_opposite_direction", -200, 7, 100)):
         got = _named(name)
         assert [a.ctrl for a in got.actions] == [START, QUEUE]
-        assert got.edges[:300] == _plain(300)
+        assert got.edges[:300] == _plain(300, NAMED_MOVE)
         last = got.edges[299]
-        second = plan_move(steps, **MOVE, spr=200.0, fclk=1e6)
+        second = plan_move(steps, **NAMED_MOVE, spr=200.0, fclk=1e6)
         assert got.edges[300:] == [last + gap - 2 + e for e in model_edges(second)]
         assert got.positions[-1] == final and len(_reversals(got.positions)) == (steps < 0)
 
 
 def test_named_stops_in_a_jog() -> None:
     got = _named("soft_stop_in_jog")
-    decided = next(i for i, e in enumerate(got.edges) if e - 1 > 120_001)  # the first engine edge after the sample
-    stop = math.ceil((100.0 / ALPHA) ** 2 / (2.0 * 2000.0 / ALPHA))  # the stop distance from 100 rad/s, 80 steps
+    # the first engine edge after the sample, and the stop distance from 100 rad/s (80 steps, whatever K)
+    decided = next(i for i, e in enumerate(got.edges) if e - 1 > (120_000 // K + 1))
+    stop = math.ceil((100.0 * K / ALPHA) ** 2 / (2.0 * 2000.0 * K**2 / ALPHA))
     assert len(got.edges) == decided + 1 + stop
     tail = _intervals(got.edges[decided:])
     assert all(b >= a - 1 for a, b in itertools.pairwise(tail)), "the speed rises in the stop"
-    assert abs(tail[-1] - _cd0(2000.0)) <= 0.01 * _cd0(2000.0)
+    assert abs(tail[-1] - _cd0(2000.0 * K**2)) <= 0.01 * _cd0(2000.0 * K**2)
     got = _named("hard_stop_in_jog")
-    assert got.edges[-1] <= 120_001 < got.edges[-1] + math.ceil(_period(100.0)) + 1
+    assert got.edges[-1] <= (120_000 // K + 1) < got.edges[-1] + math.ceil(_period(100.0 * K)) + 1
     assert got.positions == list(range(-1, -len(got.edges) - 1, -1))
 
 

@@ -804,13 +804,13 @@ def plan_script(script: Script) -> ScriptResult:
 
 RANDOM_FCLK = 1e6
 RANDOM_SPR = 200.0
-RANDOM_INTERVALS = (80.0, 2000.0)
+RANDOM_INTERVALS = (70.0, 400.0)
 """Cruise intervals (clocks) of the random scripts' speeds."""
-RANDOM_RAMPS = (10.0, 200.0)
+RANDOM_RAMPS = (8.0, 80.0)
 """Ramp lengths (steps) of the random scripts' accels and decels, at the speed they come with."""
-RANDOM_SPACING = (300, 40_000)
+RANDOM_SPACING = (300, 5_000)
 """Clocks between two commands of a random script."""
-RANDOM_SPAN = 300_000
+RANDOM_SPAN = 30_000
 """A random script's until is at most this many clocks."""
 
 _ALPHA = 2.0 * math.pi / RANDOM_SPR
@@ -830,9 +830,10 @@ def _random_rate(rng: random.Random, speed: float) -> float:
 
 def random_script(rng: random.Random, n_commands: int = 6) -> dict[str, Any]:
     """A random script for the regression: fclk 1 MHz, 200 steps/rev, prescale 1; speeds with cruise intervals of
-    80 .. 2000 clocks, accels and decels with ramps of 10 .. 200 steps at the speed they come with, commands 300 ..
-    40,000 clocks apart, until at most RANDOM_SPAN clocks. Every op appears across scripts; a jog is often followed
-    by a jog the other way (through zero), a stop or a speed change."""
+    RANDOM_INTERVALS clocks, accels and decels with ramps of RANDOM_RAMPS steps at the speed they come with, commands
+    RANDOM_SPACING clocks apart, until at most RANDOM_SPAN clocks (short: the bus tops simulate at about 30,000
+    clocks/s, and the regression plays 200 scripts through each). Every op appears across scripts; a jog is often
+    followed by a jog the other way (through zero), a stop or a speed change."""
     speed = _random_speed(rng)
     commands: list[dict[str, Any]] = []
     at = 0
@@ -861,10 +862,10 @@ def random_script(rng: random.Random, n_commands: int = 6) -> dict[str, Any]:
             if "speed" in cmd:
                 speed = cmd["speed"]
         if op in ("move", "queue"):
-            cmd["steps"] = rng.choice([-1, 1]) * rng.randint(1, 900)
+            cmd["steps"] = rng.choice([-1, 1]) * rng.randint(1, 300)
             jogging = 0
         elif op == "move_to":
-            cmd["position"] = rng.randint(-1200, 1200)
+            cmd["position"] = rng.randint(-400, 400)
             jogging = 0
         elif op == "jog":
             if rng.random() < 0.12:
@@ -876,7 +877,7 @@ def random_script(rng: random.Random, n_commands: int = 6) -> dict[str, Any]:
         elif op in ("soft_stop", "hard_stop"):
             jogging = 0
         commands.append(cmd)
-    until = min(at + rng.randint(20_000, 120_000), RANDOM_SPAN)
+    until = min(at + rng.randint(3_000, 12_000), RANDOM_SPAN)
     return {"fclk": RANDOM_FCLK, "spr": RANDOM_SPR, "prescale": 1, "commands": commands, "until": until}
 
 
@@ -887,10 +888,24 @@ in ACCEL until about edge 50,000 (pulse 80), in RUN until about 188,000 (pulse 5
 _JOG: dict[str, float] = {"accel": 2000.0, "decel": 2000.0}
 
 
+NAMED_SCALE = 3
+"""The named scripts run NAMED_SCALE times faster than their comments say (speeds x3, accels and decels x9, times
+/3): the same pulses, a third of the clocks to simulate."""
+
+
 def _named(*commands: dict[str, Any], until: int | None = None) -> dict[str, Any]:
-    out: dict[str, Any] = {**_NAMED_BASE, "commands": list(commands)}
+    scaled = []
+    for cmd in commands:
+        out_cmd = dict(cmd, at=cmd["at"] // NAMED_SCALE)
+        if "speed" in cmd:
+            out_cmd["speed"] = cmd["speed"] * NAMED_SCALE
+        for key in ("accel", "decel"):
+            if key in cmd:
+                out_cmd[key] = cmd[key] * NAMED_SCALE**2
+        scaled.append(out_cmd)
+    out: dict[str, Any] = {**_NAMED_BASE, "commands": scaled}
     if until is not None:
-        out["until"] = until
+        out["until"] = until // NAMED_SCALE
     return out
 
 

@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 import cocotb
-from cocotb.triggers import First, ReadOnly, RisingEdge, Timer, ValueChange
+from cocotb.triggers import FallingEdge, First, ReadOnly, RisingEdge, Timer, ValueChange
 from cocotb.utils import get_sim_time
 
 from stepramp.board.regmap import offset
@@ -30,7 +30,6 @@ from stepramp.sim.clocking import (
     apply_reset,
     now_cycles,
     now_periods,
-    reset_held,
     start_clock,
 )
 from stepramp.sim.coverage import watch_core
@@ -41,29 +40,62 @@ CTRL = offset("CTRL")
 LEAD_CLOCKS = 400
 
 
-class _Axil:
-    """Register access over cocotbext-axi's AxiLiteMaster (whole words: the driver's actions write whole words or
-    byte 0 of CTRL)."""
+class _AxilWriter:
+    """A minimal AXI4-Lite write master (the scripts only write): AW and W valid together from a falling edge, each
+    dropped once its handshake is sampled, BREADY high until BVALID. No coroutine runs between writes, so an idle bus
+    costs the simulation nothing (cocotbext-axi's channels wake every clock)."""
 
-    def __init__(self, master: Any) -> None:
-        self.master = master
+    def __init__(self, dut: Any) -> None:
+        self.dut, self.clk = dut, dut.aclk
+        for name in (
+            "awvalid",
+            "wvalid",
+            "bready",
+            "arvalid",
+            "rready",
+            "awaddr",
+            "wdata",
+            "wstrb",
+            "awprot",
+            "araddr",
+        ):
+            getattr(dut, f"s_axil_{name}").value = 0
+        for name in ("arprot",):
+            getattr(dut, f"s_axil_{name}").value = 0
 
     async def write(self, addr: int, value: int, strobe: int = 0xF) -> None:
-        data = (value & 0xFFFF_FFFF).to_bytes(4, "little")
-        lanes = [b for b in range(4) if strobe >> b & 1]
-        resp = await self.master.write(addr + lanes[0], data[lanes[0] : lanes[-1] + 1])
-        if int(resp.resp) != 0:
-            raise RuntimeError(f"write {addr:#x}: resp {int(resp.resp)}")
+        dut = self.dut
+        await FallingEdge(self.clk)
+        dut.s_axil_awaddr.value = addr
+        dut.s_axil_wdata.value = value & 0xFFFF_FFFF
+        dut.s_axil_wstrb.value = strobe
+        dut.s_axil_awvalid.value = 1
+        dut.s_axil_wvalid.value = 1
+        dut.s_axil_bready.value = 1
+        aw = w = False
+        for _ in range(100):
+            await RisingEdge(self.clk)
+            await ReadOnly()
+            aw = aw or bool(int(dut.s_axil_awready.value))
+            w = w or bool(int(dut.s_axil_wready.value))
+            done = bool(int(dut.s_axil_bvalid.value))
+            await FallingEdge(self.clk)
+            dut.s_axil_awvalid.value = int(not aw)
+            dut.s_axil_wvalid.value = int(not w)
+            if done:
+                if int(dut.s_axil_bresp.value) != 0:
+                    raise RuntimeError(f"write {addr:#x}: BRESP {int(dut.s_axil_bresp.value)}")
+                dut.s_axil_bready.value = 0
+                return
+        raise TimeoutError(f"write {addr:#x}: no BVALID within 100 clocks")
 
 
 async def _reset(dut: Any, top: str) -> Any:
     """Reset the top and return its register access."""
     if top == "stepramp_axil":
-        from cocotbext.axi import AxiLiteBus, AxiLiteMaster
-
-        async with reset_held(dut.aclk, dut.aresetn, active=0):
-            master = AxiLiteMaster(AxiLiteBus.from_prefix(dut, "s_axil"), dut.aclk, dut.aresetn, False)
-        return _Axil(master)
+        bus = _AxilWriter(dut)
+        await apply_reset(dut.aclk, dut.aresetn, active=0)
+        return bus
     bus = IpifMaster(dut, dut.clk, CLK_PERIOD_NS)
     await apply_reset(dut.clk, dut.rst)
     return bus
