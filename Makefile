@@ -12,7 +12,7 @@ VHDL  := $(wildcard hdl/*.vhd)
 BACKEND = GHDL_BACKEND=$${GHDL_BACKEND:-$$(test -x /usr/bin/ghdl-llvm && echo llvm || echo mcode)}
 
 .DEFAULT_GOAL := test
-.PHONY: setup test coverage mutate soak lint synth-check synth demo shell waves clean help
+.PHONY: setup test coverage mutate soak lint synth-check bench synth demo shell waves clean help
 
 help:
 	@echo "make test         lint, synthesis check and the whole regression (pytest -n $(JOBS))"
@@ -24,6 +24,7 @@ help:
 	@echo "make shell        the AVR446 demo's command shell on the simulated core (type ? for help)"
 	@echo "make lint         ruff check, ruff format --check, vsg"
 	@echo "make synth-check  every RTL file under --std=93c and --std=08, ghdl synth of each top, no latch"
+	@echo "make bench        the change latency of CTRL.CHANGE per ramp phase (the driver's planner, no simulator)"
 	@echo "make synth        size and fmax: yosys iCE40 / xc7, nextpnr HX8K / UP5K -> build/synth/report.json"
 	@echo "make clean        remove build/ (keeps .venv)"
 
@@ -61,6 +62,10 @@ OPS     ?= 0
 soak: setup
 	SOAK_SEED=$(SEED) SOAK_SECONDS=$(if $(filter 0,$(OPS)),$(SECONDS),0) SOAK_OPS=$(OPS) \
 	  $(BACKEND) $(PY) -m pytest -n 2 -q -rA -p no:cacheprovider tb/test_soak.py | grep -E "^soak|passed|failed|Error|replay"; test $${PIPESTATUS[0]} = 0
+
+# Figures no test asserts: the change latency of CTRL.CHANGE per phase (from the driver's planner).
+bench: setup
+	$(PY) -m stepramp.tools.changebench
 
 synth:
 	@scripts/bootstrap.sh $(VENV) synth

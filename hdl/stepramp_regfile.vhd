@@ -302,8 +302,8 @@ begin
         elsif (C_CONFIG_WORDS(w) = '1' and eng_busy = '1') then
           error_flag <= '1';
           err_code_r <= C_ERR_CFG_BUSY;
-        elsif (C_STORAGE_WORDS(w) = '1' and locked = '1') then
-          -- (configuration words are refused above: the core is busy while anything is pending)
+        elsif (C_STORAGE_WORDS(w) = '1' and C_CONFIG_WORDS(w) = '0' and locked = '1') then
+          -- (the configuration words keep their own rule above: written only while stopped)
           error_flag <= '1';
           err_code_r <= C_ERR_STAGED;
         elsif (C_STORAGE_WORDS(w) = '1') then
@@ -514,7 +514,7 @@ begin
     ram_we    <= (others => '0');
 
     if (wr = '1' and C_STORAGE_WORDS(ram_addr) = '1' and not (C_CONFIG_WORDS(ram_addr) = '1' and eng_busy = '1') and
-        locked = '0') then
+        (locked = '0' or C_CONFIG_WORDS(ram_addr) = '1')) then
 
       for b in 0 to 3 loop
 

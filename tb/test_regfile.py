@@ -1177,7 +1177,7 @@ def random_inputs(rng: random.Random, tb: Bench) -> dict[str, int]:
     # A queued move (the model's state, so the sequence stays replayable) meets the engine's done sooner and more
     # often with an error.
     queued = tb.model.q_pend
-    done = int(rng.random() < (0.08 if queued else 0.04))
+    done = int(rng.random() < (0.12 if queued else 0.04))
     drive: dict[str, int] = {
         "eng_done": done,
         "eng_error": int(rng.random() < (0.3 if done and queued else 0.03)),
@@ -1208,7 +1208,7 @@ def random_inputs(rng: random.Random, tb: Bench) -> dict[str, int]:
         drive["wdata"] = STEPS_REJECTED
     elif offset == off("CTRL"):
         kind = rng.random()
-        if kind < 0.4:
+        if kind < (0.3 if eng["eng_busy"] else 0.5):  # START mostly while idle, the commands mostly while busy
             drive["wdata"] |= CTRL.field("START").mask
         elif kind < 0.9:  # one command mix (QUEUE and CHANGE mostly), the other command bits 0
             drive["wdata"] = (drive["wdata"] & ~access_mask(CTRL, WS)) | rng.choice(COMMAND_MIXES)

@@ -66,6 +66,7 @@ SEED = _seed()
 @pytest.mark.parametrize("top", TOPS)
 def test_random_scripts(top: str, chunk: int) -> None:
     count = env_int("SCRIPT_COUNT", 100)
+    print(f"SCRIPT_SEED={SEED} (replays this test)")  # shown with a failure, whatever fails
     rng = random.Random(f"{SEED}:{top}:{chunk}")
     scripts = [random_script(rng) for _ in range(count)]
     planned = [plan_script(load_script(s)) for s in scripts]
