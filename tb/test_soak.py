@@ -18,7 +18,14 @@ or stepramp_axil (AXI4-Lite, with idle cycles and backpressure on every channel 
 * ``reset``: the top's reset in the middle of a move: the edges before it are the model's first edges, no pulse
   after it, every register at its reset value;
 * ``configure``: random stepping outputs (mode, widths, DIR timing, PWM period, ENABLE) through the driver, which
-  restarts the monitors (STEP width, DIR setup/hold, windings) with them.
+  restarts the monitors (STEP width, DIR setup/hold, windings) with them;
+* ``change``: a move, and a take-over (CTRL.CHANGE) a few pulses after STEP_COUNT was read, to a new target, speed,
+  accel and decel (stepramp.board.change.plan_change from the move's speed at that pulse): every edge as
+  stepramp.models.engine.change_edges says, or, when the core refused it (the pulse had passed: the bus pauses make
+  that happen), as the move alone; POSITION either way;
+* ``queue``: a move and a second one queued during it (CTRL.QUEUE), either direction: both as the model says;
+* ``jog_zero``: a jog, then the jog the other way through zero (SOFT_STOP with QUEUE in one write), ended by a hard
+  stop: each jog's edges as stepramp.models.engine.segment_edges says with its stop.
 
 The same seed gives the same operations (and the same bus pauses), so a failing seed replays exactly:
 `make soak SEED=S OPS=K` stops after the failing operation K. `make soak SECONDS=N SEED=S` runs for N seconds of
@@ -41,11 +48,12 @@ import pytest
 from cocotb.triggers import ClockCycles, RisingEdge, with_timeout
 
 from peripheral_tb import BAD_VALUES, TOPS, PeripheralTb, expect_rejected
+from stepramp.board.change import Segment, plan_change, speed_at_pulse
 from stepramp.board.driver import MODES, Outputs, StepRamp, StepRampError
-from stepramp.board.plan import Plan, plan_move
+from stepramp.board.plan import Plan, plan_move, plan_move_info
 from stepramp.board.regmap import REGISTERS, REGISTERS_BY_NAME, RW, STAGING, W1C, offset
+from stepramp.models.engine import change_edges, edges_with_stop, segment_edges
 from stepramp.models.engine import edges as model_edges
-from stepramp.models.engine import edges_with_stop
 from stepramp.sim.profiles import design_args
 from stepramp.sim.runner import run_cocotb
 from tbutil import build_dir, cocotb, edges_differ, env_int
@@ -54,11 +62,26 @@ MOTION = STAGING  # written at any time; the engine takes them at START
 CONFIG = ("DRIVE", "STEP_WIDTH", "DIR_TIMING", "PWM_PERIOD", "STEP_SPACE")
 READ_ONLY = ("ID", "CUR_DELAY", "STEP_COUNT")
 #: Operation weights.
-OPS = {"move": 6, "stop": 4, "busy_writes": 3, "idle_writes": 3, "bad_value": 2, "reset": 1, "configure": 2}
+OPS = {
+    "move": 6,
+    "stop": 4,
+    "busy_writes": 3,
+    "idle_writes": 3,
+    "bad_value": 2,
+    "reset": 1,
+    "configure": 2,
+    "change": 3,
+    "queue": 2,
+    "jog_zero": 2,
+}
 #: The soak's driver: a 1 MHz plan clock on a 200 steps/rev motor (the tick is one clock at PRESCALE 1).
 FCLK, SPR = 1e6, 200.0
 #: Simulated time one operation may take.
 OP_LIMIT_MS = 10
+
+
+def _ctrl(field: str) -> int:
+    return REGISTERS_BY_NAME["CTRL"].field(field).mask
 
 
 def rw_mask(name: str) -> int:
@@ -148,6 +171,103 @@ class Soak:
         await self.check_position(f"{kind} stop")
         self.counts[f"{kind} stops"] += 1
         self.counts["moves"] += 1
+
+    def new_values(self, prescale: int) -> tuple[float, float, float]:
+        """Random accel, decel and speed (rad/s^2, rad/s) of the generator's ranges."""
+        args = design_args(
+            100, self.rng.uniform(70, 300), self.rng.uniform(1, 60), self.rng.uniform(1, 60), prescale=prescale
+        )
+        return args["accel"], args["decel"], args["speed"]
+
+    async def op_change(self) -> None:
+        rng, tb = self.rng, self.tb
+        steps = rng.randint(40, 160) * rng.choice((1, -1))
+        prescale = rng.choice((1, 1, 2))
+        args = design_args(steps, rng.uniform(70, 300), rng.uniform(1, 60), rng.uniform(1, 60), prescale=prescale)
+        plan, info = plan_move_info(**args)
+        drv = tb.driver({"fclk": FCLK, "spr": SPR, "prescale": prescale})
+        await drv.program(plan)
+        n0, s0 = tb.pins.mark()
+        await drv.start()
+        while len(tb.step_edges) < n0 + rng.randint(2, plan.steps // 2):
+            await RisingEdge(tb.dut.step)
+        p = await drv.access.read(offset("STEP_COUNT")) + rng.randint(2, 6)
+        change = plan_change(
+            speed_at_pulse(info, p), rng.randint(1, 150), *self.new_values(prescale), SPR, FCLK, prescale
+        )
+        if change.back is not None or p >= plan.steps - 1:
+            await self.wait_done(drv)  # (a target behind the stop: the scripts' reversal, not this op's)
+            want, what = model_edges(plan), "move (no change)"
+        else:
+            await drv.change(change.segment, plan.direction, p)
+            try:
+                await self.wait_done(drv)
+                want, what = change_edges(Segment.of_move(plan), p, change.segment, prescale), f"change at {p}"
+                self.counts["changes"] += 1
+            except StepRampError as exc:
+                if "CHANGE" not in str(exc):
+                    raise
+                want, what = model_edges(plan), f"change at {p} refused"
+                self.counts["changes refused"] += 1
+        edges = tb.edges_since(n0, s0)
+        self.check_edges(what, edges, want)
+        self.position += -len(edges) if plan.direction else len(edges)
+        await self.check_position(what)
+
+    async def op_queue(self) -> None:
+        tb = self.tb
+        drv, first = self.plan(min_steps=30)
+        drv2, second = self.plan()
+        await drv.program(first)
+        n0, s0 = tb.pins.mark()
+        await drv.start()
+        while len(tb.step_edges) < n0 + self.rng.randint(1, first.steps - 20):
+            await RisingEdge(tb.dut.step)
+        await drv2.queue(second)
+        await self.wait_done(drv)
+        while len(tb.start_edges) < s0 + 2:
+            await RisingEdge(tb.dut.core_inst.busy)
+        await drv.clear_flags()  # (the first move's DONE)
+        await self.wait_done(drv)
+        edges = tb.edges_since(n0, s0)
+        self.check_edges("the running move", edges[: first.steps], model_edges(first))
+        self.check_edges("the queued move", tb.edges_since(n0 + first.steps, s0 + 1), model_edges(second))
+        for plan in (first, second):
+            self.position += -plan.steps if plan.direction else plan.steps
+        await self.check_position("queued moves")
+        self.counts["queued moves"] += 1
+
+    async def op_jog_zero(self) -> None:
+        tb = self.tb
+        accel, decel, speed = self.new_values(1)
+        speed *= self.rng.choice((1, -1))
+        drv = tb.driver()
+        k_soft, k_hard = len(self.stop_edges["soft"]), len(self.stop_edges["hard"])
+        n0, s0 = tb.pins.mark()
+        first = await drv.jog(speed, accel, decel)
+        while len(tb.step_edges) < n0 + self.rng.randint(2, first.sa + 20):
+            await RisingEdge(tb.dut.step)
+        plan, regs, back = drv.plan_jog(-speed, accel, decel)
+        await drv.program(plan, regs)
+        await drv.access.write(offset("CTRL"), _ctrl("SOFT_STOP") | _ctrl("QUEUE"), strobe=0x1)
+        while len(tb.start_edges) < s0 + 2:
+            await RisingEdge(tb.dut.core_inst.busy)
+        n1 = len(tb.step_edges)
+        while len(tb.step_edges) < n1 + self.rng.randint(2, back.sa + 20):
+            await RisingEdge(tb.dut.step)
+        await drv.hard_stop()
+        await self.wait_done(drv)
+        soft = self.stop_edges["soft"][k_soft] + 1 - tb.start_edges[s0]
+        hard = self.stop_edges["hard"][k_hard] + 1 - tb.start_edges[s0 + 1]
+        ways = (
+            (tb.edges_since(n0, s0)[: n1 - n0], segment_edges(first, 1, stop=("soft", soft)), speed),
+            (tb.edges_since(n1, s0 + 1), segment_edges(back, 1, stop=("hard", hard)), -speed),
+        )
+        for got, want, way in ways:
+            self.check_edges(f"jog {way:+.1f} rad/s", got, want)
+            self.position += len(got) if way > 0 else -len(got)
+        await self.check_position("jog through zero")
+        self.counts["jogs through zero"] += 1
 
     async def op_busy_writes(self) -> None:
         tb, rng = self.tb, self.rng
