@@ -98,3 +98,21 @@ def test_a_failing_simulation_is_reported_outside_pytest() -> None:
     )
     assert "request: the simulation failed: KeyError('accel')" in run.stdout, run.stdout + run.stderr[-2000:]
     assert "close: the simulation failed" in run.stdout, run.stdout + run.stderr[-2000:]
+
+
+def test_jog_and_change_while_running_equal_the_model() -> None:
+    """`j` (jog, then a soft stop after a time) and `c` (a move whose speed changes while it runs) on the RTL, in
+    one session: every position read back from the core equals the bit-exact model's (the same shell on ModelBackend),
+    and each command moved (a jog each way through the current position, a change to a faster speed)."""
+    from stepramp.tools.shell import ModelBackend
+
+    script = "a 4000\nj 2000 500\nj -3000 300\nc 800 400 3000\n"
+    out = io.StringIO()
+    with RtlSession(build_dir("shell_jog")) as session:
+        Shell(RtlBackend(session), out, **SHELL_CONFIG).run(io.StringIO(script))
+    model = io.StringIO()
+    Shell(ModelBackend(**SHELL_CONFIG), model, **SHELL_CONFIG).run(io.StringIO(script))
+    got, want = positions(out.getvalue()), positions(model.getvalue())
+    assert out.getvalue().count("Running... OK") == 3, out.getvalue()[-2000:]
+    assert got == want, (got, want)
+    assert got[2] > 0 and got[3] < got[2] and got[4] == got[3] + 800

@@ -210,3 +210,13 @@ def test_sim_stop_from_cocotb_results(tmp_path: Path) -> None:
     )
     assert _sim_stop_s(xml) == pytest.approx(97360e-9)
     assert _sim_stop_s(tmp_path / "absent.xml") is None
+
+
+def test_jog_and_change_commands_on_the_model() -> None:
+    """`j` jogs for a time then stops (the stop distance past the jog), `c` ends exactly on its steps with the
+    speed changed while running; bad values get the reason."""
+    out = io.StringIO()
+    Shell(ModelBackend(**SHELL_CONFIG), out, **SHELL_CONFIG).run(io.StringIO("j 2000 500\nc 800 400 3000\nj 5 10\n"))
+    pos = [int(m.group(1)) for m in map(INFO.match, out.getvalue().splitlines()) if m]
+    assert pos[0] == 0 and pos[1] > 0 and pos[2] == pos[1] + 800 and pos[3] == pos[2]
+    assert "error: speed 5 is out of range 12 - 6135 (either sign)" in out.getvalue()

@@ -8,8 +8,10 @@ through the PLB-like IPIF with the Python driver (`stepramp.board.driver.StepRam
 the interrupt and reads POSITION back, while coroutines timestamp every STEP edge. `make demo` and
 `stepramp shell` both use it, so a whole shell session is one simulation (and one waveform).
 
-Requests: {"op": "move", "steps", "accel", "decel", "speed"} (rad/s^2, rad/s), {"op": "signals", "paths":
-[[path, width], ...]} (which of these design signals are missing) and {"op": "quit"}.
+Requests: {"op": "move", "steps", "accel", "decel", "speed"} (rad/s^2, rad/s), {"op": "script", "script": {...}} (a
+command script, stepramp.board.script: the driver's planned writes and commits played at their clocks from now on;
+POSITION read back at its end), {"op": "signals", "paths": [[path, width], ...]} (which of these design signals are
+missing) and {"op": "quit"}.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from typing import Any
 
 from stepramp.board.driver import Outputs, StepRamp, StepRampError
 from stepramp.board.plan import Plan
+from stepramp.board.regmap import offset
 from stepramp.models.engine import last_edge
 from stepramp.sim.runner import run_cocotb
 from stepramp.sim.waves import missing_in
@@ -180,6 +183,15 @@ class RtlSession:
             Plan(**answer["plan"]), answer["edges"], answer["position"], answer["start_s"], answer["end_s"]
         )
 
+    def script(self, script: dict[str, Any]) -> tuple[list[int], int]:
+        """A command script on the RTL (stepramp.board.script; ValueError if it is not valid): its STEP edges (clocks
+        from its clock 0) and POSITION read back at its end. The commits land at their clocks up to the bus's
+        latency (the regression's exact contract is stepramp.sim.script_sim's, from a reset)."""
+        answer = self.request({"op": "script", "script": script})
+        if "value_error" in answer:
+            raise ValueError(answer["value_error"])
+        return answer["edges"], answer["position"]
+
     def missing_signals(self, paths: list[tuple[str, int]]) -> list[str]:
         """Which of these (dotted path below the top, width) design signals the simulator does not have."""
         missing: list[str] = self.request({"op": "signals", "paths": paths})["missing"]
@@ -288,6 +300,36 @@ if cocotb is not None:
             result: dict[str, Any] = await limited(run(), 2 * polls * (_POLL_CYCLES + 100), f"move {req}")
             return result
 
+        async def do_script(req: dict[str, Any]) -> dict[str, Any]:
+            from stepramp.board.script import PREP_CLOCKS, load_script, plan_script
+
+            try:
+                planned = plan_script(load_script(req["script"]))
+            except ValueError as exc:
+                return {"value_error": str(exc)}
+            origin = round(get_sim_time("ps") / period_ps) + PREP_CLOCKS + 10
+            first = len(pins.step_edges)
+
+            async def at_clock(clock: int) -> None:
+                delay = (origin + clock) * period_ps - get_sim_time("ps")
+                if delay > 0:
+                    await Timer(delay, unit="ps")
+
+            async def run() -> dict[str, Any]:
+                for action in planned.actions:
+                    await at_clock(action.at - PREP_CLOCKS)
+                    for addr, value in action.writes:
+                        await bus.write(addr, value)
+                    await at_clock(action.at - 2)
+                    await bus.write(offset("CTRL"), action.ctrl, strobe=0x1)
+                await at_clock(planned.until)
+                await drv.clear_flags()
+                edges = [e - origin for e in pins.step_edges[first:]]
+                return {"edges": edges, "position": await drv.position()}
+
+            result: dict[str, Any] = await limited(run(), planned.until + 2 * PREP_CLOCKS + 1000, "script")
+            return result
+
         sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
         sock.connect(os.environ["STEPRAMP_SESSION_SOCKET"])
         stream = sock.makefile("rwb")
@@ -301,6 +343,8 @@ if cocotb is not None:
             try:
                 if req["op"] == "move":
                     answer = await do_move(req)
+                elif req["op"] == "script":
+                    answer = await do_script(req)
                 elif req["op"] == "signals":
                     answer = {"missing": missing_in(dut, req["paths"])}
                 else:

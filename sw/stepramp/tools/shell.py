@@ -10,6 +10,10 @@ Each move runs on stepramp_plb, programmed over its bus by the Python driver, an
 simulation (`stepramp.sim.session.RtlSession`); POSITION is read back from the core after each move. `--model` runs the
 bit-exact model instead (no simulator, instant). Bad commands print the reason and the help text; the session goes
 on. `q` (or end of input) ends it.
+
+Beyond AVR446, motion on the fly (docs/algorithm.md, "The take-over, the queue and the script contract"): `j` jogs
+for a time and stops, `c` changes the speed of a move while it runs; each runs as a command script
+(stepramp.board.script) on the back end.
 """
 
 from __future__ import annotations
@@ -41,6 +45,8 @@ SHELL_CONFIG: dict[str, Any] = {"fclk": 250e3, "spr": 400.0, "prescale": 1}
 ACCEL_RANGE = (71, 32000)
 STEPS_RANGE = (-64000, 64000)
 SPEED_MIN = 12
+#: The longest time a `j` or `c` command waits before its stop or change (ms).
+MS_MAX = 60_000
 
 
 def speed_limit(fclk: float, spr: float, prescale: int) -> int:
@@ -62,6 +68,8 @@ class Outcome:
 class Backend(Protocol):
     def move(self, steps: int, accel: float, decel: float, speed: float) -> Outcome: ...
 
+    def script(self, script: dict[str, Any]) -> int: ...
+
 
 class ModelBackend:
     """The bit-exact model in place of the RTL (no simulator)."""
@@ -74,6 +82,14 @@ class ModelBackend:
         plan = plan_move(steps, accel, decel, speed, self.spr, self.fclk, self.prescale)
         self.position += steps
         return Outcome(plan, model_edges(plan), self.position)
+
+    def script(self, script: dict[str, Any]) -> int:
+        """A command script from the current position: POSITION at its end."""
+        from stepramp.board.script import load_script, plan_script
+
+        planned = plan_script(load_script(script))
+        self.position += planned.positions[-1] if planned.positions else 0
+        return self.position
 
 
 class RtlBackend:
@@ -88,6 +104,9 @@ class RtlBackend:
         outcome = Outcome(res.plan, res.edges, res.position)
         self.outcomes.append(outcome)
         return outcome
+
+    def script(self, script: dict[str, Any]) -> int:
+        return self.session.script(script)[1]
 
 
 _INTEGER = re.compile(r"[+-]?[0-9]{1,12}")
@@ -122,6 +141,10 @@ class Shell:
                 "move [steps] [accel] [decel] [speed]",
                 "         - Move with all parameters given",
                 "<enter>  - Repeat last move",
+                "j [speed] [ms]",
+                "         - Jog at [speed] (signed) for [ms] milliseconds, then a soft stop",
+                "c [steps] [ms] [speed]",
+                "         - Move [steps]; [ms] milliseconds after its start, change the speed to [speed]",
                 "q        - Quit (or end of input)",
                 "",
                 "         acc/dec data given in 0.01*rad/sec^2 (100 = 1 rad/sec^2)",
@@ -178,6 +201,23 @@ class Shell:
             elif tokens[0] == "m":
                 (value,) = self._args(tokens, 1)
                 self._move(self._int(value, "steps", *STEPS_RANGE), self.accel, self.decel, self.speed)
+            elif tokens[0] == "j":
+                speed, ms = self._args(tokens, 2)
+                jog = self._int(speed, "speed", -self.speed_max, self.speed_max)
+                if abs(jog) < SPEED_MIN:
+                    raise CommandError(f"speed {jog} is out of range {SPEED_MIN} - {self.speed_max} (either sign)")
+                after = self._int(ms, "time", 1, MS_MAX)
+                self._script(
+                    {"at": 0, "op": "jog", "speed": jog / 100, "accel": self.accel / 100, "decel": self.decel / 100},
+                    {"at": self._clocks(after), "op": "soft_stop"},
+                )
+            elif tokens[0] == "c":
+                steps, ms, speed = self._args(tokens, 3)
+                move = {"at": 0, "op": "move", "steps": self._int(steps, "steps", *STEPS_RANGE)}
+                move |= {"accel": self.accel / 100, "decel": self.decel / 100, "speed": self.speed / 100}
+                after = self._int(ms, "time", 1, MS_MAX)
+                new = self._int(speed, "speed", SPEED_MIN, self.speed_max)
+                self._script(move, {"at": self._clocks(after), "op": "set", "speed": new / 100})
             elif tokens[0] == "move":
                 steps, accel, decel, speed = self._args(tokens, 4)
                 self._move(
@@ -217,6 +257,29 @@ class Shell:
                 self.position = position
             return
         self.position = outcome.position
+        self.say("OK")
+
+    def _clocks(self, ms: int) -> int:
+        return round(ms * 1e-3 * self.config["fclk"])
+
+    def _script(self, *commands: dict[str, Any]) -> None:
+        """Run commands as a script on the back end (the driver's refusals are reported, the session goes on)."""
+        from stepramp.board.script import load_script, plan_script
+
+        script = {**self.config, "commands": list(commands)}
+        try:
+            planned = plan_script(load_script(script))
+        except ValueError as exc:
+            raise CommandError(str(exc)) from None
+        if planned.rejected:
+            raise CommandError("; ".join(f"{r['op']} at {r['at']}: {r['reason']}" for r in planned.rejected))
+        self.out.write("Running... ")
+        self.out.flush()
+        try:
+            self.position = self.backend.script(script)
+        except StepRampError as exc:
+            self.say(f"failed: {exc}")
+            return
         self.say("OK")
 
     def run(self, lines: Iterable[str], prompt: bool = False) -> None:
