@@ -7,8 +7,12 @@ target reached, the pins' spacing and direction), the named scripts of the issue
 The judge does not use the planner's model: it splits the edges into motions by itself (a START's first edge, or a
 queued START a few clocks after the last pulse), describes each motion from the actions' registers and the commands'
 values (the ideal trajectory from rest, then an IdealSegment from each CHANGE_AT pulse, with the speed there from the
-previous ideal), and holds every pulse it can attribute to one ideal within the bound of a move. Random scripts print
-their seed (STEPRAMP_SEED replays one).
+previous ideal), and holds every pulse it can attribute to one ideal within the bound of a move. A move queued in the
+running motion's direction is two CHANGEs with the queue's index: the judge holds the first to the running values and
+a virtual rest floor(vb^2 / (2 d1)) steps past the running target, the second to that target's pulse, the queued
+steps and the first's ideal speed there (what it can reach, at most vb). Random scripts print their seed
+(STEPRAMP_SEED replays one); the queued moves without a stop have tests of their own (the named one, a short one,
+one too late, stops before and after the second change).
 """
 
 from __future__ import annotations
@@ -20,11 +24,11 @@ import os
 import random
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import pytest
 
-from stepramp.board.change import Change, Segment, plan_change, speed_at_pulse
+from stepramp.board.change import Change, Segment, plan_change, speed_at_pulse, speed_at_segment_pulse
 from stepramp.board.driver import plan_writes, segment_writes
 from stepramp.board.plan import plan_move, plan_move_info
 from stepramp.board.regmap import offset
@@ -33,6 +37,7 @@ from stepramp.board.script import (
     HARD_STOP,
     NAMED_SCALE,
     NAMED_SCRIPTS,
+    PREP_CLOCKS,
     QUEUE,
     SOFT_STOP,
     START,
@@ -233,7 +238,10 @@ def test_refusals_and_commands_without_an_action() -> None:
         ([move, {"at": 299, "op": "set", "speed": 50.0}], "overlap the action at 0"),
         ([move, {"at": 15, "op": "soft_stop"}], "less than 16 clocks"),
         ([move, {"at": 20_000, "op": "set", "speed": 50.0}, {"at": 20_400, "op": "set", "speed": 40.0}], "pending"),
-        ([move, {"at": 20_000, "op": "queue", "steps": 5, **MOVE}, {"at": 40_000, "op": "set", "speed": 9.0}], "queue"),
+        (
+            [move, {"at": 20_000, "op": "queue", "steps": -5, **MOVE}, {"at": 40_000, "op": "set", "speed": 9.0}],
+            "queue",
+        ),
         ([jog, {"at": 20_000, "op": "queue", "steps": 5, **MOVE}], "behind a jog"),
         ([move, {"at": 143_000, "op": "set", "speed": 50.0}], "ends before the change"),
         ([jog, {"at": 20_000, "op": "jog", "speed": 5000.0}], "speed too high"),
@@ -308,7 +316,8 @@ def _segment_speed(seg: ideal.IdealSegment, x: float) -> float:
 
 @dataclass
 class Judge:
-    """One ideal for the pulses from edge index `origin` on (its pulse 0 there), in steps units."""
+    """One ideal for the pulses from edge index `origin` on (its pulse 0 there), in steps units; values: the speed,
+    accel and decel (rad/s, rad/s^2) it runs with; end: the edge index of its last pulse (None: endless)."""
 
     origin: int
     move: ideal.IdealMove | None
@@ -316,6 +325,8 @@ class Judge:
     c0_slow: float
     slack: float  # extra ticks (the carried fraction of a take-over)
     bound_c0: float = BOUND_C0
+    values: dict[str, float] | None = None
+    end: int | None = None
 
     def time(self, k: int) -> float:
         return self.move.time_at(float(k)) if self.move is not None else self.seg.time_at(float(k))  # type: ignore[union-attr]
@@ -361,7 +372,7 @@ def check_physics(obj: dict[str, Any], got: ScriptResult) -> dict[str, int]:
     """Every check of the random regression on one script; returns counts of what was judged."""
     f_tick = obj["fclk"] / obj["prescale"]
     edges, positions = got.edges, got.positions
-    counts = {"pulses": 0, "changes": 0, "queued": 0, "starts": 0}
+    counts = {"pulses": 0, "changes": 0, "queued": 0, "chained": 0, "starts": 0}
     assert all(e <= got.until for e in edges)
     # the pins: rising edges at least STEP width + space (2 clocks) apart, POSITION +-1 per edge
     assert all(b - a >= 2 for a, b in itertools.pairwise(edges)), "two STEP edges closer than 2 clocks"
@@ -425,10 +436,10 @@ def _judge_motion(
     assert (steps < 0) == (got.positions[b] < (got.positions[b - 1] if b else 0))
     c0_slow = f_tick * math.sqrt(2.0 / min(a, d))
     if endless:
-        judge = Judge(b, None, ideal.IdealSegment(0.0, a, d, speed, None, f_tick), c0_slow, 0.0)
+        judge = Judge(b, None, ideal.IdealSegment(0.0, a, d, speed, None, f_tick), c0_slow, 0.0, values=v)
     else:
         move = ideal.ideal_move(steps, v["accel"], v["decel"], v["speed"], spr, fclk, prescale)
-        judge = Judge(b, move, None, c0_slow, 0.0)
+        judge = Judge(b, move, None, c0_slow, 0.0, values=v, end=b + abs(steps) - 1)
     later = [x for x in got.actions if x.at > first.at and x.at < edges[e - 1]]
     timeline = [judge]  # each judge holds from its origin on, up to the next one's
     judged = 0
@@ -455,20 +466,67 @@ def _judge_motion(
         w = values[action.command]
         assert w is not None
         seg_steps, seg_endless = _steps_register(action)
-        a2, d2, v2 = w["accel"] / ALPHA, w["decel"] / ALPHA, w["speed"] / ALPHA
         length = None if seg_endless else abs(seg_steps) - 1
         running = timeline[-1]
         u = running.speed(b + p - running.origin)  # the running ideal's speed at pulse P
+        queued = obj["commands"][action.command]
+        if queued["op"] == "queue":  # a queued move in the same direction, without a stop: two changes
+            chain = [x for x in got.actions if x.command == action.command]
+            if action is chain[0]:  # A: the running values, to a virtual rest beyond the target (_check_chain_a)
+                w = running.values
+                assert w is not None and length is not None
+                _check_chain_a(running, w, values[action.command], queued["steps"], b + p, length)
+            else:  # B: at the old target, from the speed there, to the queued move's end
+                old = timeline[-2]
+                assert action is chain[1] and b + p == old.end, f"change B at {b + p}, not at the target {old.end}"
+                assert length == abs(queued["steps"]), "change B does not end the queued move's steps further"
+                _check_boundary_speed(old, running, u)
+                counts["chained"] += 1
+        a2, d2, v2 = w["accel"] / ALPHA, w["decel"] / ALPHA, w["speed"] / ALPHA
         args = (w["accel"], w["decel"], w["speed"], spr, fclk, prescale)
         start = _matching_change(u, length, args, int(seg_steps < 0), action).start_speed
         segment = ideal.IdealSegment(start, a2, d2, v2, length, f_tick)
         near_rest = start > v2 and v2 * v2 / (2.0 * d2) < NEAR_REST_STEPS
         c0_slow = f_tick * math.sqrt(2.0 / min(a2, d2))
         bound = NEAR_REST_BOUND_C0 if near_rest else BOUND_C0
-        timeline.append(Judge(b + p, None, segment, c0_slow, CARRY_TICKS, bound))
+        end = None if length is None else b + p + length
+        timeline.append(Judge(b + p, None, segment, c0_slow, CARRY_TICKS, bound, values=w, end=end))
         counts["changes"] += 1
     judged += _judge_span(timeline, edges, done, e, prescale)
     return judged
+
+
+def _boundary(v1: dict[str, float], v2: dict[str, float], n2: int) -> float:
+    """vb (steps/s) of a queued move of n2 steps at v2 behind a motion at v1: the speed from which the queued move
+    can still stop in its steps, at most either speed."""
+    return min(v1["speed"] / ALPHA, v2["speed"] / ALPHA, math.sqrt(2.0 * v2["decel"] / ALPHA * n2))
+
+
+def _check_chain_a(
+    running: Judge, v1: dict[str, float], v2: dict[str, float] | None, steps: int, p: int, length: int
+) -> None:
+    """Change A of a queued move: from pulse p to a virtual rest mb = floor(vb^2 / (2 d1)) steps past the running
+    motion's target (its end), the decel from which passes the target at vb."""
+    assert v2 is not None and running.end is not None
+    mb = length - (running.end - p)
+    x = _boundary(v1, v2, abs(steps)) ** 2 / (2.0 * v1["decel"] / ALPHA)
+    assert x - 1.0 < mb <= x + 1e-6, f"change A ends {mb} steps past the target, not floor({x:.3f})"
+
+
+def _check_boundary_speed(old: Judge, a: Judge, u: float) -> None:
+    """The speed at the old target (u, from A's ideal) is what A can reach there: at most the speed from which it
+    stops at its virtual rest (about vb), the speed it accelerates to from its start, and its commanded speed."""
+    assert a.seg is not None and a.values is not None and old.end is not None
+    seg, r = a.seg, old.end - a.origin
+    v1 = a.values["speed"] / ALPHA
+    assert seg.length is not None
+    if seg.u <= v1:
+        reach = math.sqrt(seg.u**2 + 2.0 * seg.a * r)
+    else:  # a down head: decel to v1
+        reach = max(v1, math.sqrt(max(seg.u**2 - 2.0 * seg.d * r, 0.0)))
+    want = min(reach, v1, math.sqrt(2.0 * seg.d * (seg.length - r)))
+    scale = v1 * v1 + seg.u * seg.u  # (squared speeds: sqrt near 0 magnifies rounding)
+    assert abs(u * u - want * want) <= 1e-9 * scale, f"speed at the old target {u!r} steps/s, not {want!r}"
 
 
 def _matching_change(u: float, length: int | None, args: tuple[float, ...], direction: int, action: Action) -> Change:
@@ -526,7 +584,7 @@ def _goal(obj: dict[str, Any], got: ScriptResult) -> int | None:
 def test_random_scripts_against_physics() -> None:
     rng = random.Random(SEED)
     print(f"seed {SEED} (STEPRAMP_SEED={SEED} replays it)")
-    totals = {"pulses": 0, "changes": 0, "queued": 0, "starts": 0, "goals": 0}
+    totals = {"pulses": 0, "changes": 0, "queued": 0, "chained": 0, "starts": 0, "goals": 0}
     ctrls: set[int] = set()
     ops: set[str] = set()
     jog_cases = {"reversals": 0, "soft": 0, "hard": 0}
@@ -557,6 +615,7 @@ def test_random_scripts_against_physics() -> None:
     assert ops == {"move", "move_to", "jog", "set", "queue", "soft_stop", "hard_stop"}
     assert ctrls == {START, CHANGE, QUEUE, SOFT_STOP, HARD_STOP, SOFT_STOP | QUEUE}
     assert totals["changes"] >= 100 and totals["queued"] >= 50 and totals["goals"] >= 40, totals
+    assert totals["chained"] >= 10, "too few queued moves without a stop (change B judged) in random scripts"
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -684,18 +743,205 @@ def test_named_jog_changes_end_on_the_target() -> None:
     assert got.positions == list(range(1, 901))
 
 
+def _from_rest(got: ScriptResult, first: int, steps: int, gap: int, move: dict[str, float]) -> None:
+    """A move of `first` steps, then `steps` queued from rest: the queued move starts exactly as a START written at
+    the running move's last STEP edge: its request one clock later, STEP 4 clocks after the gate lets it through (same
+    direction: at once, `gap` 5; DIR change: DIR at the next edge, the start one clock after, `gap` 7)."""
+    assert [a.ctrl for a in got.actions] == [START, QUEUE]
+    assert got.edges[:first] == _plain(first, move)
+    last = got.edges[first - 1]
+    second = plan_move(steps, **move, spr=200.0, fclk=1e6)
+    assert got.edges[first:] == [last + gap - 2 + e for e in model_edges(second)]
+    assert got.positions[-1] == first + steps and len(_reversals(got.positions)) == (steps < 0)
+
+
 def test_named_queued_moves() -> None:
-    """The queued move starts exactly as a START written at the running move's last STEP edge: its request one clock
-    later, STEP 4 clocks after the gate lets it through (same direction: at once; DIR change: DIR at the next edge,
-    the start one clock after)."""
-    for name, steps, gap, final in (("queue_same_direction", 200, 5, 500), ("queue_opposite_direction", -200, 7, 100)):
-        got = _named(name)
-        assert [a.ctrl for a in got.actions] == [START, QUEUE]
-        assert got.edges[:300] == _plain(300, NAMED_MOVE)
-        last = got.edges[299]
-        second = plan_move(steps, **NAMED_MOVE, spr=200.0, fclk=1e6)
-        assert got.edges[300:] == [last + gap - 2 + e for e in model_edges(second)]
-        assert got.positions[-1] == final and len(_reversals(got.positions)) == (steps < 0)
+    """The other way: the queued move starts from rest after the DIR change (QUEUE)."""
+    _from_rest(_named("queue_opposite_direction"), 300, -200, 7, NAMED_MOVE)
+
+
+def _ramp_step(vb: float, rate: float) -> tuple[float, float]:
+    """The speeds one step of a ramp at `rate` (steps/s^2) below and above vb (steps/s)."""
+    return math.sqrt(max(vb * vb - 2.0 * rate, 0.0)), math.sqrt(vb * vb + 2.0 * rate)
+
+
+def _passes_at(got: ScriptResult, k: int, vb: float, rate: float, span: int = 5) -> None:
+    """No stop at pulse k: every interval within `span` pulses of it at most that of one ramp step below vb (a clock
+    of quantization), far below the rest interval; the time of the two intervals around it within a ramp step of
+    vb."""
+    slow, fast = _ramp_step(vb, rate)
+    near = _intervals(got.edges[k - span : k + span + 1])
+    assert max(near) <= F_TICK / slow + 1.0, f"intervals {near} around pulse {k}: slower than {vb:.1f} steps/s"
+    assert max(near) < F_TICK * math.sqrt(2.0 / rate) / 5.0, "a stop at the boundary"
+    t = got.edges[k + 1] - got.edges[k - 1]
+    assert 2.0 * F_TICK / fast - 2.0 <= t <= 2.0 * F_TICK / slow + 2.0, f"{2.0 * F_TICK / t:.1f} steps/s, not {vb:.1f}"
+
+
+def _chain(got: ScriptResult) -> tuple[int, int]:
+    """(P_A, P_B) of a queued move without a stop: START, then its two CHANGEs, both with the queue's index 1."""
+    assert [(a.ctrl, a.command) for a in got.actions[:3]] == [(START, 0), (CHANGE, 1), (CHANGE, 1)], got.actions
+    p_a, p_b = (dict(a.writes)[offset("CHANGE_AT")] for a in got.actions[1:3])
+    return p_a, p_b
+
+
+def test_named_queue_in_the_same_direction_does_not_stop() -> None:
+    """A move queued in the running move's direction follows it without a stop: change A at the usual P with the
+    running values, towards a virtual rest mb = floor(vb^2 / (2 d1)) steps past the target, and change B (the
+    driver's own commit, the queue's index) at the target's pulse, so that the motor passes the old target at the
+    boundary speed vb = min(v1, v2, sqrt(2 d2 N2)): 60 rad/s here (100 rad/s and sqrt(2 d 200) are faster)."""
+    got = _named("queue_same_direction")
+    plain = _plain(300, NAMED_MOVE)
+    p_a, p_b = _chain(got)
+    assert p_a == change_pulse(plain, 50_000 // K) and got.edges[: p_a + 1] == plain[: p_a + 1]
+    assert p_b == 299, "change B does not take over at the old target (position 300)"
+    d1 = 2000.0 * K**2 / ALPHA
+    vb = 60.0 * K / ALPHA
+    mb = math.floor(vb * vb / (2.0 * d1))
+    assert mb == 28 and _steps_register(got.actions[1])[0] == 299 - p_a + mb + 1, "change A's virtual rest"
+    assert _steps_register(got.actions[2])[0] == 201, "change B does not run the queued move's 200 steps"
+    # change B's writes come after PENDING of A fell (two clocks after pulse P_A - 1's engine edge, its STEP edge + 1)
+    assert got.actions[2].at - PREP_CLOCKS > plain[p_a - 1] + 1
+    assert got.positions == list(range(1, 501))
+    _passes_at(got, 299, vb, d1)
+    # before: the move at 100 rad/s slows down to vb; after: the queued move cruises at 60 rad/s and ends at rest
+    assert abs(min(_intervals(got.edges[:p_b])) - _period(100.0 * K)) <= 1.0
+    assert sum(1 for i in _intervals(got.edges[p_b:]) if abs(i - _period(60.0 * K)) <= 1.0) >= 50
+    assert abs(_intervals(got.edges)[-1] - _cd0(2000.0 * K**2)) <= 0.01 * _cd0(2000.0 * K**2)
+
+
+def test_a_short_queued_move_passes_the_target_at_its_stopping_speed() -> None:
+    """20 steps queued behind a 300-step move at 100 rad/s (ramps of 79.6 steps): vb = sqrt(2 d2 N2), the speed from
+    which the queued move can just stop in its 20 steps; the motor passes 300 at it in one deceleration to rest at
+    320 (the intervals only grow from the decel's start on)."""
+    move = {"at": 0, "op": "move", "steps": 300, **MOVE}
+    obj = script(move, {"at": 80_000, "op": "queue", "steps": 20, **MOVE})
+    got = run(obj)
+    check_physics(obj, got)
+    _, p_b = _chain(got)
+    assert p_b == 299 and got.positions == list(range(1, 321))
+    d = 2000.0 / ALPHA
+    _passes_at(got, 299, math.sqrt(2.0 * d * 20), d, span=1)  # (the decel goes on after it)
+    ramp = (100.0 / ALPHA) ** 2 / (2.0 * d)
+    tail = _intervals(got.edges[math.ceil(320 - ramp) :])
+    assert all(b >= a - 1 for a, b in itertools.pairwise(tail)), "the speed rises in the decel through 300"
+    assert abs(tail[-1] - _cd0(2000.0)) <= 0.01 * _cd0(2000.0)
+
+
+def test_a_queue_too_late_for_the_take_overs_starts_from_rest() -> None:
+    """The queue's commit moved over the move's decel: early, the two changes (the lead of change B from its commit
+    after A, 2 pulses and 400 clocks, is met: check_physics holds it); late, QUEUE from rest 5 clocks after the last
+    pulse; once it falls back, every later commit does."""
+    plain = _plain(300)
+    move = {"at": 0, "op": "move", "steps": 300, **MOVE}
+    chained = []
+    for k in range(250, 299, 3):
+        obj = script(move, {"at": plain[k] + 10, "op": "queue", "steps": 200, **MOVE})
+        got = run(obj)
+        check_physics(obj, got)
+        chained.append(got.actions[-1].ctrl == CHANGE)
+        if chained[-1]:
+            assert _chain(got)[1] == 299 and got.positions == list(range(1, 501))
+        else:
+            _from_rest(got, 300, 200, 5, MOVE)
+    assert chained[0] and not chained[-1] and chained == sorted(chained, reverse=True), chained
+
+
+def _queue_at_60(move: dict[str, Any]) -> dict[str, Any]:
+    return {"at": 80_000, "op": "queue", "steps": 200, **MOVE, "speed": 60.0}
+
+
+def test_a_stop_before_change_b_cancels_it() -> None:
+    """A soft or hard stop written before W_B (change B's commit): the driver does not commit B. A soft stop sampled
+    after A took over is decided at A's pulse 1 by A's rules (here its cruise: the stop distance from 100 rad/s);
+    one sampled while A is pending drops A and is decided by the move's; a hard stop ends the motion. Change A is
+    plan_change's from the move's speed at P_A, towards a virtual rest floor(vb^2 / (2 d1)) steps past 300."""
+    plan, info = plan_move_info(300, **MOVE, spr=200.0, fclk=1e6)
+    plain = _plain(300)
+    move = {"at": 0, "op": "move", "steps": 300, **MOVE}
+    queue = _queue_at_60(move)
+    chained = run(script(move, queue))
+    p_a, _ = _chain(chained)
+    w_b = chained.actions[2].at
+    d1 = 2000.0 / ALPHA
+    mb = math.floor((60.0 / ALPHA) ** 2 / (2.0 * d1))
+    change_a = plan_change(speed_at_pulse(info, p_a), 299 - p_a + mb, 2000.0, 2000.0, 100.0, 200.0, 1e6)
+    regs, seg = change_a.segment.registers(0)
+    assert list(chained.actions[1].writes) == [*plan_writes(regs), *segment_writes(seg), (offset("CHANGE_AT"), p_a)]
+    took = plain[p_a - 1] + 1  # PENDING of A falls (E_A + 2)
+    at = took + 20
+    assert at < w_b
+    got = run(script(move, queue, {"at": at, "op": "soft_stop"}))
+    assert [(a.ctrl, a.command) for a in got.actions] == [(START, 0), (CHANGE, 1), (SOFT_STOP, 2)]
+    values = segment_stop_values(change_a.segment, 1)
+    assert values is not None
+    assert got.edges == [t + 5 for t in accumulate(segment_values(Segment.of_move(plan), p_a) + values)]
+    stop = (100.0 / ALPHA) ** 2 / (2.0 * d1)
+    assert abs(len(got.edges) - 1 - (p_a + 1) - stop) <= 1.0, "not the stop distance from 100 rad/s"
+    assert abs(_intervals(got.edges)[-1] - _cd0(2000.0)) <= 0.01 * _cd0(2000.0)
+    # while A is pending: both dropped, decided by the move's rules (the sample at + 1, the move's edge at - 1)
+    at = queue["at"] + 50
+    got = run(script(move, queue, {"at": at, "op": "soft_stop"}))
+    assert [a.ctrl for a in got.actions] == [START, CHANGE, SOFT_STOP]
+    assert got.edges == [e + 3 for e in edges_with_stop(plan, "soft", at - 1)]
+    # a hard stop
+    got = run(script(move, queue, {"at": took + 20, "op": "hard_stop"}))
+    assert [a.ctrl for a in got.actions] == [START, CHANGE, HARD_STOP]
+    assert got.edges == [e for e in plain if e <= took + 21]
+    # the run ends before W_B: B is not committed, the edges up to the end are the same
+    got = run(script(move, queue, until=w_b - 1))
+    assert [a.ctrl for a in got.actions] == [START, CHANGE]
+    assert got.edges == [e for e in chained.edges if e <= w_b - 1]
+    # the staging is reserved for B from A's commit to B's take-over: a set between them is refused
+    for at in (took + 100, w_b + 1000):
+        got = run(script(move, queue, {"at": at, "op": "set", "speed": 50.0}))
+        assert [r["op"] for r in got.rejected] == ["set"] and "staging is locked" in got.rejected[0]["reason"]
+        assert got.edges == chained.edges
+
+
+def test_a_soft_stop_after_change_b_is_committed() -> None:
+    """Sampled up to E_B + 1 (pulse P_B - 1's engine edge + 1) it drops B and is decided by A's rules: in A's final
+    decel it is ignored, and A runs on to its virtual rest, mb steps past the old target (the core's rule). Sampled
+    later, it is decided at pulse P_B + 1 by B's rules."""
+    plan, info = plan_move_info(300, **MOVE, spr=200.0, fclk=1e6)
+    move = {"at": 0, "op": "move", "steps": 300, **MOVE}
+    queue = _queue_at_60(move)
+    chained = run(script(move, queue))
+    p_a, p_b = _chain(chained)
+    d1 = 2000.0 / ALPHA
+    mb = math.floor((60.0 / ALPHA) ** 2 / (2.0 * d1))
+    change_a = plan_change(speed_at_pulse(info, p_a), 299 - p_a + mb, 2000.0, 2000.0, 100.0, 200.0, 1e6)
+    before = segment_values(Segment.of_move(plan), p_a)
+    # A's final decel from 100 rad/s begins 79.6 steps before its virtual rest at 300 + mb
+    at = chained.edges[290]
+    assert chained.actions[2].at < at and 299 + mb - (100.0 / ALPHA) ** 2 / (2.0 * d1) < 291
+    got = run(script(move, queue, {"at": at, "op": "soft_stop"}))
+    assert [a.ctrl for a in got.actions] == [START, CHANGE, CHANGE, SOFT_STOP]
+    assert got.positions == list(range(1, 300 + mb + 1)), "not on to A's virtual rest"
+    want = accumulate(before + segment_values(change_a.segment, cast(int, change_a.segment.length)))
+    assert got.edges == [t + 5 for t in want]
+    assert abs(_intervals(got.edges)[-1] - _cd0(2000.0)) <= 0.01 * _cd0(2000.0)
+    # after the take-over of B: decided at its pulse 1
+    at = chained.edges[p_b - 1] + 5
+    got = run(script(move, queue, {"at": at, "op": "soft_stop"}))
+    u_b = speed_at_segment_pulse(change_a, 299 - p_a)
+    change_b = plan_change(u_b, 200, 2000.0, 2000.0, 60.0, 200.0, 1e6)
+    values = segment_stop_values(change_b.segment, 1)
+    assert values is not None
+    want = accumulate(before + segment_values(change_a.segment, 299 - p_a) + values)
+    assert got.edges == [t + 5 for t in want]
+    assert abs(len(got.edges) - 301 - (60.0 / ALPHA) ** 2 / (2.0 * d1)) <= 2.0, "not the stop distance from vb"
+    # queued in the first steps (intervals of thousands of clocks): B is committed before pulse P_A; a stop between
+    # them drops B, and A, taken over, decides it at its pulse 1 (P_A + 1)
+    queue = dict(queue, at=3_000)
+    early = run(script(move, queue))
+    p_a, _ = _chain(early)
+    assert early.actions[2].at + 500 < early.edges[p_a] - 1, "B is not committed before pulse P_A"
+    got = run(script(move, queue, {"at": early.actions[2].at + 500, "op": "soft_stop"}))
+    assert [a.ctrl for a in got.actions] == [START, CHANGE, CHANGE, SOFT_STOP]
+    change_a = plan_change(speed_at_pulse(info, p_a), 299 - p_a + mb, 2000.0, 2000.0, 100.0, 200.0, 1e6)
+    values = segment_stop_values(change_a.segment, 1)
+    assert values is not None
+    assert got.edges == [t + 5 for t in accumulate(segment_values(Segment.of_move(plan), p_a) + values)]
 
 
 def test_named_stops_in_a_jog() -> None:

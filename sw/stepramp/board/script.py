@@ -5,7 +5,9 @@ docs/algorithm.md, "The take-over, the queue and the script contract (issue 15)"
 (move, move_to, jog, set, queue, soft_stop, hard_stop) at clock edges; the driver turns each into register writes
 and one committing CTRL write (an Action: START, CHANGE at a pulse P, QUEUE, SOFT_STOP, HARD_STOP, or SOFT_STOP and
 QUEUE for a reversal) from its own model of the motion, and the same model gives every STEP rising edge and the
-POSITION after it. The testbench plays the actions on the RTL and compares.
+POSITION after it. A move queued in the running motion's direction is two CHANGEs, the second one committed by the
+driver itself (an action with the queue's index, unless a stop comes first). The testbench plays the actions on the
+RTL and compares.
 
 Clock axis: edge W of a command is the edge at which the register file samples its CTRL write; the strobe acts at
 W + 1 (the start gate's request, the engine's CHANGE and stop sampling). A START at W: start_edge s from the start
@@ -28,7 +30,7 @@ from typing import Any, cast
 
 from stepramp.board.change import Change, Segment, plan_change, speed_at_pulse, speed_at_segment_pulse
 from stepramp.board.driver import NO_SEGMENT, Outputs, RegisterAccess, StepRamp, plan_writes, segment_writes
-from stepramp.board.plan import FRAC_CRUISE, MAX_PRESCALE, MoveInfo, Plan, plan_move_info
+from stepramp.board.plan import FRAC_CRUISE, MAX_PRESCALE, MoveInfo, Plan, plan_move_info, steps_units
 from stepramp.board.regmap import REGISTERS_BY_NAME, offset
 from stepramp.models.engine import change_pulse, segment_runs, segment_stop_values
 from stepramp.models.stepping import START_TO_FIRST_STEP, GateTiming, gate_timing
@@ -41,6 +43,8 @@ MARGIN = 2
 """Clocks around an RTL boundary (a START being taken, a soft stop's decision) within which a command is refused."""
 EXTRA_CLOCKS = 1000
 """A script without "until" runs to its last edge (or its last command) plus this many clocks."""
+CHAIN_MARGIN = 4
+"""Clocks between PENDING falling after a queued move's first change (A) and the first write of its second (B)."""
 
 
 def _ctrl(name: str) -> int:
@@ -95,8 +99,9 @@ class Script:
 
 @dataclass(frozen=True)
 class Action:
-    """What the testbench plays for command `command` (its index in the script): the (byte offset, 32-bit value)
-    register writes, in order, in the PREP_CLOCKS clocks before `at`, then CTRL byte 0 = ctrl at edge `at`."""
+    """What the testbench plays for command `command` (its index in the script; a queued move's second CHANGE, which
+    the driver commits itself, has the queue's): the (byte offset, 32-bit value) register writes, in order, in the
+    PREP_CLOCKS clocks before `at`, then CTRL byte 0 = ctrl at edge `at`."""
 
     at: int
     writes: tuple[tuple[int, int], ...]
@@ -217,6 +222,11 @@ class _RejectError(Exception):
     """A command the driver refuses (listed in ScriptResult.rejected; nothing changes)."""
 
 
+def _motion_args(phys: dict[str, float], s: Script) -> tuple[float, float, float, float, float, int]:
+    """(accel, decel, speed, spr, fclk, prescale): plan_change's arguments after u and the remaining steps."""
+    return phys["accel"], phys["decel"], phys["speed"], s.spr, s.fclk, s.prescale
+
+
 def _driver_call(fn: Callable[..., Any], *args: Any) -> Any:
     """A driver planning call, its ValueError as a rejection with the driver's reason."""
     try:
@@ -225,11 +235,17 @@ def _driver_call(fn: Callable[..., Any], *args: Any) -> Any:
         raise _RejectError(str(err)) from err
 
 
+def _phys(v: dict[str, float], speed: float | None = None) -> dict[str, float]:
+    """The speed (or `speed`), accel and decel of the values in force v."""
+    return {"speed": v["speed"] if speed is None else speed, "accel": v["accel"], "decel": v["decel"]}
+
+
 @dataclass
 class _Part:
     """A piece of a motion: the segment that runs from the motion's pulse `pulse` (its pulse 0) on; values: the
     interval values that replace the segment's own once a soft stop is decided in it. commit / pending: the CHANGE
-    that took it over (None for the part a START began) and its PENDING span [commit, E + 2]."""
+    that took it over (None for the part a START began) and its PENDING span [commit, E + 2]. phys: the speed,
+    accel and decel (rad/s, rad/s^2) the segment was planned with."""
 
     pulse: int
     seg: Segment
@@ -238,6 +254,7 @@ class _Part:
     values: list[int] | None = None
     commit: int | None = None
     pending: list[int] | None = None
+    phys: dict[str, float] | None = None
 
     def value_iter(self) -> Iterator[int]:
         if self.values is not None:
@@ -376,6 +393,19 @@ class _Proposal:
     apply: Callable[[], None]
 
 
+@dataclass
+class _Chained:
+    """Change B of a queued move in the same direction (_Run.chain_proposal): the driver commits it at `at` (CTRL
+    write of CHANGE, its writes in the PREP_CLOCKS before) unless a stop is written first. reserved: the span the
+    staging is kept for it, from its first write to its own PENDING's end; command: the queue's index."""
+
+    at: int
+    writes: tuple[tuple[int, int], ...]
+    apply: Callable[[], None]
+    reserved: list[int]
+    command: int
+
+
 class _Run:
     """The planner's state while it goes through the commands in order."""
 
@@ -388,6 +418,8 @@ class _Run:
         self.actions: list[Action] = []
         self.rejected: list[dict[str, Any]] = []
         self.pending: list[list[int]] = []  # PENDING spans [from, to] of changes and queued moves
+        self.chained: _Chained | None = None  # a queued move's change B, not committed yet
+        self.index = 0  # the command being planned
 
     # -- the state at an edge -----------------------------------------------------------------------------------
 
@@ -452,7 +484,7 @@ class _Run:
             tuple[Plan, MoveInfo],
             _driver_call(plan_move_info, steps, v["accel"], v["decel"], v["speed"], s.spr, s.fclk, s.prescale),
         )
-        part = _Part(0, Segment.of_move(plan), lambda j: speed_at_pulse(info, j), None)
+        part = _Part(0, Segment.of_move(plan), lambda j: speed_at_pulse(info, j), None, phys=_phys(v))
         return plan, part, [*plan_writes(plan), *segment_writes(NO_SEGMENT)]
 
     def jog_part(self, speed: float, v: dict[str, float]) -> tuple[int, _Part, list[tuple[int, int]]]:
@@ -461,7 +493,7 @@ class _Run:
         plan, segment, seg = _driver_call(self.driver.plan_jog, speed, v["accel"], v["decel"])
         change = plan_change(0.0, None, v["accel"], v["decel"], abs(speed), s.spr, s.fclk, s.prescale)
         assert change.segment == seg
-        part = _Part(0, seg, lambda j: speed_at_segment_pulse(change, j), None)
+        part = _Part(0, seg, lambda j: speed_at_segment_pulse(change, j), None, phys=_phys(v, abs(speed)))
         return plan.direction, part, [*plan_writes(plan), *segment_writes(segment)]
 
     def start(self, w: int, direction: int, origin: int, part: _Part, queued_after: _Motion | None) -> _Motion:
@@ -503,6 +535,9 @@ class _Run:
                 m.changed()
             elif p <= last_pending.pulse:  # sampled after the take-over: decided at the segment's pulse 1
                 p = last_pending.pulse + 1
+        if m.parts[-1].commit is not None and p <= m.parts[-1].pulse:
+            # (a queued move's change B dropped before pulse P_A: change A, taken over, decides it at its pulse 1)
+            p = m.parts[-1].pulse + 1
         edges = m.upto(sample + 1)
         while p >= len(edges) and m.more():
             edges = m.upto(-math.inf)
@@ -546,17 +581,21 @@ class _Run:
         part = m.parts[-1]
         return p, part.speed(p - part.pulse)
 
-    def change_proposal(self, m: _Motion, w: int, p: int, change: Change, target: int | None) -> _Proposal:
+    def change_proposal(
+        self, m: _Motion, w: int, p: int, change: Change, target: int | None, phys: dict[str, float]
+    ) -> _Proposal:
         seg = change.segment
         plan, segment = seg.registers(m.direction)
         writes = [*plan_writes(plan), *segment_writes(segment), (offset("CHANGE_AT"), p)]
 
         def apply() -> None:
             edges = m.upto(-math.inf)
+            while len(edges) < p and m.more():
+                edges = m.upto(-math.inf)
             pending = [w, edges[p - 1] - 1 + 2]
             self.pending.append(pending)
             speed = (lambda j: speed_at_segment_pulse(change, j)) if change.pieces else (lambda j: 0.0)
-            m.parts.append(_Part(p, seg, speed, target, commit=w, pending=pending))
+            m.parts.append(_Part(p, seg, speed, target, commit=w, pending=pending, phys=phys))
             m.changed()
 
         return _Proposal(writes, CHANGE, apply)
@@ -623,7 +662,7 @@ class _Run:
                 _driver_call(plan_change, u, remaining, v["accel"], v["decel"], v["speed"], s.spr, s.fclk, s.prescale),
             )
             if change.back is None:
-                return self.change_proposal(m, w, p, change, target)
+                return self.change_proposal(m, w, p, change, target, _phys(v))
         return self.move_back(m, w, target, v, stop=True)
 
     def to_jog(self, m: _Motion, w: int, speed: float, v: dict[str, float], reject_late: bool) -> _Proposal | None:
@@ -644,11 +683,89 @@ class _Run:
                     Change,
                     _driver_call(plan_change, u, None, v["accel"], v["decel"], abs(speed), s.spr, s.fclk, s.prescale),
                 )
-                return self.change_proposal(m, w, p, change, None)
+                return self.change_proposal(m, w, p, change, None, _phys(v, abs(speed)))
             _, part, writes = self.jog_part(speed, v)
             return self.queue_proposal(m, w, part, direction, writes, stop=False)
         _, part, writes = self.jog_part(speed, v)
         return self.queue_proposal(m, w, part, direction, writes, stop=True)
+
+    def chain_proposal(self, m: _Motion, w: int, steps: int, v: dict[str, float]) -> _Proposal | None:
+        """A queued move in the running positioning motion's direction, without a stop between them
+        (docs/algorithm.md, "QUEUE"): two take-overs. Change A at P_A (the usual pulse), with the running values:
+        towards a virtual rest mb = floor(vb^2 / (2 d1)) steps past the target, so that the motion passes the target
+        at about vb = min(v1, v2, sqrt(2 d2 N2)); change B at the target's pulse P_B, to the queued move's end at its
+        values from the speed of A's ideal profile there, committed by the driver itself once PENDING of A fell (at
+        W_B). None when a condition fails (the caller queues the move from rest): nothing pending, no stop, P_B
+        reachable from W_B by the usual rule (P_B >= change_pulse), both plans without a reversal."""
+        part = m.parts[-1]
+        length = part.seg.length
+        if (
+            m.target is None
+            or length is None
+            or part.values is not None
+            or part.phys is None
+            or m.hard is not None
+            or m.stopping(w)
+            or (part.pending is not None and part.pending[1] >= w - PREP_CLOCKS)
+        ):
+            return None
+        s = self.script
+        try:
+            p_a, u_a = self.take_over(m, w)
+        except _RejectError:
+            return None
+        last = part.pulse + length  # L1: the motion's pulse at its target
+        if p_a > last:
+            return None
+        ph1, ph2 = part.phys, _phys(v)
+        _, _, d1, v1 = steps_units(ph1["accel"], ph1["decel"], ph1["speed"], s.spr, s.fclk, s.prescale)
+        _, _, d2, v2 = steps_units(ph2["accel"], ph2["decel"], ph2["speed"], s.spr, s.fclk, s.prescale)
+        n2 = abs(steps)
+        vb = min(v1, v2, math.sqrt(2.0 * d2 * n2))
+        mb = math.floor(vb * vb / (2.0 * d1) * (1.0 + 1e-9))  # (v^2 / (2 d) of equal values is not floored short)
+        try:
+            change_a = plan_change(u_a, last - p_a + mb, *_motion_args(ph1, s))
+            change_b = plan_change(speed_at_segment_pulse(change_a, last - p_a), n2, *_motion_args(ph2, s))
+        except ValueError:
+            return None
+        if change_a.back is not None or change_b.back is not None:
+            return None
+        target_a = cast(int, m.target) + m.sign * mb
+        prop_a = self.change_proposal(m, w, p_a, change_a, target_a, ph1)
+        # B's commit: its writes after PENDING of A fell (two clocks after pulse P_A - 1's engine edge)
+        edges = m.upto(-math.inf)
+        w_b = edges[p_a - 1] + 1 + PREP_CLOCKS + CHAIN_MARGIN
+        twin = m.clone()
+        twin.parts.append(_Part(p_a, change_a.segment, lambda j: speed_at_segment_pulse(change_a, j), target_a))
+        try:
+            p_min, _ = self.take_over(twin, w_b)
+        except _RejectError:
+            return None
+        if last < p_min:
+            return None
+        twin_edges = twin.upto(-math.inf)
+        while len(twin_edges) < last and twin.more():
+            twin_edges = twin.upto(-math.inf)
+        reserved = [w_b - PREP_CLOCKS, twin_edges[last - 1] + 1]
+        prop_b = self.change_proposal(m, w_b, last, change_b, cast(int, m.target) + m.sign * n2, ph2)
+        index = self.index
+
+        def apply() -> None:
+            prop_a.apply()
+            self.pending.append(reserved)
+            self.chained = _Chained(w_b, tuple(prop_b.writes), prop_b.apply, reserved, index)
+
+        return _Proposal(prop_a.writes, CHANGE, apply)
+
+    def flush(self, upto: float) -> None:
+        """Commit change B of a queued move (an internal action) once the script reaches its edge."""
+        chained = self.chained
+        if chained is None or chained.at > upto:
+            return
+        self.chained = None
+        self.pending.remove(chained.reserved)
+        chained.apply()
+        self.actions.append(Action(chained.at, chained.writes, CHANGE, chained.command))
 
     def proposal(self, cmd: Command) -> _Proposal | None:
         """The action a command makes (None: none), or a rejection."""
@@ -698,6 +815,10 @@ class _Run:
                 if cur.endless:
                     raise _RejectError("a queue behind a jog (it does not end)")
                 plan, part, writes = self.move_part(steps, v)
+                if plan.direction == cur.direction:
+                    chained = self.chain_proposal(cur, w, steps, v)
+                    if chained is not None:
+                        return chained
                 part.target = cur.end_position() + steps
                 return self.queue_proposal(cur, w, part, plan.direction, writes, stop=False)
             return self.idle_move(w, steps, v)
@@ -741,16 +862,28 @@ class _Run:
         return _Proposal(writes, START, lambda: self.motions.append(motion))
 
     def command(self, n: int, cmd: Command) -> None:
-        """Command n: its action (and the model's change), or its refusal."""
+        """Command n: its action (and the model's change), or its refusal. A queued move's change B not committed
+        yet is committed first when the command comes at or after its edge; a stop written before cancels it."""
+        self.flush(cmd.at)
+        self.index = n
+        stop = cmd.op in ("soft_stop", "hard_stop") or (cmd.op == "jog" and cmd.speed == 0)
         try:
             prop = self.proposal(cmd)
             if prop is not None:
                 self.check_window(cmd.at, bool(prop.writes))
+                if self.chained is not None and not stop:  # (a set may need no writes: a stop at A's target)
+                    raise _RejectError(
+                        f"a queued move's second change is to be committed at {self.chained.at}: only a stop can come "
+                        "before it"
+                    )
         except _RejectError as why:
             self.rejected.append({"at": cmd.at, "op": cmd.op, "reason": str(why)})
             return
         self.accept_values(cmd)
         if prop is not None:
+            if self.chained is not None:  # a stop before change B is committed: the driver does not commit it
+                self.pending.remove(self.chained.reserved)
+                self.chained = None
             prop.apply()
             self.actions.append(Action(cmd.at, tuple(prop.writes), prop.ctrl, n))
 
@@ -769,6 +902,7 @@ class _Run:
 
     def finish(self) -> ScriptResult:
         until = self.script.until
+        self.flush(math.inf if until is None else until)  # (one after until changes nothing up to it)
         if until is None:
             for motion in self.motions:
                 if motion.endless:
@@ -828,24 +962,52 @@ def _random_rate(rng: random.Random, speed: float) -> float:
     return round(speed * speed / (2.0 * steps * _ALPHA), 3)
 
 
+def _move_clocks(cmd: dict[str, Any]) -> float:
+    """Clocks a random script's move command takes from rest to rest (its ideal trapezoid at RANDOM_FCLK)."""
+    length = max(abs(cmd["steps"]) - 1, 0)
+    v, a, d = cmd["speed"] / _ALPHA, cmd["accel"] / _ALPHA, cmd["decel"] / _ALPHA
+    n_a, n_d = v * v / (2.0 * a), v * v / (2.0 * d)
+    if n_a + n_d > length:
+        v = math.sqrt(2.0 * a * d * length / (a + d))
+        return RANDOM_FCLK * (v / a + v / d)
+    return RANDOM_FCLK * (v / a + v / d + (length - n_a - n_d) / v)
+
+
 def random_script(rng: random.Random, n_commands: int = 6) -> dict[str, Any]:
     """A random script for the regression: fclk 1 MHz, 200 steps/rev, prescale 1; speeds with cruise intervals of
     RANDOM_INTERVALS clocks, accels and decels with ramps of RANDOM_RAMPS steps at the speed they come with, commands
     RANDOM_SPACING clocks apart, until at most RANDOM_SPAN clocks (short: the bus tops simulate at about 30,000
     clocks/s, and the regression plays 200 scripts through each). Every op appears across scripts; a jog is often
-    followed by a jog the other way (through zero), a stop or a speed change."""
+    followed by a jog the other way (through zero), a stop or a speed change; a queue mostly goes the way of the
+    move before it, and a first move short enough to end within the span is often followed by a queue written
+    while it runs (a queued move without a stop between them, or, written late, from rest)."""
     speed = _random_speed(rng)
     commands: list[dict[str, Any]] = []
     at = 0
     jogging = 0  # the sign of the last jog command (0: none since a stop or a move)
+    heading = 0  # the sign of the last move or queue (0: none, or a move_to, jog or stop since)
     first = rng.choice(["move", "move_to", "jog", "jog", "queue"])
+    ends = 0.0  # with a queue while the first move runs: that move's last pulse, about
     for n in range(n_commands):
-        if n:
+        chain = n == 1 and commands[0]["op"] in ("move", "queue") and rng.random() < 0.6
+        if chain:  # a queue while the first move runs (shortened to end within half the span)
+            move = commands[0]
+            while _move_clocks(move) > RANDOM_SPAN * 0.5 and abs(move["steps"]) > 1:
+                move["steps"] = int(math.copysign(max(abs(move["steps"]) * 7 // 10, 1), move["steps"]))
+            ends = _move_clocks(move)
+            chain = ends > 2.0 * (PREP_CLOCKS + COMMIT_GAP)
+            if chain:
+                at = max(int(ends * rng.uniform(0.2, 1.0)), PREP_CLOCKS + COMMIT_GAP)
+        if n and not chain:
+            if n == 2 and ends and rng.random() < 0.6:  # most queued moves run on past their boundary
+                at = max(at, int(ends))
             at += int(math.exp(rng.uniform(*map(math.log, RANDOM_SPACING))))
             if at > RANDOM_SPAN * 0.85:
                 break
         if n == 0:
             op = first
+        elif chain:
+            op = "queue"
         elif jogging:
             op = rng.choice(["jog", "jog", "soft_stop", "hard_stop", "set", "move_to", "queue"])
         else:
@@ -862,11 +1024,12 @@ def random_script(rng: random.Random, n_commands: int = 6) -> dict[str, Any]:
             if "speed" in cmd:
                 speed = cmd["speed"]
         if op in ("move", "queue"):
-            cmd["steps"] = rng.choice([-1, 1]) * rng.randint(1, 300)
-            jogging = 0
+            sign = heading if op == "queue" and heading and rng.random() < 0.7 else rng.choice([-1, 1])
+            cmd["steps"] = sign * rng.randint(1, 300)
+            jogging, heading = 0, sign
         elif op == "move_to":
             cmd["position"] = rng.randint(-400, 400)
-            jogging = 0
+            jogging = heading = 0
         elif op == "jog":
             if rng.random() < 0.12:
                 cmd["speed"] = 0.0
@@ -874,7 +1037,9 @@ def random_script(rng: random.Random, n_commands: int = 6) -> dict[str, Any]:
                 sign = -jogging if jogging and rng.random() < 0.6 else rng.choice([-1, 1])
                 cmd["speed"] = sign * cmd.get("speed", speed)
             jogging = int(math.copysign(1, cmd["speed"])) if cmd["speed"] else 0
-        elif op in ("soft_stop", "hard_stop"):
+        if op in ("jog", "soft_stop", "hard_stop"):
+            heading = 0
+        if op in ("soft_stop", "hard_stop"):
             jogging = 0
         commands.append(cmd)
     until = min(at + rng.randint(3_000, 12_000), RANDOM_SPAN)
@@ -951,9 +1116,12 @@ NAMED_SCRIPTS: dict[str, dict[str, Any]] = {
         {"at": 100_000, "op": "set", "speed": 60.0, "decel": 1000.0},
         {"at": 160_000, "op": "move_to", "position": 900},
     ),
-    # 300 steps, then 200 more queued: the second starts 5 clocks after the first's last pulse, ends at 500
+    # 300 steps, then 200 more queued at 60 rad/s: no stop between them, the motor passes 300 at the boundary speed
+    # min(100, 60, sqrt(2 d 200)) = 60 rad/s (change A at P towards a virtual rest 28 steps past 300, change B at
+    # pulse 299, position 300), ends at 500
     "queue_same_direction": _named(
-        {"at": 0, "op": "move", "steps": 300, **_MOVE}, {"at": 50_000, "op": "queue", "steps": 200, **_MOVE}
+        {"at": 0, "op": "move", "steps": 300, **_MOVE},
+        {"at": 50_000, "op": "queue", "steps": 200, **_MOVE, "speed": 60.0},
     ),
     # 300 steps, then 200 back queued: DIR changes, the second starts 7 clocks after the first's last pulse, ends at 100
     "queue_opposite_direction": _named(
