@@ -60,6 +60,7 @@ events and resets. Replay a failing sequence with REGFILE_SEED=<seed> .venv/bin/
 
 from __future__ import annotations
 
+import functools
 import os
 import random
 from collections import Counter, deque
@@ -537,6 +538,17 @@ async def fresh_error(tb: Bench) -> None:
     assert s["ERROR"] == 0 and s["ERR_CODE"] == ERR["LATE"]
 
 
+async def refused_command(tb: Bench, data: int, what: str, pending: int = 0) -> None:
+    """A CTRL write with CHANGE or QUEUE that the register file refuses: no strobe, ERROR with CHANGE, PENDING as
+    given."""
+    await fresh_error(tb)
+    got = await tb.write(off("CTRL"), data)
+    assert got["start"] == 0 and got["change"] == 0, what
+    s = await flagged(tb, "CHANGE", what)
+    assert s["PENDING"] == pending, what
+    await fresh_error(tb)
+
+
 async def flagged(tb: Bench, code: str | None, what: str) -> dict[str, int]:
     """STATUS after fresh_error(): ERROR with ERR_CODE code, or (None) no new error."""
     s = await status(tb)
@@ -874,13 +886,7 @@ async def change_commit(dut) -> None:
         s = await flagged(tb, None, what)
         assert s["PENDING"] == 0, what
 
-    async def refused(data: int, what: str, pending: int = 0) -> None:
-        await fresh_error(tb)
-        got = await tb.write(off("CTRL"), data)
-        assert got["change"] == 0 and got["start"] == 0, what
-        s = await flagged(tb, "CHANGE", what)
-        assert s["PENDING"] == pending, what
-        await fresh_error(tb)
+    refused = functools.partial(refused_command, tb)
 
     got = await tb.write(off("CTRL"), cmd("CHANGE"), 0b1110)  # byte 0 not enabled: no command
     assert got["change"] == 0
@@ -984,13 +990,7 @@ async def queue_commit(dut) -> None:
         await tb.write(off("STATUS"), STATUS.field("DONE").mask)
         tb.set_engine(eng_busy=1, eng_state=1)
 
-    async def refused(data: int, what: str, pending: int = 0) -> None:
-        await fresh_error(tb)
-        got = await tb.write(off("CTRL"), data)
-        assert got["start"] == 0 and got["change"] == 0, what
-        s = await flagged(tb, "CHANGE", what)
-        assert s["PENDING"] == pending, what
-        await fresh_error(tb)
+    refused = functools.partial(refused_command, tb)
 
     got = await tb.write(off("CTRL"), cmd("QUEUE"), 0b1110)  # byte 0 not enabled: no command
     assert (await status(tb))["PENDING"] == 0
