@@ -311,6 +311,7 @@ begin
           for i in mem'range loop
 
             if (i = w) then
+              mem(i)     <= merge(mem(i), wdata, be) and storage_mask(i);
               written(i) <= '1';
               if (i = word(C_REG_STEPS)) then
                 steps_bad <= '0';
@@ -414,18 +415,6 @@ begin
 
         rdata_r <= rd_v;
       end if;
-
-      -- The storage words' write enables, out of the chain above: the word's decode and one flag of its kind (the
-      -- configuration words while idle, the staging words while unlocked), so that the enables stay shallow on the
-      -- bus's address path.
-      for i in mem'range loop
-
-        if (wr = '1' and i = w and C_STORAGE_WORDS(i) = '1' and ((C_CONFIG_WORDS(i) = '1' and eng_busy = '0') or
-                                                                 (C_CONFIG_WORDS(i) = '0' and locked = '0'))) then
-          mem(i) <= merge(mem(i), wdata, be) and storage_mask(i);
-        end if;
-
-      end loop;
 
       if (clr(C_STATUS_DONE_LSB) = '1') then
         done_flag <= '0';
