@@ -190,7 +190,8 @@ begin
 
   core_inst : entity work.stepramp_core
     generic map (
-      G_MICROSTEPS => G_MICROSTEPS
+      G_MICROSTEPS => G_MICROSTEPS,
+      G_WADDR      => true
     )
     port map (
       clk    => aclk,
@@ -198,6 +199,7 @@ begin
       wr     => wr,
       rd     => rd,
       addr   => addr,
+      waddr  => awaddr,
       wdata  => wdata,
       be     => wstrb,
       rdata  => core_rd,

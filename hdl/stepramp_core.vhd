@@ -11,15 +11,19 @@ library work;
 
 entity stepramp_core is
   generic (
-    G_MICROSTEPS : positive := 16
+    G_MICROSTEPS : positive := 16;
+    -- stepramp_regfile's G_WADDR: the AXI4-Lite top decodes a write from waddr.
+    G_WADDR : boolean := false
   );
   port (
     clk : in    std_logic;
     rst : in    std_logic;
     -- Register port: wr or rd for one cycle; ack (with err, and rdata for a read) one clock later.
-    wr    : in    std_logic;
-    rd    : in    std_logic;
-    addr  : in    std_logic_vector(C_ADDR_BITS - 1 downto 0);
+    wr   : in    std_logic;
+    rd   : in    std_logic;
+    addr : in    std_logic_vector(C_ADDR_BITS - 1 downto 0);
+    -- A write's address (addr on a one-address bus; stepramp_regfile, "waddr").
+    waddr : in    std_logic_vector(C_ADDR_BITS - 1 downto 0);
     wdata : in    std_logic_vector(31 downto 0);
     be    : in    std_logic_vector(3 downto 0);
     rdata : out   std_logic_vector(31 downto 0);
@@ -98,12 +102,16 @@ architecture rtl of stepramp_core is
 begin
 
   regfile_inst : entity work.stepramp_regfile
+    generic map (
+      G_WADDR => G_WADDR
+    )
     port map (
       clk             => clk,
       rst             => rst,
       wr              => wr,
       rd              => rd,
       addr            => addr,
+      waddr           => waddr,
       wdata           => wdata,
       be              => be,
       rdata           => rdata,

@@ -86,6 +86,7 @@ begin
       wr     => wr,
       rd     => rd,
       addr   => bus2ip_addr(C_ADDR_BITS - 1 downto 0),
+      waddr  => bus2ip_addr(C_ADDR_BITS - 1 downto 0),
       wdata  => bus2ip_data,
       be     => bus2ip_be,
       rdata  => rdata,

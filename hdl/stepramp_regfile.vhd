@@ -11,13 +11,21 @@ library work;
   use work.stepramp_regs_pkg.all;
 
 entity stepramp_regfile is
+  generic (
+    -- true: a write's address is waddr (the AXI4-Lite top: its held write address, so that the write decode does not
+    -- wait for the read / write arbitration); false: addr serves reads and writes (waddr unused).
+    G_WADDR : boolean := false
+  );
   port (
     clk : in    std_logic;
     rst : in    std_logic;
     -- Bus side.
-    wr    : in    std_logic;
-    rd    : in    std_logic;
-    addr  : in    std_logic_vector(C_ADDR_BITS - 1 downto 0);
+    wr   : in    std_logic;
+    rd   : in    std_logic;
+    addr : in    std_logic_vector(C_ADDR_BITS - 1 downto 0);
+    -- The write's address: addr on a bus with one address (the PLB-like top), the AXI4-Lite write address channel's
+    -- own register on the AXI4-Lite top (the write decode then does not wait for the read / write arbitration).
+    waddr : in    std_logic_vector(C_ADDR_BITS - 1 downto 0);
     wdata : in    std_logic_vector(31 downto 0);
     be    : in    std_logic_vector(3 downto 0);
     rdata : out   std_logic_vector(31 downto 0);
@@ -271,17 +279,23 @@ begin
   bus_proc : process (clk) is
 
     variable w        : natural range 0 to 2 ** (C_ADDR_BITS - 2) - 1;
+    variable ww       : natural range 0 to 2 ** (C_ADDR_BITS - 2) - 1; -- the write's word (waddr)
     variable rd_v     : std_logic_vector(31 downto 0);
     variable ctrl_v   : std_logic_vector(31 downto 0);
     variable stat_v   : std_logic_vector(31 downto 0);
     variable mapped   : boolean;
+    variable mapped_w : boolean;
     variable new_ctrl : std_logic_vector(31 downto 0);
     variable clr      : std_logic_vector(31 downto 0);
 
   begin
 
     if rising_edge(clk) then
-      w           := to_integer(unsigned(addr(C_ADDR_BITS - 1 downto 2)));
+      w  := to_integer(unsigned(addr(C_ADDR_BITS - 1 downto 2)));
+      ww := w;
+      if (G_WADDR) then
+        ww := to_integer(unsigned(waddr(C_ADDR_BITS - 1 downto 2)));
+      end if;
       ack_r       <= '0';
       err_r       <= '0';
       start_r     <= '0';
@@ -290,6 +304,7 @@ begin
       change_r    <= '0';
       pos_load_r  <= '0';
       mapped      := C_MAPPED_WORDS(w) = '1';
+      mapped_w    := C_MAPPED_WORDS(ww) = '1';
 
       -- Sticky flags: engine events (set) have priority over a W1C write in the same cycle (below).
       clr := (others => '0');
@@ -297,20 +312,20 @@ begin
       if (wr = '1') then
         ack_r <= '1';
 
-        if (not mapped) then
+        if (not mapped_w) then
           err_r <= '1';
-        elsif (C_CONFIG_WORDS(w) = '1' and eng_busy = '1') then
+        elsif (C_CONFIG_WORDS(ww) = '1' and eng_busy = '1') then
           error_flag <= '1';
           err_code_r <= C_ERR_CFG_BUSY;
-        elsif (C_STORAGE_WORDS(w) = '1' and C_CONFIG_WORDS(w) = '0' and locked = '1') then
+        elsif (C_STORAGE_WORDS(ww) = '1' and C_CONFIG_WORDS(ww) = '0' and locked = '1') then
           -- (the configuration words keep their own rule above: written only while stopped)
           error_flag <= '1';
           err_code_r <= C_ERR_STAGED;
-        elsif (C_STORAGE_WORDS(w) = '1') then
+        elsif (C_STORAGE_WORDS(ww) = '1') then
 
           for i in mem'range loop
 
-            if (i = w) then
+            if (i = ww) then
               mem(i)     <= merge(mem(i), wdata, be) and storage_mask(i);
               written(i) <= '1';
               if (i = word(C_REG_STEPS)) then
@@ -323,7 +338,7 @@ begin
 
           end loop;
 
-        elsif (w = word(C_REG_CTRL)) then
+        elsif (ww = word(C_REG_CTRL)) then
           new_ctrl := merge(x"00000000", wdata, be);
 
           if (be(1) = '1') then
@@ -360,9 +375,9 @@ begin
               q_pend <= '1';
             end if;
           end if;
-        elsif (w = word(C_REG_STATUS)) then
+        elsif (ww = word(C_REG_STATUS)) then
           clr := merge(x"00000000", wdata, be);
-        elsif (w = word(C_REG_POSITION)) then
+        elsif (ww = word(C_REG_POSITION)) then
           if (eng_busy = '1') then
             error_flag <= '1';
             err_code_r <= C_ERR_POS_BUSY;
@@ -425,7 +440,7 @@ begin
       end if;
 
       -- STEPS = -2^31 has no 31-bit magnitude: reject the start here, the engine never sees it.
-      if (wr = '1' and mapped and w = word(C_REG_CTRL) and merge(x"00000000", wdata, be)(C_CTRL_START_LSB) = '1' and
+      if (wr = '1' and mapped_w and ww = word(C_REG_CTRL) and merge(x"00000000", wdata, be)(C_CTRL_START_LSB) = '1' and
           eng_busy = '0' and steps_bad = '1') then
         start_r    <= '0';
         done_flag  <= '1';

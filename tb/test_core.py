@@ -99,6 +99,7 @@ class CoreMaster:
         self.violations: list[str] = []
         self.idle()
         dut.addr.value = 0
+        dut.waddr.value = 0
         dut.wdata.value = 0
         dut.be.value = 0
         self._tasks = [cocotb.start_soon(self._watch_ack()), cocotb.start_soon(self._watch_err())]
@@ -121,6 +122,7 @@ class CoreMaster:
         self.dut.wr.value = int(kind == "wr")
         self.dut.rd.value = int(kind == "rd")
         self.dut.addr.value = addr & (WINDOW - 1)
+        self.dut.waddr.value = addr & (WINDOW - 1)  # one address for both, as on the PLB-like top
         self.dut.wdata.value = wdata & WORD
         self.dut.be.value = be & 0xF
         edge = int(self.cycles()) + 1

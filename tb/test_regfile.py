@@ -436,6 +436,8 @@ class Bench:
             if self.driven.get(name) != v:
                 self.handles[name].value = v
                 self.driven[name] = v
+                if name == "addr":  # one address for reads and writes, as on the PLB-like top
+                    self.dut.waddr.value = v
 
     async def cycle(self, **drive: int) -> dict[str, int | None]:
         """Drive inputs for one clock (from a falling edge), let the rising edge sample them, compare after it."""

@@ -129,7 +129,7 @@ class _Recorder:
             await RisingEdge(regfile.wr)
             await ReadOnly()
             # (wr may rise at a falling edge, from the bus's select: the last rising edge, floored, + 1)
-            self.writes.append((math.floor(now_periods(CLK_PERIOD_PS)) + 1, int(regfile.addr.value) & ~3))
+            self.writes.append((math.floor(now_periods(CLK_PERIOD_PS)) + 1, int(regfile.waddr.value) & ~3))
 
     async def _errors(self) -> None:
         # ERROR is sticky (a script never clears it): a new error shows as a new ERR_CODE, or as ERROR rising.
