@@ -43,7 +43,12 @@ entity stepramp_axil is
     a1     : out   std_logic;
     a2     : out   std_logic;
     b1     : out   std_logic;
-    b2     : out   std_logic
+    b2     : out   std_logic;
+    -- Machine inputs, asynchronous (stepramp_core; docs/stepramp_inputs.md): tie to '0' when unused.
+    limit_neg : in    std_logic;
+    limit_pos : in    std_logic;
+    home      : in    std_logic;
+    estop     : in    std_logic
   );
 end entity stepramp_axil;
 
@@ -194,25 +199,32 @@ begin
       G_WADDR      => true
     )
     port map (
-      clk    => aclk,
-      rst    => rst,
-      wr     => wr,
-      rd     => rd,
-      addr   => addr,
-      waddr  => awaddr,
-      wdata  => wdata,
-      be     => wstrb,
-      rdata  => core_rd,
-      ack    => core_ack,
-      err    => core_err,
-      irq    => irq,
-      step   => step,
-      dir    => dir,
-      enable => enable,
-      a1     => a1,
-      a2     => a2,
-      b1     => b1,
-      b2     => b2
+      clk        => aclk,
+      rst        => rst,
+      wr         => wr,
+      rd         => rd,
+      addr       => addr,
+      waddr      => awaddr,
+      wdata      => wdata,
+      be         => wstrb,
+      rdata      => core_rd,
+      ack        => core_ack,
+      err        => core_err,
+      irq        => irq,
+      step       => step,
+      dir        => dir,
+      enable     => enable,
+      a1         => a1,
+      a2         => a2,
+      b1         => b1,
+      b2         => b2,
+      limit_neg  => limit_neg,
+      limit_pos  => limit_pos,
+      home       => home,
+      estop      => estop,
+      sync_start => '0',
+      st_busy    => open,
+      st_done    => open
     );
 
 end architecture rtl;

@@ -37,7 +37,16 @@ entity stepramp_core is
     a1     : out   std_logic;
     a2     : out   std_logic;
     b1     : out   std_logic;
-    b2     : out   std_logic
+    b2     : out   std_logic;
+    -- Machine inputs, asynchronous (synchronised, filtered and given their polarity inside; INPUT_CFG).
+    limit_neg : in    std_logic;
+    limit_pos : in    std_logic;
+    home      : in    std_logic;
+    estop     : in    std_logic;
+    -- The multi-axis top: a START on this clock (as if written), and STATUS.BUSY / STATUS.DONE.
+    sync_start : in    std_logic;
+    st_busy    : out   std_logic;
+    st_done    : out   std_logic
   );
 end entity stepramp_core;
 
@@ -98,6 +107,24 @@ architecture rtl of stepramp_core is
   signal elec_pos      : std_logic_vector(8 downto 0);
   signal step_count    : std_logic_vector(30 downto 0);
   signal cur_delay     : std_logic_vector(31 downto 0);
+  signal pins          : std_logic_vector(3 downto 0);
+  signal in_filter     : std_logic_vector(19 downto 0);
+  signal in_pol        : std_logic_vector(3 downto 0);
+  signal latch_src     : std_logic_vector(1 downto 0);
+  signal latch_active  : std_logic;
+  signal latch_release : std_logic;
+  signal latch_clr     : std_logic;
+  signal in_level      : std_logic_vector(3 downto 0);
+  signal in_rise       : std_logic_vector(3 downto 0);
+  signal in_fall       : std_logic_vector(3 downto 0);
+  signal latched       : std_logic;
+  signal latch_pos     : std_logic_vector(31 downto 0);
+  signal latch_time    : std_logic_vector(63 downto 0);
+  signal time_count    : std_logic_vector(63 downto 0);
+  signal estop_fault   : std_logic;
+  -- ESTOP's filtered level or its latched fault: a hard stop held on the engine and the stepping logic.
+  signal estop_stop : std_logic;
+  signal step_hard  : std_logic;
 
 begin
 
@@ -162,8 +189,52 @@ begin
       eng_cur_delay   => cur_delay,
       eng_chg_pend    => chg_pend,
       eng_chg_refused => chg_refused,
-      dir_fault       => dir_fault
+      dir_fault       => dir_fault,
+      ext_start       => sync_start,
+      done_flag_o     => st_done,
+      in_filter       => in_filter,
+      in_pol          => in_pol,
+      latch_src       => latch_src,
+      latch_active    => latch_active,
+      latch_release   => latch_release,
+      latch_clr       => latch_clr,
+      in_level        => in_level,
+      in_rise         => in_rise,
+      latched         => latched,
+      latch_pos       => latch_pos,
+      latch_time      => latch_time,
+      time_count      => time_count,
+      estop_fault     => estop_fault
     );
+
+  pins <= estop & home & limit_pos & limit_neg;
+
+  inputs_inst : entity work.stepramp_inputs
+    port map (
+      clk           => clk,
+      rst           => rst,
+      pins          => pins,
+      filter        => in_filter,
+      pol           => in_pol,
+      level         => in_level,
+      rise          => in_rise,
+      fall          => in_fall,
+      latch_src     => latch_src,
+      latch_active  => latch_active,
+      latch_release => latch_release,
+      latch_clr     => latch_clr,
+      position      => position,
+      latched       => latched,
+      latch_pos     => latch_pos,
+      latch_time    => latch_time,
+      time_count    => time_count
+    );
+
+  -- ESTOP stops from its filtered level on: the engine's hard stop is sampled at the next edge, so no pulse is
+  -- decided after it (docs/stepramp_inputs.md, "ESTOP timing").
+  estop_stop <= in_level(3) or estop_fault;
+  step_hard  <= hard_stop or estop_stop;
+  st_busy    <= busy_any;
 
   -- STATUS.BUSY covers a start held back by the stepping logic for DIR setup/hold or STEP spacing.
   busy_any <= busy or gate_busy;
@@ -174,7 +245,7 @@ begin
   load <= start_req and not busy_any;
 
   -- A hard stop that cancels a start held by the stepping logic reaches the engine with that start (done, no pulse).
-  eng_hard_stop <= hard_stop or gate_stop;
+  eng_hard_stop <= hard_stop or gate_stop or estop_stop;
 
   stepper_inst : entity work.stepramp_stepper
     generic map (
@@ -193,7 +264,7 @@ begin
       ctrl_enable   => ctrl_enable,
       start_req     => start_req,
       new_dir       => direction,
-      hard_stop     => hard_stop,
+      hard_stop     => step_hard,
       soft_stop     => soft_stop,
       gate_busy     => gate_busy,
       dir_fault     => dir_fault,

@@ -35,7 +35,12 @@ entity stepramp_plb is
     a1     : out   std_logic;
     a2     : out   std_logic;
     b1     : out   std_logic;
-    b2     : out   std_logic
+    b2     : out   std_logic;
+    -- Machine inputs, asynchronous (stepramp_core; docs/stepramp_inputs.md): tie to '0' when unused.
+    limit_neg : in    std_logic;
+    limit_pos : in    std_logic;
+    home      : in    std_logic;
+    estop     : in    std_logic
   );
 end entity stepramp_plb;
 
@@ -81,25 +86,32 @@ begin
       G_MICROSTEPS => G_MICROSTEPS
     )
     port map (
-      clk    => clk,
-      rst    => rst,
-      wr     => wr,
-      rd     => rd,
-      addr   => bus2ip_addr(C_ADDR_BITS - 1 downto 0),
-      waddr  => bus2ip_addr(C_ADDR_BITS - 1 downto 0),
-      wdata  => bus2ip_data,
-      be     => bus2ip_be,
-      rdata  => rdata,
-      ack    => ack,
-      err    => err,
-      irq    => irq,
-      step   => step,
-      dir    => dir,
-      enable => enable,
-      a1     => a1,
-      a2     => a2,
-      b1     => b1,
-      b2     => b2
+      clk        => clk,
+      rst        => rst,
+      wr         => wr,
+      rd         => rd,
+      addr       => bus2ip_addr(C_ADDR_BITS - 1 downto 0),
+      waddr      => bus2ip_addr(C_ADDR_BITS - 1 downto 0),
+      wdata      => bus2ip_data,
+      be         => bus2ip_be,
+      rdata      => rdata,
+      ack        => ack,
+      err        => err,
+      irq        => irq,
+      step       => step,
+      dir        => dir,
+      enable     => enable,
+      a1         => a1,
+      a2         => a2,
+      b1         => b1,
+      b2         => b2,
+      limit_neg  => limit_neg,
+      limit_pos  => limit_pos,
+      home       => home,
+      estop      => estop,
+      sync_start => '0',
+      st_busy    => open,
+      st_done    => open
     );
 
 end architecture rtl;

@@ -82,7 +82,27 @@ entity stepramp_regfile is
     -- The engine holds an accepted change until its pulse (chg_pend), or refused one (chg_refused strobe).
     eng_chg_pend    : in    std_logic;
     eng_chg_refused : in    std_logic;
-    dir_fault       : in    std_logic
+    dir_fault       : in    std_logic;
+    -- A START from outside the bus (the multi-axis top's SYNC_START): taken as a START written at this edge.
+    ext_start : in    std_logic;
+    -- STATUS.DONE, for the multi-axis top's status word.
+    done_flag_o : out   std_logic;
+    -- Machine inputs (stepramp_inputs): configuration out; filtered levels (bit 0 LIMIT_NEG, 1 LIMIT_POS, 2 HOME,
+    -- 3 ESTOP), activation strobes, the latch and TIME in.
+    in_filter     : out   std_logic_vector(19 downto 0);
+    in_pol        : out   std_logic_vector(3 downto 0);
+    latch_src     : out   std_logic_vector(1 downto 0);
+    latch_active  : out   std_logic;
+    latch_release : out   std_logic;
+    latch_clr     : out   std_logic;
+    in_level      : in    std_logic_vector(3 downto 0);
+    in_rise       : in    std_logic_vector(3 downto 0);
+    latched       : in    std_logic;
+    latch_pos     : in    std_logic_vector(31 downto 0);
+    latch_time    : in    std_logic_vector(63 downto 0);
+    time_count    : in    std_logic_vector(63 downto 0);
+    -- STATUS.ESTOP_FAULT: the core hard-stops and holds ENABLE low while it is set.
+    estop_fault : out   std_logic
   );
 end entity stepramp_regfile;
 
@@ -98,7 +118,7 @@ architecture rtl of stepramp_regfile is
   constant C_FIRST_CFG_W  : natural := C_REG_DRIVE / 4;
   constant C_LAST_CFG_W   : natural := C_REG_STEP_SPACE / 4;
   constant C_FIRST_SEG_W  : natural := C_REG_SEGMENT / 4;
-  constant C_LAST_W       : natural := C_REG_CHANGE_AT / 4;
+  constant C_LAST_W       : natural := C_REG_INPUT_CFG / 4;
   constant C_ERR_CODE_MSB : natural := C_STATUS_ERR_CODE_LSB + C_STATUS_ERR_CODE_W - 1;
   constant C_WORDS        : natural := 2 ** (C_ADDR_BITS - 2);
 
@@ -121,18 +141,29 @@ architecture rtl of stepramp_regfile is
   signal irq_done_en  : std_logic;
   signal enable_r     : std_logic;
   signal irq_error_en : std_logic;
-  signal done_flag    : std_logic;
-  signal error_flag   : std_logic;
-  signal err_code_r   : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
-  signal rdata_r      : std_logic_vector(31 downto 0);
-  signal ack_r        : std_logic;
-  signal err_r        : std_logic;
-  signal irq_r        : std_logic;
-  signal start_r      : std_logic;
-  signal soft_stop_r  : std_logic;
-  signal hard_stop_r  : std_logic;
-  signal pos_load_r   : std_logic;
-  signal pos_value_r  : std_logic_vector(31 downto 0);
+  -- The machine inputs' interrupt enables (LIMIT_NEG_EV, LIMIT_POS_EV, HOME_EV, ESTOP_FAULT, LATCHED) and their
+  -- sticky flags (the first four; LATCHED lives in stepramp_inputs).
+  signal irq_in_en : std_logic_vector(4 downto 0);
+  signal in_ev     : std_logic_vector(3 downto 0);
+  -- The direction of the running (or held) move, as STEPS gave it at its START; a limit acts against it.
+  signal mv_dir : std_logic;
+  -- A limit stopped the running move (once per move).
+  signal lim_hit : std_logic;
+  -- TIME bits 63:32 as the last read of TIME_LO saw them.
+  signal time_hi_r   : std_logic_vector(31 downto 0);
+  signal latch_clr_r : std_logic;
+  signal done_flag   : std_logic;
+  signal error_flag  : std_logic;
+  signal err_code_r  : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
+  signal rdata_r     : std_logic_vector(31 downto 0);
+  signal ack_r       : std_logic;
+  signal err_r       : std_logic;
+  signal irq_r       : std_logic;
+  signal start_r     : std_logic;
+  signal soft_stop_r : std_logic;
+  signal hard_stop_r : std_logic;
+  signal pos_load_r  : std_logic;
+  signal pos_value_r : std_logic_vector(31 downto 0);
   -- STEPS holds -2^31 (a START is then rejected), registered as STEPS is written, so that the START path reads a
   -- flip-flop instead of a 32-bit compare (the clock, issue 12).
   signal steps_bad : std_logic;
@@ -141,6 +172,8 @@ architecture rtl of stepramp_regfile is
   signal q_pend   : std_logic;
   -- STATUS.PENDING: the staging registers are locked until the change is taken or the queued move started.
   signal locked : std_logic;
+  -- STEPS' sign: the direction of the staged move (1: position counts down).
+  signal direction_i : std_logic;
 
   -- Word index of a byte offset.
   function word (
@@ -194,7 +227,7 @@ architecture rtl of stepramp_regfile is
   ) return boolean is
   begin
 
-    return w >= C_FIRST_CFG_W and w <= C_LAST_CFG_W;
+    return (w >= C_FIRST_CFG_W and w <= C_LAST_CFG_W) or w = C_REG_INPUT_FILTER / 4 or w = C_REG_INPUT_CFG / 4;
 
   end function is_config;
 
@@ -240,7 +273,8 @@ architecture rtl of stepramp_regfile is
         hit := is_config(w);
       else
         hit := is_storage(w) or w = word(C_REG_ID) or w = word(C_REG_CTRL) or w = word(C_REG_STATUS) or
-               w = word(C_REG_POSITION) or w = word(C_REG_CUR_DELAY) or w = word(C_REG_STEP_COUNT);
+               w = word(C_REG_POSITION) or w = word(C_REG_CUR_DELAY) or w = word(C_REG_STEP_COUNT) or
+               (w >= word(C_REG_LATCH_POS) and w <= word(C_REG_TIME_HI));
       end if;
 
       if (hit) then
@@ -287,6 +321,9 @@ begin
     variable mapped_w : boolean;
     variable new_ctrl : std_logic_vector(31 downto 0);
     variable clr      : std_logic_vector(31 downto 0);
+    variable start_v  : std_logic;
+    variable toward_v : std_logic;
+    variable cfg_v    : std_logic_vector(31 downto 0);
 
   begin
 
@@ -303,6 +340,8 @@ begin
       hard_stop_r <= '0';
       change_r    <= '0';
       pos_load_r  <= '0';
+      latch_clr_r <= '0';
+      start_v     := '0';
       mapped      := C_MAPPED_WORDS(w) = '1';
       mapped_w    := C_MAPPED_WORDS(ww) = '1';
 
@@ -344,15 +383,14 @@ begin
           if (be(1) = '1') then
             irq_done_en  <= wdata(C_CTRL_IRQ_DONE_EN_LSB);
             irq_error_en <= wdata(C_CTRL_IRQ_ERROR_EN_LSB);
+            irq_in_en    <= wdata(C_CTRL_IRQ_LATCH_EN_LSB downto C_CTRL_IRQ_LIMIT_NEG_EN_LSB);
           end if;
 
           if (be(2) = '1') then
             enable_r <= wdata(C_CTRL_ENABLE_LSB);
           end if;
 
-          if (new_ctrl(C_CTRL_START_LSB) = '1') then
-            start_r <= '1';
-          end if;
+          start_v     := new_ctrl(C_CTRL_START_LSB);
           soft_stop_r <= new_ctrl(C_CTRL_SOFT_STOP_LSB);
           hard_stop_r <= new_ctrl(C_CTRL_HARD_STOP_LSB);
 
@@ -414,19 +452,32 @@ begin
         ctrl_v(C_CTRL_IRQ_ERROR_EN_LSB) := irq_error_en;
         ctrl_v(C_CTRL_ENABLE_LSB)       := enable_r;
 
-        stat_v(C_STATUS_STATE_LSB + 1 downto C_STATUS_STATE_LSB) := eng_state;
-        stat_v(C_STATUS_BUSY_LSB)                                := eng_busy;
-        stat_v(C_STATUS_DIR_LSB)                                 := eng_dir;
-        stat_v(C_STATUS_DONE_LSB)                                := done_flag;
-        stat_v(C_STATUS_ERROR_LSB)                               := error_flag;
-        stat_v(C_STATUS_DIR_FAULT_LSB)                           := dir_fault;
-        stat_v(C_STATUS_PENDING_LSB)                             := locked;
-        stat_v(C_ERR_CODE_MSB downto C_STATUS_ERR_CODE_LSB)      := err_code_r;
+        ctrl_v(C_CTRL_IRQ_LATCH_EN_LSB downto C_CTRL_IRQ_LIMIT_NEG_EN_LSB) := irq_in_en;
+
+        stat_v(C_STATUS_STATE_LSB + 1 downto C_STATUS_STATE_LSB)          := eng_state;
+        stat_v(C_STATUS_BUSY_LSB)                                         := eng_busy;
+        stat_v(C_STATUS_DIR_LSB)                                          := eng_dir;
+        stat_v(C_STATUS_DONE_LSB)                                         := done_flag;
+        stat_v(C_STATUS_ERROR_LSB)                                        := error_flag;
+        stat_v(C_STATUS_DIR_FAULT_LSB)                                    := dir_fault;
+        stat_v(C_STATUS_PENDING_LSB)                                      := locked;
+        stat_v(C_ERR_CODE_MSB downto C_STATUS_ERR_CODE_LSB)               := err_code_r;
+        stat_v(C_STATUS_ESTOP_LSB downto C_STATUS_LIMIT_NEG_LSB)          := in_level;
+        stat_v(C_STATUS_ESTOP_FAULT_LSB downto C_STATUS_LIMIT_NEG_EV_LSB) := in_ev;
+        stat_v(C_STATUS_LATCHED_LSB)                                      := latched;
+
+        if (w = word(C_REG_TIME_LO)) then
+          time_hi_r <= time_count(63 downto 32);
+        end if;
 
         rd_v := gate(reset_value(w), C_STORAGE_WORDS(w) = '1') or gate(C_ID_VALUE, w = word(C_REG_ID)) or
                 gate(ctrl_v, w = word(C_REG_CTRL)) or gate(stat_v, w = word(C_REG_STATUS)) or
                 gate(eng_position, w = word(C_REG_POSITION)) or gate(eng_cur_delay, w = word(C_REG_CUR_DELAY)) or
-                gate('0' & eng_step_count, w = word(C_REG_STEP_COUNT));
+                gate('0' & eng_step_count, w = word(C_REG_STEP_COUNT)) or
+                gate(latch_pos, w = word(C_REG_LATCH_POS)) or
+                gate(latch_time(31 downto 0), w = word(C_REG_LATCH_TIME_LO)) or
+                gate(latch_time(63 downto 32), w = word(C_REG_LATCH_TIME_HI)) or
+                gate(time_count(31 downto 0), w = word(C_REG_TIME_LO)) or gate(time_hi_r, w = word(C_REG_TIME_HI));
 
         rdata_r <= rd_v;
       end if;
@@ -439,23 +490,61 @@ begin
         error_flag <= '0';
       end if;
 
-      -- STEPS = -2^31 has no 31-bit magnitude: reject the start here, the engine never sees it.
-      if (wr = '1' and mapped_w and ww = word(C_REG_CTRL) and merge(x"00000000", wdata, be)(C_CTRL_START_LSB) = '1' and
-          eng_busy = '0' and steps_bad = '1') then
-        start_r    <= '0';
-        done_flag  <= '1';
-        error_flag <= '1';
-        err_code_r <= C_ERR_STEPS;
+      for i in 0 to 2 loop
+
+        if (clr(C_STATUS_LIMIT_NEG_EV_LSB + i) = '1') then
+          in_ev(i) <= '0';
+        end if;
+
+      end loop;
+
+      -- The fault clears only once ESTOP has gone inactive.
+      if (clr(C_STATUS_ESTOP_FAULT_LSB) = '1' and in_level(3) = '0') then
+        in_ev(3) <= '0';
+      end if;
+
+      latch_clr_r <= clr(C_STATUS_LATCHED_LSB);
+
+      -- A START (written, or the multi-axis top's) while idle: refused with STEPS = -2^31 (no 31-bit magnitude),
+      -- during an ESTOP fault, or towards an active limit; it then ends at once (DONE and ERROR), nothing moves.
+      start_v  := start_v or ext_start;
+      cfg_v    := mem(word(C_REG_INPUT_CFG));
+      toward_v := cfg_v(C_INPUT_CFG_LIMIT_EN_LSB) and
+                  ((in_level(0) and direction_i) or (in_level(1) and not direction_i));
+
+      if (start_v = '1') then
+        start_r <= '1';
+        if (eng_busy = '0') then
+          mv_dir <= direction_i;
+          if (steps_bad = '1' or in_ev(3) = '1' or in_level(3) = '1' or toward_v = '1') then
+            start_r    <= '0';
+            done_flag  <= '1';
+            error_flag <= '1';
+            if (steps_bad = '1') then
+              err_code_r <= C_ERR_STEPS;
+            elsif (toward_v = '1') then
+              err_code_r <= C_ERR_LIMIT;
+            else
+              err_code_r <= C_ERR_ESTOP;
+            end if;
+          end if;
+        end if;
       end if;
 
       if (eng_done = '1') then
         done_flag <= '1';
       end if;
 
-      -- The queued move starts at the engine's done, as a START written at this edge; an error drops it.
+      -- The queued move starts at the engine's done, as a START written at this edge; an error drops it, and an
+      -- active limit against its direction refuses it.
       if (eng_done = '1' and q_pend = '1') then
         q_pend  <= '0';
-        start_r <= not eng_error;
+        start_r <= not eng_error and not toward_v;
+        mv_dir  <= direction_i;
+        if (eng_error = '0' and toward_v = '1') then
+          error_flag <= '1';
+          err_code_r <= C_ERR_LIMIT;
+        end if;
       end if;
 
       if (eng_error = '1') then
@@ -468,7 +557,47 @@ begin
         err_code_r <= C_ERR_CHANGE;
       end if;
 
-      irq_r <= (done_flag and irq_done_en) or (error_flag and irq_error_en);
+      -- A limit against the running move stops it, once (soft or hard, INPUT_CFG.LIMIT_HARD), and drops a queued
+      -- move; the move's own direction counts, mv_dir (1: position counting down, towards LIMIT_NEG).
+      if (eng_busy = '0') then
+        lim_hit <= '0';
+      elsif (lim_hit = '0' and cfg_v(C_INPUT_CFG_LIMIT_EN_LSB) = '1' and
+             ((in_level(0) and mv_dir) or (in_level(1) and not mv_dir)) = '1') then
+        lim_hit    <= '1';
+        q_pend     <= '0';
+        error_flag <= '1';
+        err_code_r <= C_ERR_LIMIT;
+        if (cfg_v(C_INPUT_CFG_LIMIT_HARD_LSB) = '1') then
+          hard_stop_r <= '1';
+        else
+          soft_stop_r <= '1';
+        end if;
+      end if;
+
+      -- Input events; ESTOP latches the fault, clears CTRL.ENABLE and drops a queued move (the core hard-stops
+      -- from the filtered level itself).
+      for i in 0 to 3 loop
+
+        if (in_rise(i) = '1') then
+          in_ev(i) <= '1';
+        end if;
+
+      end loop;
+
+      if (in_rise(3) = '1' or in_level(3) = '1') then
+        in_ev(3) <= '1';
+        enable_r <= '0';
+        q_pend   <= '0';
+      end if;
+
+      if (in_rise(3) = '1') then
+        error_flag <= '1';
+        err_code_r <= C_ERR_ESTOP;
+      end if;
+
+      irq_r <= (done_flag and irq_done_en) or (error_flag and irq_error_en) or
+               (in_ev(0) and irq_in_en(0)) or (in_ev(1) and irq_in_en(1)) or (in_ev(2) and irq_in_en(2)) or
+               (in_ev(3) and irq_in_en(3)) or (latched and irq_in_en(4));
 
       if (rst = '1') then
         ack_r        <= '0';
@@ -482,6 +611,12 @@ begin
         irq_r        <= '0';
         irq_done_en  <= '0';
         irq_error_en <= '0';
+        irq_in_en    <= (others => '0');
+        in_ev        <= (others => '0');
+        mv_dir       <= '0';
+        lim_hit      <= '0';
+        time_hi_r    <= (others => '0');
+        latch_clr_r  <= '0';
         enable_r     <= '0';
         done_flag    <= '0';
         error_flag   <= '0';
@@ -575,17 +710,28 @@ begin
   pos_load  <= pos_load_r;
   change    <= change_r;
   locked    <= change_r or eng_chg_pend or q_pend;
-  pos_value <= pos_value_r;
+
+  done_flag_o   <= done_flag;
+  estop_fault   <= in_ev(3);
+  latch_clr     <= latch_clr_r;
+  in_filter     <= mem(word(C_REG_INPUT_FILTER))(19 downto 0);
+  in_pol        <= mem(word(C_REG_INPUT_CFG))(C_INPUT_CFG_POL_ESTOP_LSB downto C_INPUT_CFG_POL_LIMIT_NEG_LSB);
+  latch_src     <= mem(word(C_REG_INPUT_CFG))(C_INPUT_CFG_LATCH_SRC_LSB + 1 downto C_INPUT_CFG_LATCH_SRC_LSB);
+  latch_active  <= mem(word(C_REG_INPUT_CFG))(C_INPUT_CFG_LATCH_ON_ACTIVE_LSB);
+  latch_release <= mem(word(C_REG_INPUT_CFG))(C_INPUT_CFG_LATCH_ON_RELEASE_LSB);
+  pos_value     <= pos_value_r;
 
   -- The signed step count as magnitude and direction (-2^31 is rejected at START above).
+  direction <= direction_i;
+
   steps_proc : process (mem) is
 
     variable s : signed(31 downto 0);
 
   begin
 
-    s         := signed(mem(word(C_REG_STEPS)));
-    direction <= s(31);
+    s           := signed(mem(word(C_REG_STEPS)));
+    direction_i <= s(31);
 
     if (s(31) = '1') then
       s := -s;
@@ -612,7 +758,7 @@ begin
   run_stop   <= mem(word(C_REG_RUN_STOP))(30 downto 0);
   head_prod  <= mem(word(C_REG_HEAD_PROD_HI))(15 downto 0) & mem(word(C_REG_HEAD_PROD_LO));
   change_at  <= mem(word(C_REG_CHANGE_AT))(30 downto 0);
-  enable     <= enable_r;
+  enable     <= enable_r and not in_ev(3);
   mode       <= mem(word(C_REG_DRIVE))(C_DRIVE_MODE_LSB + 2 downto C_DRIVE_MODE_LSB);
   ustep_log2 <= mem(word(C_REG_DRIVE))(C_DRIVE_USTEP_LOG2_LSB + 2 downto C_DRIVE_USTEP_LOG2_LSB);
   step_width <= mem(word(C_REG_STEP_WIDTH))(15 downto 0);

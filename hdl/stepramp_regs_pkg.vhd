@@ -9,7 +9,7 @@ package stepramp_regs_pkg is
 
   -- Decoded address bits and the ID register's value.
   constant C_ADDR_BITS : natural                       := 8;
-  constant C_ID_VALUE  : std_logic_vector(31 downto 0) := x"53520005";
+  constant C_ID_VALUE  : std_logic_vector(31 downto 0) := x"53520006";
 
   -- Byte offsets.
   constant C_REG_ID            : natural := 16#00#;
@@ -48,52 +48,105 @@ package stepramp_regs_pkg is
   constant C_REG_HEAD_PROD_LO  : natural := 16#84#;
   constant C_REG_HEAD_PROD_HI  : natural := 16#88#;
   constant C_REG_CHANGE_AT     : natural := 16#8C#;
+  constant C_REG_INPUT_FILTER  : natural := 16#90#;
+  constant C_REG_INPUT_CFG     : natural := 16#94#;
+  constant C_REG_LATCH_POS     : natural := 16#98#;
+  constant C_REG_LATCH_TIME_LO : natural := 16#9C#;
+  constant C_REG_LATCH_TIME_HI : natural := 16#A0#;
+  constant C_REG_TIME_LO       : natural := 16#A4#;
+  constant C_REG_TIME_HI       : natural := 16#A8#;
 
   -- Fields: lowest bit and width.
-  constant C_CTRL_START_LSB        : natural := 0;
-  constant C_CTRL_START_W          : natural := 1;
-  constant C_CTRL_SOFT_STOP_LSB    : natural := 1;
-  constant C_CTRL_SOFT_STOP_W      : natural := 1;
-  constant C_CTRL_HARD_STOP_LSB    : natural := 2;
-  constant C_CTRL_HARD_STOP_W      : natural := 1;
-  constant C_CTRL_CHANGE_LSB       : natural := 3;
-  constant C_CTRL_CHANGE_W         : natural := 1;
-  constant C_CTRL_QUEUE_LSB        : natural := 4;
-  constant C_CTRL_QUEUE_W          : natural := 1;
-  constant C_CTRL_IRQ_DONE_EN_LSB  : natural := 8;
-  constant C_CTRL_IRQ_DONE_EN_W    : natural := 1;
-  constant C_CTRL_IRQ_ERROR_EN_LSB : natural := 9;
-  constant C_CTRL_IRQ_ERROR_EN_W   : natural := 1;
-  constant C_CTRL_ENABLE_LSB       : natural := 16;
-  constant C_CTRL_ENABLE_W         : natural := 1;
-  constant C_STATUS_STATE_LSB      : natural := 0;
-  constant C_STATUS_STATE_W        : natural := 2;
-  constant C_STATUS_BUSY_LSB       : natural := 2;
-  constant C_STATUS_BUSY_W         : natural := 1;
-  constant C_STATUS_DIR_LSB        : natural := 3;
-  constant C_STATUS_DIR_W          : natural := 1;
-  constant C_STATUS_DONE_LSB       : natural := 4;
-  constant C_STATUS_DONE_W         : natural := 1;
-  constant C_STATUS_ERROR_LSB      : natural := 5;
-  constant C_STATUS_ERROR_W        : natural := 1;
-  constant C_STATUS_DIR_FAULT_LSB  : natural := 6;
-  constant C_STATUS_DIR_FAULT_W    : natural := 1;
-  constant C_STATUS_PENDING_LSB    : natural := 7;
-  constant C_STATUS_PENDING_W      : natural := 1;
-  constant C_STATUS_ERR_CODE_LSB   : natural := 8;
-  constant C_STATUS_ERR_CODE_W     : natural := 5;
-  constant C_DRIVE_MODE_LSB        : natural := 0;
-  constant C_DRIVE_MODE_W          : natural := 3;
-  constant C_DRIVE_USTEP_LOG2_LSB  : natural := 4;
-  constant C_DRIVE_USTEP_LOG2_W    : natural := 3;
-  constant C_DIR_TIMING_SETUP_LSB  : natural := 0;
-  constant C_DIR_TIMING_SETUP_W    : natural := 16;
-  constant C_DIR_TIMING_HOLD_LSB   : natural := 16;
-  constant C_DIR_TIMING_HOLD_W     : natural := 16;
-  constant C_SEGMENT_HEAD_DOWN_LSB : natural := 0;
-  constant C_SEGMENT_HEAD_DOWN_W   : natural := 1;
-  constant C_SEGMENT_ENDLESS_LSB   : natural := 1;
-  constant C_SEGMENT_ENDLESS_W     : natural := 1;
+  constant C_CTRL_START_LSB                 : natural := 0;
+  constant C_CTRL_START_W                   : natural := 1;
+  constant C_CTRL_SOFT_STOP_LSB             : natural := 1;
+  constant C_CTRL_SOFT_STOP_W               : natural := 1;
+  constant C_CTRL_HARD_STOP_LSB             : natural := 2;
+  constant C_CTRL_HARD_STOP_W               : natural := 1;
+  constant C_CTRL_CHANGE_LSB                : natural := 3;
+  constant C_CTRL_CHANGE_W                  : natural := 1;
+  constant C_CTRL_QUEUE_LSB                 : natural := 4;
+  constant C_CTRL_QUEUE_W                   : natural := 1;
+  constant C_CTRL_IRQ_DONE_EN_LSB           : natural := 8;
+  constant C_CTRL_IRQ_DONE_EN_W             : natural := 1;
+  constant C_CTRL_IRQ_ERROR_EN_LSB          : natural := 9;
+  constant C_CTRL_IRQ_ERROR_EN_W            : natural := 1;
+  constant C_CTRL_IRQ_LIMIT_NEG_EN_LSB      : natural := 10;
+  constant C_CTRL_IRQ_LIMIT_NEG_EN_W        : natural := 1;
+  constant C_CTRL_IRQ_LIMIT_POS_EN_LSB      : natural := 11;
+  constant C_CTRL_IRQ_LIMIT_POS_EN_W        : natural := 1;
+  constant C_CTRL_IRQ_HOME_EN_LSB           : natural := 12;
+  constant C_CTRL_IRQ_HOME_EN_W             : natural := 1;
+  constant C_CTRL_IRQ_ESTOP_EN_LSB          : natural := 13;
+  constant C_CTRL_IRQ_ESTOP_EN_W            : natural := 1;
+  constant C_CTRL_IRQ_LATCH_EN_LSB          : natural := 14;
+  constant C_CTRL_IRQ_LATCH_EN_W            : natural := 1;
+  constant C_CTRL_ENABLE_LSB                : natural := 16;
+  constant C_CTRL_ENABLE_W                  : natural := 1;
+  constant C_STATUS_STATE_LSB               : natural := 0;
+  constant C_STATUS_STATE_W                 : natural := 2;
+  constant C_STATUS_BUSY_LSB                : natural := 2;
+  constant C_STATUS_BUSY_W                  : natural := 1;
+  constant C_STATUS_DIR_LSB                 : natural := 3;
+  constant C_STATUS_DIR_W                   : natural := 1;
+  constant C_STATUS_DONE_LSB                : natural := 4;
+  constant C_STATUS_DONE_W                  : natural := 1;
+  constant C_STATUS_ERROR_LSB               : natural := 5;
+  constant C_STATUS_ERROR_W                 : natural := 1;
+  constant C_STATUS_DIR_FAULT_LSB           : natural := 6;
+  constant C_STATUS_DIR_FAULT_W             : natural := 1;
+  constant C_STATUS_PENDING_LSB             : natural := 7;
+  constant C_STATUS_PENDING_W               : natural := 1;
+  constant C_STATUS_ERR_CODE_LSB            : natural := 8;
+  constant C_STATUS_ERR_CODE_W              : natural := 5;
+  constant C_STATUS_LIMIT_NEG_LSB           : natural := 16;
+  constant C_STATUS_LIMIT_NEG_W             : natural := 1;
+  constant C_STATUS_LIMIT_POS_LSB           : natural := 17;
+  constant C_STATUS_LIMIT_POS_W             : natural := 1;
+  constant C_STATUS_HOME_LSB                : natural := 18;
+  constant C_STATUS_HOME_W                  : natural := 1;
+  constant C_STATUS_ESTOP_LSB               : natural := 19;
+  constant C_STATUS_ESTOP_W                 : natural := 1;
+  constant C_STATUS_LIMIT_NEG_EV_LSB        : natural := 20;
+  constant C_STATUS_LIMIT_NEG_EV_W          : natural := 1;
+  constant C_STATUS_LIMIT_POS_EV_LSB        : natural := 21;
+  constant C_STATUS_LIMIT_POS_EV_W          : natural := 1;
+  constant C_STATUS_HOME_EV_LSB             : natural := 22;
+  constant C_STATUS_HOME_EV_W               : natural := 1;
+  constant C_STATUS_ESTOP_FAULT_LSB         : natural := 23;
+  constant C_STATUS_ESTOP_FAULT_W           : natural := 1;
+  constant C_STATUS_LATCHED_LSB             : natural := 24;
+  constant C_STATUS_LATCHED_W               : natural := 1;
+  constant C_DRIVE_MODE_LSB                 : natural := 0;
+  constant C_DRIVE_MODE_W                   : natural := 3;
+  constant C_DRIVE_USTEP_LOG2_LSB           : natural := 4;
+  constant C_DRIVE_USTEP_LOG2_W             : natural := 3;
+  constant C_DIR_TIMING_SETUP_LSB           : natural := 0;
+  constant C_DIR_TIMING_SETUP_W             : natural := 16;
+  constant C_DIR_TIMING_HOLD_LSB            : natural := 16;
+  constant C_DIR_TIMING_HOLD_W              : natural := 16;
+  constant C_SEGMENT_HEAD_DOWN_LSB          : natural := 0;
+  constant C_SEGMENT_HEAD_DOWN_W            : natural := 1;
+  constant C_SEGMENT_ENDLESS_LSB            : natural := 1;
+  constant C_SEGMENT_ENDLESS_W              : natural := 1;
+  constant C_INPUT_CFG_POL_LIMIT_NEG_LSB    : natural := 0;
+  constant C_INPUT_CFG_POL_LIMIT_NEG_W      : natural := 1;
+  constant C_INPUT_CFG_POL_LIMIT_POS_LSB    : natural := 1;
+  constant C_INPUT_CFG_POL_LIMIT_POS_W      : natural := 1;
+  constant C_INPUT_CFG_POL_HOME_LSB         : natural := 2;
+  constant C_INPUT_CFG_POL_HOME_W           : natural := 1;
+  constant C_INPUT_CFG_POL_ESTOP_LSB        : natural := 3;
+  constant C_INPUT_CFG_POL_ESTOP_W          : natural := 1;
+  constant C_INPUT_CFG_LIMIT_EN_LSB         : natural := 4;
+  constant C_INPUT_CFG_LIMIT_EN_W           : natural := 1;
+  constant C_INPUT_CFG_LIMIT_HARD_LSB       : natural := 5;
+  constant C_INPUT_CFG_LIMIT_HARD_W         : natural := 1;
+  constant C_INPUT_CFG_LATCH_SRC_LSB        : natural := 8;
+  constant C_INPUT_CFG_LATCH_SRC_W          : natural := 2;
+  constant C_INPUT_CFG_LATCH_ON_ACTIVE_LSB  : natural := 10;
+  constant C_INPUT_CFG_LATCH_ON_ACTIVE_W    : natural := 1;
+  constant C_INPUT_CFG_LATCH_ON_RELEASE_LSB : natural := 11;
+  constant C_INPUT_CFG_LATCH_ON_RELEASE_W   : natural := 1;
 
   -- STATUS.ERR_CODE values.
   constant C_ERR_NONE       : std_logic_vector(4 downto 0) := "00000";
@@ -116,6 +169,8 @@ package stepramp_regs_pkg is
   constant C_ERR_SEGMENT    : std_logic_vector(4 downto 0) := "10001";
   constant C_ERR_CHANGE     : std_logic_vector(4 downto 0) := "10010";
   constant C_ERR_STAGED     : std_logic_vector(4 downto 0) := "10011";
+  constant C_ERR_LIMIT      : std_logic_vector(4 downto 0) := "10100";
+  constant C_ERR_ESTOP      : std_logic_vector(4 downto 0) := "10101";
 
   -- Per word offset: the bits a write can set (the RW fields) and the reset value (the register file's
   -- storage words).
@@ -125,7 +180,7 @@ package stepramp_regs_pkg is
   constant C_REG_RW_MASK : t_reg_words :=
   (
     0      => x"00000000",
-    1      => x"00010300",
+    1      => x"00017F00",
     2      => x"00000000",
     3      => x"FFFFFFFF",
     4      => x"0000FFFF",
@@ -160,12 +215,19 @@ package stepramp_regs_pkg is
     33     => x"FFFFFFFF",
     34     => x"0000FFFF",
     35     => x"7FFFFFFF",
+    36     => x"000FFFFF",
+    37     => x"00000F3F",
+    38     => x"00000000",
+    39     => x"00000000",
+    40     => x"00000000",
+    41     => x"00000000",
+    42     => x"00000000",
     others => x"00000000"
   );
 
   constant C_REG_RESET : t_reg_words :=
   (
-    0      => x"53520005",
+    0      => x"53520006",
     1      => x"00000000",
     2      => x"00000000",
     3      => x"00000000",
@@ -201,6 +263,13 @@ package stepramp_regs_pkg is
     33     => x"00000000",
     34     => x"00000000",
     35     => x"00000000",
+    36     => x"00000000",
+    37     => x"00000010",
+    38     => x"00000000",
+    39     => x"00000000",
+    40     => x"00000000",
+    41     => x"00000000",
+    42     => x"00000000",
     others => x"00000000"
   );
 

@@ -9,6 +9,7 @@ PWM duty measurement samples the pins clock by clock, for one carrier period now
 * StepWidthMonitor: every STEP pulse is high at least max(step_width, 1) clocks (exactly, with exact=True).
 * DirTimingMonitor: no DIR change within dir_setup clocks before or dir_hold clocks after a STEP rising edge.
 * ShootThroughMonitor: IN1 and IN2 of a bridge are never '1' together.
+* EstopMonitor: no STEP rising edge more than 2 clocks after the filtered ESTOP edge, while the ESTOP stop holds.
 * ElectricalMonitor: after every STEP rising edge the windings show the model's state for the position counted
   from the STEP pulses and DIR (so the electrical position follows the step count in both directions); in PWM mode
   the polarity at every step and the duty measured over a carrier period now and then.
@@ -345,6 +346,46 @@ class ElectricalMonitor(Monitor):
                     f"position {pos}: winding {'AB'[k]} on-clocks ({on1}, {on2}) per {self.pwm_period}, "
                     f"expected ({want1}, {want2})"
                 )
+
+
+class EstopMonitor(Monitor):
+    """No STEP rising edge more than `bound` clocks after the filtered ESTOP edge (docs/algorithm.md, "Machine inputs":
+    2 clocks), for as long as the ESTOP stop holds. `stop` is the signal that rises at the filtered edge F and stays
+    high while the stop holds (stepramp_core's estop_stop: the filtered level or the latched fault); `steps` the STEP
+    pins it guards. latencies: for every ESTOP edge, the last STEP rising edge after it minus F (clocks; none if no
+    pulse came after F)."""
+
+    title = "ESTOP"
+
+    def __init__(self, stop: Any, steps: Sequence[Any], bound: int = 2, **options: Unpack[MonitorOptions]) -> None:
+        super().__init__(**options)
+        self.stop_signal = stop
+        self.steps = list(steps)
+        self.bound = bound
+        self.since: float | None = None
+        self.edges: list[float] = []
+        self.latencies: list[float] = []
+
+    def _coroutines(self) -> Iterable[Coroutine[Any, Any, None]]:
+        return [self._watch_stop(), *(self._watch_step(step) for step in self.steps)]
+
+    async def _watch_stop(self) -> None:
+        while True:
+            await RisingEdge(self.stop_signal)
+            self.since = self.now()
+            self.edges.append(self.since)
+            await self.stop_signal.falling_edge
+            self.since = None
+
+    async def _watch_step(self, step: Any) -> None:
+        while True:
+            await RisingEdge(step)
+            t, since = self.now(), self.since
+            if since is None:
+                continue
+            if t > since + self.bound:
+                self.violation(f"{_name(step)} rose {t - since:g} clocks after the filtered ESTOP edge")
+            self.latencies.append(t - since)
 
 
 class MotionMonitors:

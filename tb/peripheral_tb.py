@@ -27,7 +27,14 @@ from stepramp.board.plan import Plan, plan_move
 from stepramp.board.regmap import ERROR_CODES
 from stepramp.models.engine import edges as edges_of
 from stepramp.models.engine import edges_with_stop, last_edge
-from stepramp.sim.clocking import CLK_PERIOD_NS, CLK_PERIOD_PS, apply_reset, reset_held, start_clock
+from stepramp.sim.clocking import (
+    CLK_PERIOD_NS,
+    CLK_PERIOD_PS,
+    apply_reset,
+    quiet_inputs,
+    reset_held,
+    start_clock,
+)
 from stepramp.sim.coverage import watch_coverage
 from stepramp.sim.ipif import IpifError, IpifMaster
 from stepramp.sim.profiles import PROFILES_BY_NAME
@@ -228,6 +235,7 @@ class PeripheralTb(MotionBench):
         self.port = PORTS[top](dut, seed if idle else None)
         self.clk = self.port.clk
         start_clock(self.clk)
+        quiet_inputs(dut)
         self.bus: Any = None
         self.pins: StepWatch | None = None
         self.step_edges: list[int] = []  # the pins' records once reset

@@ -21,7 +21,7 @@ from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge
 from peripheral_tb import TOPS, PeripheralTb
 from stepramp.board.driver import Outputs, StepRamp, StepRampError, plan_writes
 from stepramp.board.plan import Plan, plan_move
-from stepramp.board.regmap import REGISTERS, offset
+from stepramp.board.regmap import LIVE, REGISTERS, offset
 from stepramp.models.engine import edges as model_edges
 from stepramp.models.engine import first_space_fault, min_gap
 from stepramp.sim.profiles import PROFILES_BY_NAME, exact_plan
@@ -219,6 +219,8 @@ async def reset_during_a_move(dut) -> None:
         await ClockCycles(tb.clk, 3000)
         assert tb.pins.mark()[0] == mark[0], "a STEP pulse after the reset"
         for reg in REGISTERS:
+            if reg.name in LIVE:
+                continue  # the clock count
             got = await tb.bus.read(reg.offset)
             assert got == reg.reset, f"cut {cut}: {reg.name} reads {got:#x} after reset, expected {reg.reset:#x}"
     await tb.configure(Outputs(mode="half", step_width=width), enable=True)

@@ -4,16 +4,18 @@
 The model (RegfileModel below) is written from stepramp.board.regmap, the one source of the register layout: the
 offsets, fields, access kinds (RO, RW, W1C, WS), reset values and masks come from there, and the behaviour from
 docs/registers.md, docs/stepramp_plb.md ("Register behaviour") and docs/algorithm.md ("The take-over, the queue and
-the script contract"), not from the VHDL. The bench drives the register file's bus port (one-cycle wr / rd strobes
-with addr, wdata and be; ack, err and rdata one clock later) and plays the engine's side (eng_busy, eng_done,
-eng_error, eng_err_code, eng_state, eng_dir, eng_position, eng_step_count, eng_cur_delay, eng_chg_pend,
-eng_chg_refused, dir_fault). Every input is driven at a falling edge, the model takes the same inputs at the rising
-edge that samples them, and at the next falling edge every output of the register file is compared with the model:
-ack, err, rdata (on a read acknowledge without err), irq, the start / soft_stop / hard_stop / change / pos_load
-strobes and pos_value (with pos_load), and every move and configuration output (steps / direction, prescale,
-c_first .. cruise, sa, sd, stop_ratio, the segment's outputs, change_at, enable, mode, ustep_log2, step_width,
-dir_setup, dir_hold, pwm_period, step_space). So every test below is checked in every cycle; the directed tests add
-explicit assertions of the documented rules.
+the script contract"; "Machine inputs: limits, home, E-stop and the position latch"), not from the VHDL. The bench
+drives the register file's bus port (one-cycle wr / rd strobes with addr, wdata and be; ack, err and rdata one clock
+later), plays the engine's side (eng_busy, eng_done, eng_error, eng_err_code, eng_state, eng_dir, eng_position,
+eng_step_count, eng_cur_delay, eng_chg_pend, eng_chg_refused, dir_fault), the multi-axis top's ext_start and the
+stepramp_inputs block's side (in_level, in_rise, latched, latch_pos, latch_time, time_count). Every input is driven
+at a falling edge, the model takes the same inputs at the rising edge that samples them, and at the next falling
+edge every output of the register file is compared with the model: ack, err, rdata (on a read acknowledge without
+err), irq, the start / soft_stop / hard_stop / change / pos_load / latch_clr strobes and pos_value (with pos_load),
+done_flag_o, estop_fault, and every move and configuration output (steps / direction, prescale, c_first .. cruise,
+sa, sd, stop_ratio, the segment's outputs, change_at, enable, mode, ustep_log2, step_width, dir_setup, dir_hold,
+pwm_period, step_space, in_filter, in_pol, latch_src, latch_active, latch_release). So every test below is checked
+in every cycle; the directed tests add explicit assertions of the documented rules.
 
 Rules the model holds (docs/registers.md, docs/stepramp_plb.md, docs/algorithm.md):
 
@@ -22,40 +24,71 @@ Rules the model holds (docs/registers.md, docs/stepramp_plb.md, docs/algorithm.m
 * RW fields keep what was written (byte-merged, masked to the field); RO registers and fields ignore writes; WS
   fields (CTRL.START / SOFT_STOP / HARD_STOP / CHANGE / QUEUE) act when written 1 (byte 0 enabled) and read 0;
   START, SOFT_STOP and HARD_STOP pulse their output for one clock (high in the cycle after the write edge); W1C flags
-  (STATUS.DONE / ERROR) are cleared by writing 1 and set by the engine's strobes, and a set in the same cycle as the
-  clear wins;
-* START with STEPS = 0x80000000 while eng_busy = '0': no start strobe, DONE and ERROR with ERR_CODE STEPS;
+  (STATUS.DONE / ERROR and the input flags below) are cleared by writing 1 and set by their events, and a set in the
+  same cycle as the clear wins;
+* a START is a CTRL write with START or ext_start = '1' (both at one edge: one START). While eng_busy = '0' it is
+  refused (no start strobe, DONE and ERROR) with ERR_CODE STEPS when STEPS = 0x80000000, else LIMIT when
+  INPUT_CFG.LIMIT_EN and the limit towards STEPS' direction is active (in_level(0) LIMIT_NEG with STEPS bit 31 = 1,
+  in_level(1) LIMIT_POS with bit 31 = 0), else ESTOP when STATUS.ESTOP_FAULT or in_level(3) is set; it records the
+  move's direction mv_dir = STEPS bit 31. While busy the start strobe pulses (the core ignores it), nothing is
+  checked and mv_dir stays;
 * a POSITION write while eng_busy = '0' pulses pos_load with the written bytes merged into eng_position; while
-  busy it is ignored and sets ERROR with POS_BUSY; a write to DRIVE .. STEP_SPACE while busy is ignored and sets
-  ERROR with CFG_BUSY (CTRL can be written at any time);
+  busy it is ignored and sets ERROR with POS_BUSY; a write to a configuration word (DRIVE .. STEP_SPACE,
+  INPUT_FILTER, INPUT_CFG) while busy is ignored and sets ERROR with CFG_BUSY (CTRL can be written at any time);
 * locked = the change strobe (the registered change output) or eng_chg_pend or a queued move (q_pend); STATUS.PENDING
   reads it. A write to a staging word (regmap.STAGING: STEPS .. STOP_RATIO, SEGMENT .. CHANGE_AT) while locked is
   ignored (the word, its output and its read-back keep their value) and sets ERROR with STAGED (acknowledged, no
-  err); otherwise the staging words are written at any time. The configuration words keep their CFG_BUSY rule only;
+  err); otherwise the staging words are written at any time. The configuration words (INPUT_FILTER and INPUT_CFG
+  among them) keep their CFG_BUSY rule only;
 * a CTRL write with CHANGE or QUEUE is refused (ERROR with CHANGE; no change strobe, no queue) when eng_busy = '0',
   or locked, or both are set, or (CHANGE) STEPS bit 31 differs from eng_dir, or (QUEUE) STEPS = 0x80000000; else
   CHANGE pulses change for one clock and QUEUE sets q_pend. A CTRL write with SOFT_STOP or HARD_STOP and without
   QUEUE clears q_pend (its stop strobes still pulse);
-* at an edge with eng_done = '1' and q_pend = '1' (q_pend as it was before the edge): q_pend clears and, if
-  eng_error = '0', the start strobe pulses, as if START had been written at that edge;
+* at an edge with eng_done = '1' and q_pend = '1' (q_pend as it was before the edge): q_pend clears and mv_dir =
+  STEPS bit 31; the start strobe pulses, as if START had been written at that edge, unless eng_error = '1' or
+  (LIMIT_EN and) the limit towards STEPS' direction is active; without eng_error that limit sets ERROR with LIMIT;
 * eng_chg_refused sets ERROR with ERR_CODE CHANGE (a set in the cycle of a W1C clear wins, as the engine's);
-* irq = (DONE and IRQ_DONE_EN) or (ERROR and IRQ_ERROR_EN), registered (one clock after the flags);
+* limit stop: at an edge with eng_busy = '1', LIMIT_EN, the limit towards mv_dir active (in_level(0) with mv_dir = 1,
+  in_level(1) with mv_dir = 0) and no limit stop since eng_busy was last '0' (lim_hit): lim_hit sets, q_pend clears,
+  ERROR with LIMIT, and the hard_stop (INPUT_CFG.LIMIT_HARD = 1) or soft_stop (0) strobe pulses (ORed with a
+  written one). An edge with eng_busy = '0' clears lim_hit;
+* machine inputs: in_rise(i) sets STATUS.LIMIT_NEG_EV, LIMIT_POS_EV, HOME_EV (i = 0 .. 2) or ESTOP_FAULT (i = 3);
+  ESTOP_FAULT is also held set while in_level(3) = '1' (so its W1C clear works only with in_level(3) = '0'). While
+  in_level(3) = '1' and at in_rise(3) CTRL.ENABLE and q_pend clear; in_rise(3) sets ERROR with ESTOP. STATUS.LIMIT_NEG
+  .. ESTOP read in_level, STATUS.LATCHED reads latched (its W1C pulses latch_clr for one clock, registered: high in
+  the cycle after the write edge), LATCH_POS, LATCH_TIME_LO / HI read latch_pos and latch_time, TIME_LO reads
+  time_count bits 31:0 and its read copies time_count bits 63:32 into TIME_HI (0 after reset);
+* irq = (DONE and IRQ_DONE_EN) or (ERROR and IRQ_ERROR_EN) or (each input flag and its CTRL.IRQ_*_EN) or (latched
+  and IRQ_LATCH_EN), registered (one clock after the flags; after the latched input's edge);
+* enable = CTRL.ENABLE and not STATUS.ESTOP_FAULT; estop_fault = STATUS.ESTOP_FAULT; done_flag_o = STATUS.DONE;
+  in_filter, in_pol (INPUT_CFG.POL_*), latch_src, latch_active, latch_release follow their fields;
 * STATUS.STATE / BUSY / DIR / DIR_FAULT, POSITION, CUR_DELAY and STEP_COUNT read the engine's inputs.
 
 Choices the documents leave open are pinned here as the RTL has them:
 
-* ERR_CODE when several causes meet at one edge: eng_chg_refused's CHANGE over the engine's eng_err_code over the
-  register file's own (STEPS, POS_BUSY, CFG_BUSY, STAGED, CHANGE); of the two own causes one CTRL write can raise
-  (START refused for STEPS, CHANGE / QUEUE refused), STEPS;
-* a START written at the edge where a queued move is dropped by eng_error is dropped too (no start strobe);
-* a stop written at the edge of the engine's done still lets the queued move start (q_pend was set before the edge):
-  the start strobe pulses with the stop's.
+* ERR_CODE when several causes meet at one edge, the last of this list wins: the register file's bus causes
+  (POS_BUSY, CFG_BUSY, STAGED, CHANGE / QUEUE refused), the START refusal (STEPS, LIMIT, ESTOP), the queued move
+  refused by a limit (LIMIT), the engine's eng_err_code, eng_chg_refused's CHANGE, a limit stop's LIMIT, in_rise(3)'s
+  ESTOP. So an ESTOP activation and a limit stop win over the engine's code; a refused START loses to it;
+* a START at the edge where a queued move is dropped by eng_error, or refused by a limit, is dropped too (no start
+  strobe; its own refusal, if any, is still flagged); a stop written at the edge of the engine's done still lets the
+  queued move start (q_pend was set before the edge): the start strobe pulses with the stop's;
+* a START refused while idle records mv_dir too (no effect in the core: the engine stays idle), and so does a queued
+  move that is dropped or refused at the done;
+* the queued move's start at the done is not checked against ESTOP (fault or level): the rules above list the
+  engine's error and the limit only (see estop_fault; the core's ESTOP hard stop is held on the engine then);
+* START and ext_start judge STEPS, INPUT_CFG, ESTOP_FAULT and in_level as they are before the edge: ext_start at the
+  edge of a STEPS write checks (and records the direction of) the old STEPS, and at the edge of the fault's W1C clear
+  it is still refused (see external_start).
 
 Tests: reset values, field read/write with every byte-enable pattern, read-only and unmapped offsets, the outputs
 to the engine, the CTRL strobes and the STEPS check, STATUS and irq, POSITION and configuration while busy, CHANGE
-accepted and refused (change_commit), the queued move (queue_commit), the staging lock (staging_locked), and a
-seeded random sequence (REGFILE_SEED, printed; REGFILE_CYCLES cycles, 4,000 by default) of reads, writes, engine
-events and resets. Replay a failing sequence with REGFILE_SEED=<seed> .venv/bin/pytest tb/test_regfile.py.
+accepted and refused (change_commit), the queued move (queue_commit), the staging lock (staging_locked), for issue 16
+the machine inputs' levels, flags and interrupts (machine_inputs), the limit stop and the START / queued-move
+refusals (limit_stop_and_refusal), the E-stop fault (estop_fault), TIME, the latch registers and latch_clr
+(time_and_latch_registers), the multi-axis START (external_start), and a seeded random sequence (REGFILE_SEED,
+printed; REGFILE_CYCLES cycles, 4,000 by default) of reads, writes, engine events, machine inputs, ext_start and
+resets. Replay a failing sequence with REGFILE_SEED=<seed> .venv/bin/pytest tb/test_regfile.py.
 """
 
 from __future__ import annotations
@@ -78,6 +111,7 @@ from stepramp.board.regmap import (
     STAGING,
     W1C,
     WS,
+    Field,
     Register,
 )
 from stepramp.sim.clocking import start_clock
@@ -104,45 +138,78 @@ def _span(first: str, last: str) -> tuple[str, ...]:
 
 
 MOTION = STAGING  # written at any time unless locked (STAGED); latched at START or at a take-over
-CONFIG = _span("DRIVE", "STEP_SPACE")  # written only while stopped (CFG_BUSY)
+#: Written only while stopped (CFG_BUSY), never locked by PENDING: the stepping and the machine inputs' configuration.
+CONFIG = (*_span("DRIVE", "STEP_SPACE"), "INPUT_FILTER", "INPUT_CFG")
 STORAGE = MOTION + CONFIG  # plain read/write storage
 CTRL = REGISTERS_BY_NAME["CTRL"]
 STATUS = REGISTERS_BY_NAME["STATUS"]
+INPUT_CFG = REGISTERS_BY_NAME["INPUT_CFG"]
 STEPS_REJECTED = 0x8000_0000  # -2^31: no 31-bit magnitude
 ERR = {name: code for name, (code, _) in ERROR_CODES.items()}
+TIME_MASK = (1 << 64) - 1
 
-#: Read-only values that come from the engine's side: (register, field) -> input port.
-ENGINE_SOURCES = {
-    ("STATUS", "STATE"): "eng_state",
-    ("STATUS", "BUSY"): "eng_busy",
-    ("STATUS", "DIR"): "eng_dir",
-    ("STATUS", "DIR_FAULT"): "dir_fault",
-    ("POSITION", "VALUE"): "eng_position",
-    ("CUR_DELAY", "VALUE"): "eng_cur_delay",
-    ("STEP_COUNT", "VALUE"): "eng_step_count",
+#: The machine inputs in the bit order of in_level / in_rise, and the STATUS flag that each one's activation sets.
+INPUTS = ("LIMIT_NEG", "LIMIT_POS", "HOME", "ESTOP")
+EVENT_FLAGS = ("LIMIT_NEG_EV", "LIMIT_POS_EV", "HOME_EV", "ESTOP_FAULT")
+ESTOP_BIT = 1 << INPUTS.index("ESTOP")
+
+#: Read-only values that come from the register file's inputs: (register, field) -> (input port, the field's lsb in
+#: that port).
+SOURCES: dict[tuple[str, str], tuple[str, int]] = {
+    ("STATUS", "STATE"): ("eng_state", 0),
+    ("STATUS", "BUSY"): ("eng_busy", 0),
+    ("STATUS", "DIR"): ("eng_dir", 0),
+    ("STATUS", "DIR_FAULT"): ("dir_fault", 0),
+    ("POSITION", "VALUE"): ("eng_position", 0),
+    ("CUR_DELAY", "VALUE"): ("eng_cur_delay", 0),
+    ("STEP_COUNT", "VALUE"): ("eng_step_count", 0),
+    **{("STATUS", name): ("in_level", i) for i, name in enumerate(INPUTS)},
+    ("STATUS", "LATCHED"): ("latched", 0),
+    ("LATCH_POS", "VALUE"): ("latch_pos", 0),
+    ("LATCH_TIME_LO", "VALUE"): ("latch_time", 0),
+    ("LATCH_TIME_HI", "VALUE"): ("latch_time", 32),
+    ("TIME_LO", "VALUE"): ("time_count", 0),
 }
 
-#: Wide values assembled from NAME_LO (bits 31:0) and NAME_HI: port name -> (LO, HI) register names.
+#: Wide storage values assembled from NAME_LO (bits 31:0) and NAME_HI: port name -> (LO, HI) register names.
 WIDE_PORTS = {
     r.name[:-3].lower(): (r.name, r.name[:-3] + "_HI")
     for r in REGISTERS
-    if r.name.endswith("_LO") and r.name[:-3] + "_HI" in REGISTERS_BY_NAME
+    if r.name in STORAGE and r.name.endswith("_LO") and r.name[:-3] + "_HI" in REGISTERS_BY_NAME
+}
+
+#: Ports named against the rule of _field_ports (None: the field has no port, the register file uses it itself).
+PORT_NAMES: dict[tuple[str, str], str | None] = {
+    ("INPUT_FILTER", "VALUE"): "in_filter",
+    **{("INPUT_CFG", f"POL_{name}"): "in_pol" for name in INPUTS},  # one port, in the order of in_level
+    ("INPUT_CFG", "LIMIT_EN"): None,
+    ("INPUT_CFG", "LIMIT_HARD"): None,
+    ("INPUT_CFG", "LATCH_ON_ACTIVE"): "latch_active",
+    ("INPUT_CFG", "LATCH_ON_RELEASE"): "latch_release",
 }
 
 
-def _field_ports() -> dict[str, tuple[str, str]]:
+def _field_ports() -> dict[str, tuple[str, Field]]:
     """Outputs that carry one field, port -> (register, field): every field of the storage registers but STEPS (the
     steps and direction outputs) and the wide values' words, in map order, then CTRL.ENABLE. The port of a VALUE
-    field is named after its register, any other after the field (DIR_TIMING's with dir_ in front)."""
+    field is named after its register, any other after the field (DIR_TIMING's with dir_ in front), except those of
+    PORT_NAMES; fields that share a port (INPUT_CFG.POL_*) are one field of their joint bits."""
     wide = {name for pair in WIDE_PORTS.values() for name in pair}
-    ports: dict[str, tuple[str, str]] = {}
+    ports: dict[str, tuple[str, Field]] = {}
     for rname in STORAGE:
         if rname == "STEPS" or rname in wide:
             continue
         for f in REGISTERS_BY_NAME[rname].fields:
-            port = rname if f.name == "VALUE" else f"DIR_{f.name}" if rname == "DIR_TIMING" else f.name
-            ports[port.lower()] = (rname, f.name)
-    return {**ports, "enable": ("CTRL", "ENABLE")}
+            default = rname if f.name == "VALUE" else f"DIR_{f.name}" if rname == "DIR_TIMING" else f.name
+            port = PORT_NAMES.get((rname, f.name), default.lower())
+            if port is None:
+                continue
+            if port in ports:  # the next bits of a joint port
+                _, g = ports[port]
+                assert f.lsb == g.lsb + g.width, port
+                f = Field(port.upper(), g.lsb, g.width + f.width, RW, g.reset | f.reset << g.width, port)
+            ports[port] = (rname, f)
+    return {**ports, "enable": ("CTRL", CTRL.field("ENABLE"))}
 
 
 #: Outputs that carry one field: port -> (register, field).
@@ -151,9 +218,15 @@ FIELD_PORTS = _field_ports()
 #: output of its own).
 STROBES = {f.name: f.name.lower() for f in CTRL.fields if f.access == WS and f.name not in ("CHANGE", "QUEUE")}
 #: Every one-clock strobe output.
-STROBE_PORTS = (*STROBES.values(), "change", "pos_load")
-#: W1C flags of STATUS and the CTRL enable that routes each to irq (DONE -> IRQ_DONE_EN).
-IRQ_ENABLES = {f.name: CTRL.field(f"IRQ_{f.name}_EN") for f in STATUS.fields if f.access == W1C}
+STROBE_PORTS = (*STROBES.values(), "change", "pos_load", "latch_clr")
+#: W1C flags of STATUS and the CTRL enable that routes each to irq, from the enables' descriptions ("irq follows
+#: STATUS.DONE").
+IRQ_ENABLES = {
+    f.description.removeprefix("irq follows STATUS."): f
+    for f in CTRL.fields
+    if f.description.startswith("irq follows STATUS.")
+}
+assert set(IRQ_ENABLES) == {f.name for f in STATUS.fields if f.access == W1C}, IRQ_ENABLES
 
 ENGINE_INPUTS = (
     "eng_busy",
@@ -169,9 +242,13 @@ ENGINE_INPUTS = (
     "eng_chg_refused",
     "dir_fault",
 )
+#: The multi-axis top's START and the stepramp_inputs block's outputs.
+MACHINE_INPUTS = ("ext_start", "in_level", "in_rise", "latched", "latch_pos", "latch_time", "time_count")
 BUS_INPUTS = ("wr", "rd", "addr", "wdata", "be")
 #: Back to 0 after one cycle unless driven again.
-PULSE_INPUTS = ("rst", "wr", "rd", "eng_done", "eng_error", "eng_chg_refused")
+PULSE_INPUTS = ("rst", "wr", "rd", "eng_done", "eng_error", "eng_chg_refused", "ext_start", "in_rise")
+#: Inputs that hold their value until changed (Bench.set_engine).
+HELD_INPUTS = tuple(n for n in (*ENGINE_INPUTS, *MACHINE_INPUTS) if n not in PULSE_INPUTS)
 
 
 def byte_mask(be: int) -> int:
@@ -183,6 +260,13 @@ def steps_split(value: int) -> tuple[int, int]:
     """STEPS (two's complement) as the engine gets it: (31-bit magnitude, sign)."""
     sign = value >> 31
     return ((-value if sign else value) & 0x7FFF_FFFF), sign
+
+
+def toward_limit(cfg: int, level: int, down: int) -> bool:
+    """INPUT_CFG.LIMIT_EN (in cfg) and the limit that guards direction down (1: position counting down, LIMIT_NEG;
+    0: LIMIT_POS) active in the levels."""
+    guard = INPUTS.index("LIMIT_NEG" if down else "LIMIT_POS")
+    return bool(cfg & INPUT_CFG.field("LIMIT_EN").mask and (level >> guard) & 1)
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -204,13 +288,17 @@ class RegfileModel:
             name: REGISTERS_BY_NAME[name].reset & access_mask(REGISTERS_BY_NAME[name], RW) for name in STORAGE
         }
         self.ctrl = CTRL.reset & access_mask(CTRL, RW)
-        self.flags = STATUS.reset & access_mask(STATUS, W1C)
+        # The W1C flags the register file holds (STATUS.LATCHED is the latched input's).
+        self.flags = STATUS.reset & access_mask(STATUS, W1C) & ~STATUS.field("LATCHED").mask
         self.err_code = STATUS.field("ERR_CODE").reset
         self.ack = self.err = self.irq = 0
         self.read_ack = False
         self.rdata = 0
         self.strobes = dict.fromkeys(STROBE_PORTS, 0)
         self.q_pend = False  # a queued move, started at the engine's next done
+        self.mv_dir = 0  # STEPS bit 31 of the last START taken while idle (or queued move)
+        self.lim_hit = False  # a limit stopped the motion since eng_busy was last 0
+        self.time_hi = 0  # TIME_HI: time_count bits 63:32 at the last read of TIME_LO
 
     def locked(self, ins: dict[str, int]) -> bool:
         """STATUS.PENDING at the edge that samples ins: the change strobe out, the engine's pending change, or a
@@ -221,13 +309,15 @@ class RegfileModel:
     def read_value(self, reg: Register, ins: dict[str, int]) -> int:
         value = 0
         for f in reg.fields:
-            src = ENGINE_SOURCES.get((reg.name, f.name))
+            src = SOURCES.get((reg.name, f.name))
             if src is not None:
-                v = ins[src]
+                v = ins[src[0]] >> src[1]
             elif reg.name == "STATUS" and f.name == "ERR_CODE":
                 v = self.err_code
             elif reg.name == "STATUS" and f.name == "PENDING":
                 v = int(self.locked(ins))
+            elif reg.name == "TIME_HI":
+                v = self.time_hi
             elif f.access == RO:
                 v = f.reset  # constant (ID)
             elif f.access == WS:
@@ -268,7 +358,8 @@ class RegfileModel:
         return None
 
     def _ctrl_write(self, data: int, m: int, ins: dict[str, int], locked: bool) -> bool:
-        """A CTRL write (data already masked to the enabled lanes); returns the queued-move flag after it."""
+        """A CTRL write (data already masked to the enabled lanes), START aside; returns the queued-move flag after
+        it."""
         self.ctrl = ((self.ctrl & ~m) | data) & access_mask(CTRL, RW)
         cmd = {f.name: (data >> f.lsb) & 1 for f in CTRL.fields if f.access == WS}
         for fname, port in STROBES.items():
@@ -287,11 +378,30 @@ class RegfileModel:
             else:
                 q_pend = True
                 self.events["queue"] += 1
-        if self.strobes["start"] and not ins["eng_busy"] and self.store["STEPS"] == STEPS_REJECTED:
-            self.strobes["start"] = 0
-            self._set_flag("DONE")
-            self._error("STEPS")  # after a CHANGE / QUEUE refusal of the same write: its code wins
         return q_pend
+
+    def _start(self, steps: int, cfg: int, fault: int, ins: dict[str, int], ext: bool) -> None:
+        """A START (written or ext_start) at this edge; steps, cfg and fault: STEPS, INPUT_CFG and ESTOP_FAULT before
+        the edge."""
+        self.strobes["start"] = 1
+        self.events["ext_start" if ext else "start written"] += 1
+        if ins["eng_busy"]:
+            self.events["start while busy"] += 1
+            return
+        self.mv_dir = steps >> 31
+        if steps == STEPS_REJECTED:
+            reason = "STEPS"
+        elif toward_limit(cfg, ins["in_level"], steps >> 31):
+            reason = "LIMIT"
+        elif fault or ins["in_level"] & ESTOP_BIT:
+            reason = "ESTOP"
+        else:
+            return
+        self.strobes["start"] = 0
+        self._set_flag("DONE")
+        self._error(reason)  # after a CHANGE / QUEUE refusal of the same write: its code wins
+        self.events[f"start refused {reason}"] += 1
+        self.events["ext_start refused"] += ext
 
     def clock(self, ins: dict[str, int]) -> None:
         """One rising edge with these inputs."""
@@ -300,11 +410,15 @@ class RegfileModel:
             self.events["reset"] += 1
             return
         busy = ins["eng_busy"]
+        level = ins["in_level"]
         locked = self.locked(ins)
         self.events["locked"] += locked
-        irq = 0
+        # What the edge sees of the state before it.
+        steps, cfg, mv_dir, fault = self.store["STEPS"], self.store["INPUT_CFG"], self.mv_dir, self._flag("ESTOP_FAULT")
+        irq = ins["latched"] & (self.ctrl >> IRQ_ENABLES["LATCHED"].lsb) & 1
         for flag, enable in IRQ_ENABLES.items():
-            irq |= self._flag(flag) & (self.ctrl >> enable.lsb) & 1
+            if flag != "LATCHED":
+                irq |= self._flag(flag) & (self.ctrl >> enable.lsb) & 1
         reg = BY_OFFSET.get(ins["addr"] & (WINDOW - 4))
         access = ins["wr"] or ins["rd"]
         self.ack, self.err = int(access), int(access and reg is None)
@@ -314,9 +428,13 @@ class RegfileModel:
         if self.read_ack:
             self.rdata = self.read_value(reg, ins)
             self.events[f"read {reg.name}"] += 1
+            if reg.name == "TIME_LO":
+                self.time_hi = ins["time_count"] >> 32
         self.strobes = dict.fromkeys(self.strobes, 0)
 
         clear = 0
+        start = bool(ins["ext_start"])
+        written_start = False
         q_pend = self.q_pend
         self.own_error = False
         if ins["wr"] and reg is not None:
@@ -332,6 +450,7 @@ class RegfileModel:
                 self.events["config written while locked, idle"] += reg.name in CONFIG and locked
             elif reg is CTRL:
                 q_pend = self._ctrl_write(data, m, ins, locked)
+                written_start = bool(data & CTRL.field("START").mask)
             elif reg is STATUS:
                 clear = data & access_mask(STATUS, W1C)
             elif reg.name == "POSITION":
@@ -340,23 +459,45 @@ class RegfileModel:
                 else:
                     self.strobes["pos_load"] = 1
                     self.pos_value = (ins["eng_position"] & ~m & WORD) | data
-            # RO registers (ID, CUR_DELAY, STEP_COUNT): acknowledged, nothing changes.
+            # RO registers (ID, CUR_DELAY, STEP_COUNT, LATCH_*, TIME_*): acknowledged, nothing changes.
 
-        # The queued move at the engine's done (q_pend as before the edge): started unless the engine failed; then a
-        # START written at this edge is dropped with it (the RTL's choice).
-        if ins["eng_done"] and self.q_pend:
-            q_pend = False
-            self.events["queued start" if not ins["eng_error"] else "queue dropped by an error"] += 1
-            self.events["start written, dropped with the queue"] += self.strobes["start"] and ins["eng_error"]
-            self.strobes["start"] = int(not ins["eng_error"])
-        self.q_pend = q_pend
-
-        # Sticky flags: the clear, then this cycle's sets (a set in the same cycle as the clear wins).
+        # Sticky flags: the clear first, then this edge's sets (a set in the same cycle as the clear wins). The fault
+        # is held while ESTOP is active, so its clear needs ESTOP inactive.
+        fault_m = STATUS.field("ESTOP_FAULT").mask
+        if clear & fault_m and level & ESTOP_BIT:
+            self.events["fault clear while ESTOP active"] += 1
+        self.strobes["latch_clr"] = int(bool(clear & STATUS.field("LATCHED").mask))
         done_m, error_m = STATUS.field("DONE").mask, STATUS.field("ERROR").mask
         sets_error = ins["eng_error"] or ins["eng_chg_refused"]
         if (ins["eng_done"] and clear & done_m) or (sets_error and clear & error_m):
             self.events["set wins over clear"] += 1
+        if ins["in_rise"] & sum(1 << i for i, f in enumerate(EVENT_FLAGS) if clear & STATUS.field(f).mask):
+            self.events["event set wins over clear"] += 1
         self.flags &= ~clear
+
+        if start and written_start:
+            self.events["ext_start with a written START"] += 1
+        if start or written_start:
+            self.events["START at the fault's clear"] += bool(fault and clear & fault_m)
+            self._start(steps, cfg, fault, ins, ext=start and not written_start)
+
+        # The queued move at the engine's done (q_pend as before the edge): started unless the engine failed or the
+        # limit towards its direction is active (then ERROR with LIMIT); a START at this edge goes with it (the RTL's
+        # choice).
+        if ins["eng_done"] and self.q_pend:
+            q_pend = False
+            self.mv_dir = steps >> 31
+            toward = toward_limit(cfg, level, steps >> 31)
+            if ins["eng_error"]:
+                self.events["queue dropped by an error"] += 1
+            elif toward:
+                self.events["queued move refused by a limit"] += 1
+                self._error("LIMIT")
+            else:
+                self.events["queued start"] += 1
+            self.events["start dropped with the queue"] += self.strobes["start"] and (ins["eng_error"] or toward)
+            self.strobes["start"] = int(not ins["eng_error"] and not toward)
+
         if ins["eng_done"]:
             self._set_flag("DONE")
         if ins["eng_error"]:
@@ -368,6 +509,35 @@ class RegfileModel:
             self.err_code = ERR["CHANGE"]  # wins over the engine's eng_err_code and the register file's own
             self.events["chg_refused"] += 1
             self.events["chg_refused code over engine's"] += ins["eng_error"]
+
+        # A limit towards the running motion stops it, once per motion.
+        if not busy:
+            self.lim_hit = False
+        elif not self.lim_hit and toward_limit(cfg, level, mv_dir):
+            self.lim_hit = True
+            self.events["queue dropped by a limit"] += q_pend
+            q_pend = False
+            self.events["limit code over engine's"] += ins["eng_error"] or ins["eng_chg_refused"]
+            self._error("LIMIT")
+            hard = bool(cfg & INPUT_CFG.field("LIMIT_HARD").mask)
+            self.strobes["hard_stop" if hard else "soft_stop"] = 1
+            self.events["limit stop hard" if hard else "limit stop soft"] += 1
+
+        # The machine inputs' events; ESTOP drops ENABLE and the queued move and, at its activation, flags ESTOP.
+        for i, flag in enumerate(EVENT_FLAGS):
+            if ins["in_rise"] >> i & 1:
+                self._set_flag(flag)
+                self.events[f"rise {INPUTS[i]}"] += 1
+        if ins["in_rise"] & ESTOP_BIT or level & ESTOP_BIT:
+            self._set_flag("ESTOP_FAULT")
+            self.events["ENABLE dropped by ESTOP"] += bool(self.ctrl & CTRL.field("ENABLE").mask)
+            self.events["queue dropped by ESTOP"] += q_pend
+            self.ctrl &= ~CTRL.field("ENABLE").mask
+            q_pend = False
+        if ins["in_rise"] & ESTOP_BIT:
+            self._error("ESTOP")
+        self.q_pend = q_pend
+
         for port, value in self.strobes.items():
             self.events[port] += value
         self.events["irq rises"] += irq and not self.irq
@@ -379,12 +549,14 @@ class RegfileModel:
         out["rdata"] = self.rdata if self.read_ack else None
         out["pos_value"] = self.pos_value if self.strobes["pos_load"] else None
         out["steps"], out["direction"] = steps_split(self.store["STEPS"])
-        for port, (rname, fname) in FIELD_PORTS.items():
-            f = REGISTERS_BY_NAME[rname].field(fname)
+        for port, (rname, f) in FIELD_PORTS.items():
             word = self.ctrl if rname == "CTRL" else self.store[rname]
             out[port] = (word & f.mask) >> f.lsb
         for port, (lo, hi) in WIDE_PORTS.items():
             out[port] = (self.store[hi] << 32) | self.store[lo]
+        out["estop_fault"] = self._flag("ESTOP_FAULT")
+        out["enable"] = out["enable"] & (1 - out["estop_fault"])
+        out["done_flag_o"] = self._flag("DONE")
         return out
 
 
@@ -405,7 +577,7 @@ class Bench:
     def __init__(self, dut: Any) -> None:
         self.dut = dut
         self.model = RegfileModel()
-        self.ins: dict[str, int] = dict.fromkeys(("rst", *BUS_INPUTS, *ENGINE_INPUTS), 0)
+        self.ins: dict[str, int] = dict.fromkeys(("rst", *BUS_INPUTS, *ENGINE_INPUTS, *MACHINE_INPUTS), 0)
         self.ins["be"] = 0xF
         self.driven: dict[str, int] = {}
         self.handles = {name: getattr(dut, name) for name in self.ins}
@@ -426,10 +598,21 @@ class Bench:
             await self.cycle(rst=1)
 
     def set_engine(self, **values: int) -> None:
-        """Engine inputs that stay until changed (eng_done / eng_error are pulses: give them to cycle())."""
+        """Engine and machine inputs that stay until changed (eng_done, eng_error, eng_chg_refused, ext_start and
+        in_rise are pulses: give them to cycle())."""
         for name, v in values.items():
-            assert name in ENGINE_INPUTS, name
+            assert name in HELD_INPUTS, name
             self.ins[name] = v
+
+    async def activate(self, name: str, **drive: int) -> dict[str, int | None]:
+        """A machine input becomes active (filtered) at this edge: its level and its rise strobe together."""
+        bit = 1 << INPUTS.index(name)
+        self.ins["in_level"] |= bit
+        return await self.cycle(in_rise=bit | drive.pop("in_rise", 0), **drive)
+
+    def release(self, name: str) -> None:
+        """A machine input's level goes inactive from the next edge on (no strobe: the register file has none)."""
+        self.ins["in_level"] &= ~(1 << INPUTS.index(name))
 
     def _drive(self) -> None:
         for name, v in self.ins.items():
@@ -490,13 +673,18 @@ class Bench:
 
     def check_widths(self) -> None:
         """The ports are as wide as the register map's fields."""
-        for port, (rname, fname) in FIELD_PORTS.items():
-            assert len(self.outputs[port]) == REGISTERS_BY_NAME[rname].field(fname).width, port
+        for port, (_, f) in FIELD_PORTS.items():
+            assert len(self.outputs[port]) == f.width, port
         for port, (lo, hi) in WIDE_PORTS.items():
             want = REGISTERS_BY_NAME[lo].field("VALUE").width + REGISTERS_BY_NAME[hi].field("VALUE").width
             assert len(self.outputs[port]) == want, port
         assert len(self.dut.eng_err_code) == STATUS.field("ERR_CODE").width
         assert len(self.dut.addr) == ADDR_BITS
+        for port in ("in_level", "in_rise"):
+            assert len(getattr(self.dut, port)) == len(INPUTS), port
+        for (rname, fname), (port, lsb) in SOURCES.items():
+            assert len(getattr(self.dut, port)) >= lsb + REGISTERS_BY_NAME[rname].field(fname).width, port
+        assert len(self.dut.time_count) == len(self.dut.latch_time) == 64
 
 
 async def new_bench(dut: Any) -> Bench:
@@ -615,17 +803,21 @@ async def read_write_fields(dut) -> None:
             m = byte_mask(be)
             shadow = ((shadow & ~m) | (data & m)) & rw
             assert await tb.read(reg.offset + rng.randrange(4)) == shadow, f"{name} be={be:#x}"
-    # Read-only: ID, CUR_DELAY, STEP_COUNT and STATUS (its W1C flags are 0, its other fields read the engine).
-    tb.set_engine(eng_cur_delay=0x1234_5678, eng_step_count=0x0ABC_DEF0)
+    # Read-only: ID, CUR_DELAY, STEP_COUNT, LATCH_POS .. TIME_HI and STATUS (its W1C flags are 0, its other fields
+    # read the inputs; a write of LATCHED pulses latch_clr, nothing else).
+    tb.set_engine(eng_cur_delay=0x1234_5678, eng_step_count=0x0ABC_DEF0, latch_pos=0x8765_4321)
+    tb.set_engine(latch_time=0x0123_4567_89AB_CDEF, time_count=0xFEDC_BA98_7654_3210)
     await tb.write(
         off("STATUS"), WORD
     )  # the ERROR of the CHANGE + QUEUE in CTRL = 0xFFFFFFFF: a STATUS write clears it
     before = await tb.snapshot()
-    for name in ("ID", "CUR_DELAY", "STEP_COUNT", "STATUS"):
+    latched_m = STATUS.field("LATCHED").mask
+    for name in (*(r.name for r in REGISTERS if r.access == RO), "STATUS"):
         for data in (WORD, 0, 0x5A5A_5A5A):
             got = await tb.write(off(name), data)
             assert got["err"] == 0
-            assert not any(got[s] for s in STROBE_PORTS)
+            assert not any(got[s] for s in STROBE_PORTS if s != "latch_clr")
+            assert got["latch_clr"] == int(name == "STATUS" and bool(data & latched_m)), name
     assert await tb.snapshot() == before
     # Unmapped offsets: err on read and write, at every low address; a write there changes nothing.
     assert UNMAPPED, "the register map fills the window"
@@ -664,8 +856,7 @@ async def engine_outputs(dut) -> None:
                     await tb.write(off(word_name) + rng.randrange(4), word, 1 << lane)
             got = await tb.idle()
             assert got[port] == value, f"{port}: {got[port]:#x} != {value:#x}"
-    for port, (rname, fname) in FIELD_PORTS.items():
-        f = REGISTERS_BY_NAME[rname].field(fname)
+    for port, (rname, f) in FIELD_PORTS.items():
         for value in (0, (1 << f.width) - 1, rng.getrandbits(f.width)):
             if rname == "CTRL":
                 await tb.write(off(rname), value << f.lsb, 0b0100)  # ENABLE is in byte 2
@@ -698,7 +889,7 @@ async def ctrl_strobes(dut) -> None:
     await tb.write(off("CTRL"), WORD & ~cmd("CHANGE", "QUEUE"), 0b0001)
     assert await tb.reg("CTRL") == 0
     await tb.write(off("CTRL"), WORD, 0b0010)
-    assert await tb.reg("CTRL") == field_bits("CTRL", "IRQ_DONE_EN", 1) | field_bits("CTRL", "IRQ_ERROR_EN", 1)
+    assert await tb.reg("CTRL") == access_mask(CTRL, RW) & byte_mask(0b0010)  # the irq enables
     await tb.write(off("CTRL"), 0, 0b0001)
     await tb.write(off("CTRL"), WORD, 0b1100)
     assert await tb.reg("CTRL") == access_mask(CTRL, RW)
@@ -782,7 +973,8 @@ async def status_and_irq(dut) -> None:
     assert await tb.reg("STATUS") & (done | error) == 0
 
     # irq: each flag through its enable, one clock after the flag; and low again one clock after the clear.
-    for flag, enable in IRQ_ENABLES.items():
+    for flag in ("DONE", "ERROR"):  # the machine inputs' flags: machine_inputs
+        enable = IRQ_ENABLES[flag]
         mask = STATUS.field(flag).mask
         pulse = {"eng_done": 1} if flag == "DONE" else {"eng_error": 1, "eng_err_code": ERR["LATE"]}
         for other in IRQ_ENABLES.values():  # the other enable alone does not route this flag
@@ -1136,10 +1328,639 @@ async def staging_locked(dut) -> None:
 
 
 # ---------------------------------------------------------------------------------------------------------------
+# Issue 16: the machine inputs, the limit stop, the E-stop fault, TIME and the latch, the multi-axis START.
+
+
+def status_bits(*names: str) -> int:
+    """STATUS with these fields set (to write 1 to W1C flags)."""
+    return sum(STATUS.field(name).mask for name in names)
+
+
+async def clear_all(tb: Bench) -> None:
+    """Every W1C flag cleared (ESTOP_FAULT only if ESTOP is inactive)."""
+    await tb.write(off("STATUS"), access_mask(STATUS, W1C))
+
+
+async def engine_done(tb: Bench, **drive: int) -> dict[str, int | None]:
+    """The engine's done (busy low from that edge on, as in the core); returns the outputs after it."""
+    tb.set_engine(eng_busy=0, eng_state=0)
+    return await tb.cycle(eng_done=1, **drive)
+
+
+async def start_move(tb: Bench, steps: int, what: str) -> None:
+    """STEPS written and a START accepted while idle, then the engine busy (from the next edge, as in the core) in
+    the move's direction."""
+    await tb.write(off("STEPS"), steps & WORD)
+    got = await tb.write(off("CTRL"), cmd("START"), 0b0001)  # byte 0: the enables stay
+    assert got["start"] == 1, f"{what}: START refused"
+    tb.set_engine(eng_busy=1, eng_state=1, eng_dir=(steps & WORD) >> 31)
+    await tb.idle()
+
+
+async def refused_start(tb: Bench, code: str, what: str, **drive: int) -> None:
+    """A START while idle (written, or ext_start with ext=1 in drive) that the register file refuses: no start
+    strobe, DONE and ERROR with code."""
+    await fresh_error(tb)
+    await tb.write(off("STATUS"), status_bits("DONE"))
+    if drive.pop("ext", 0):
+        got = await tb.cycle(ext_start=1, **drive)
+    else:
+        got = await tb.write(off("CTRL"), cmd("START"), 0b0001, **drive)
+    assert got["start"] == 0, f"{what}: started"
+    s = await flagged(tb, code, what)
+    assert s["DONE"] == 1, f"{what}: no DONE"
+    await fresh_error(tb)
+    await tb.write(off("STATUS"), status_bits("DONE"))
+
+
+@cocotb.test(timeout_time=1, timeout_unit="ms")
+async def machine_inputs(dut) -> None:
+    """STATUS.LIMIT_NEG .. ESTOP read in_level (every combination). An activation (in_rise) sets its flag
+    (LIMIT_NEG_EV, LIMIT_POS_EV, HOME_EV, ESTOP_FAULT) at its edge; the flag stays after the release until a W1C write
+    with byte 2 enabled clears it (a limit's or HOME's also while the level is still active), and a rise in the cycle
+    of the clear wins. ESTOP_FAULT is held while ESTOP is active (its clear needs ESTOP inactive), and its activation
+    flags ERROR with ESTOP. STATUS.LATCHED reads latched. irq: each flag through its CTRL.IRQ_*_EN only (byte 1), one
+    clock after the flag; latched through IRQ_LATCH_EN, one clock after the input. HOME never stops a motion."""
+    tb = await new_bench(dut)
+    for level in range(16):  # levels alone (no strobe): read back, ESTOP's holds the fault, no event flag
+        tb.set_engine(in_level=level)
+        s = await status(tb)
+        assert [s[name] for name in INPUTS] == [(level >> i) & 1 for i in range(len(INPUTS))], level
+        # (the read at the first edge that sees ESTOP returns the fault as it was before that edge)
+        assert [s[f] for f in EVENT_FLAGS] == [0, 0, 0, int(level > ESTOP_BIT)], level
+        assert s["ERROR"] == 0, "a level without its activation flagged an error"
+    await tb.write(off("STATUS"), status_bits("ESTOP_FAULT"))
+    assert (await status(tb))["ESTOP_FAULT"] == 1, "ESTOP_FAULT cleared while ESTOP is active"
+    tb.set_engine(in_level=0)
+    await tb.write(off("STATUS"), status_bits("ESTOP_FAULT"))
+    assert (await status(tb))["ESTOP_FAULT"] == 0
+
+    for name, flag in zip(INPUTS, EVENT_FLAGS, strict=True):
+        others = [f for f in EVENT_FLAGS if f != flag]
+        await fresh_error(tb)
+        got = await tb.activate(name)
+        assert got["estop_fault"] == int(name == "ESTOP")
+        s = await status(tb)
+        assert s[name] == 1 and s[flag] == 1 and not any(s[f] for f in others), f"{name}: {s}"
+        if name == "ESTOP":
+            await flagged(tb, "ESTOP", "ESTOP's activation")
+            await tb.write(off("STATUS"), status_bits(flag))
+            assert (await status(tb))[flag] == 1, "ESTOP_FAULT cleared while ESTOP is active"
+        else:
+            await flagged(tb, None, f"{name}'s activation")
+            await tb.write(off("STATUS"), status_bits(flag))  # an edge's flag: cleared while still active
+            s = await status(tb)
+            assert s[flag] == 0 and s[name] == 1, f"{name}: {s}"
+            tb.release(name)
+            await tb.idle()
+            await tb.activate(name)
+        tb.release(name)
+        s = await status(tb)
+        assert s[name] == 0 and s[flag] == 1, f"{name}: not sticky"
+        await tb.write(off("STATUS"), WORD, 0b1011)  # byte 2 not enabled: no clear
+        assert (await status(tb))[flag] == 1
+        await tb.write(off("STATUS"), WORD & ~status_bits(flag))  # the other bits: no clear
+        assert (await status(tb))[flag] == 1
+        got = await tb.write(off("STATUS"), status_bits(flag), 0b0100)
+        assert got["estop_fault"] == 0
+        assert (await status(tb))[flag] == 0, f"{flag} not cleared"
+        # A rise in the cycle of the clear wins.
+        got = await tb.activate(name, wr=1, addr=off("STATUS"), wdata=status_bits(flag), be=0xF)
+        assert (await status(tb))[flag] == 1, f"{flag}: the clear won over the rise"
+        tb.release(name)
+        await tb.write(off("STATUS"), status_bits(flag))
+        assert (await status(tb))[flag] == 0
+    await clear_all(tb)
+
+    # irq: each input flag through its enable alone.
+    for name, flag in zip(INPUTS, EVENT_FLAGS, strict=True):
+        enable = IRQ_ENABLES[flag]
+        for other in IRQ_ENABLES.values():
+            if other is enable:
+                continue
+            await tb.write(off("CTRL"), other.mask, 0b0010)
+            await tb.activate(name)
+            tb.release(name)
+            got = await tb.idle(3)
+            # ESTOP's activation also sets ERROR, which IRQ_ERROR_EN routes.
+            assert got["irq"] == int(name == "ESTOP" and other.name == "IRQ_ERROR_EN"), f"{flag} via {other.name}"
+            await clear_all(tb)
+            await tb.idle()
+        await tb.write(off("CTRL"), enable.mask, 0b0010)
+        assert await tb.reg("CTRL") == enable.mask
+        got = await tb.activate(name)  # the flag is set at this edge ...
+        assert got["irq"] == 0
+        assert (await tb.idle())["irq"] == 1  # ... and irq one edge later
+        tb.release(name)
+        await tb.write(off("CTRL"), 0, 0b0001)  # a byte-0 write keeps the enables
+        assert (await tb.idle())["irq"] == 1
+        assert (await tb.write(off("STATUS"), status_bits(flag)))["irq"] == 1
+        assert (await tb.idle())["irq"] == 0, f"{flag}: irq after the clear"
+        await clear_all(tb)
+    # LATCHED: the latched input through IRQ_LATCH_EN alone; STATUS.LATCHED reads the input.
+    enable = IRQ_ENABLES["LATCHED"]
+    tb.set_engine(latched=1)
+    for other in IRQ_ENABLES.values():
+        if other is not enable:
+            await tb.write(off("CTRL"), other.mask, 0b0010)
+            assert (await tb.idle(2))["irq"] == 0, f"LATCHED via {other.name}"
+    assert (await status(tb))["LATCHED"] == 1
+    await tb.write(off("CTRL"), enable.mask, 0b0010)  # irq from the first edge that sees the enable ...
+    assert (await tb.idle())["irq"] == 1
+    tb.set_engine(latched=0)
+    got = await tb.idle()  # ... and low from the first edge that sees latched low
+    assert got["irq"] == 0 and (await status(tb))["LATCHED"] == 0
+    tb.set_engine(latched=1)
+    assert (await tb.idle())["irq"] == 1
+    tb.set_engine(latched=0)
+    await tb.write(off("CTRL"), 0, 0b0010)
+    assert (await tb.idle())["irq"] == 0
+
+    # HOME never stops a motion (either direction, LIMIT_EN on, hard or soft).
+    for steps, cfg in ((100, 0x10), (-100, 0x30)):
+        await tb.write(off("INPUT_CFG"), cfg)
+        await fresh_error(tb)
+        await start_move(tb, steps, "HOME")
+        got = await tb.activate("HOME")
+        assert got["soft_stop"] == 0 and got["hard_stop"] == 0
+        await tb.idle(2)
+        await flagged(tb, None, "HOME while moving")
+        tb.release("HOME")
+        await engine_done(tb)
+    await clear_all(tb)
+
+
+@cocotb.test(timeout_time=1, timeout_unit="ms")
+async def limit_stop_and_refusal(dut) -> None:
+    """INPUT_CFG.LIMIT_EN (on after reset): a limit towards the motion (LIMIT_POS with STEPS >= 0 at the START,
+    LIMIT_NEG with STEPS < 0) that is active at an edge while busy pulses soft_stop (LIMIT_HARD = 0) or hard_stop (1)
+    at that edge, ORed with a written one, sets ERROR with LIMIT and drops a queued move; once per motion (not again
+    until busy has been low), also when the limit becomes active between the START and busy. A limit away from the
+    motion does nothing, and a START while busy does not change the motion's direction. While idle a START towards an
+    active limit is refused (DONE, ERROR with LIMIT, no start), away it starts; a queued move towards an active limit
+    is refused at the done (ERROR with LIMIT, no start), away it starts. LIMIT_EN = 0: no stop, no refusal.
+    ERR_CODE at one edge (as the RTL has it): a limit stop's LIMIT over the engine's code and eng_chg_refused's
+    CHANGE; the engine's code over a START refused for LIMIT."""
+    tb = await new_bench(dut)
+    fwd, back = 100, -100
+    limit_en, limit_hard = INPUT_CFG.field("LIMIT_EN").mask, INPUT_CFG.field("LIMIT_HARD").mask
+    assert await tb.reg("INPUT_CFG") == INPUT_CFG.reset == limit_en
+
+    async def stops(name: str, port: str, what: str, **drive: int) -> None:
+        """name becomes active while moving towards it: the stop strobe at that edge (one clock), ERROR LIMIT."""
+        await fresh_error(tb)
+        got = await tb.activate(name, **drive)
+        assert got[port] == 1, f"{what}: no {port}"
+        assert got["soft_stop" if port == "hard_stop" else "hard_stop"] == int("wdata" in drive), what
+        got = await tb.idle()
+        assert got["soft_stop"] == 0 and got["hard_stop"] == 0, f"{what}: a stop longer than one clock"
+        await flagged(tb, "LIMIT", what)
+
+    async def ignored(name: str, what: str) -> None:
+        """name becomes active (again): no stop, no error."""
+        await fresh_error(tb)
+        got = await tb.activate(name)
+        assert got["soft_stop"] == 0 and got["hard_stop"] == 0, what
+        await tb.idle(2)
+        await flagged(tb, None, what)
+
+    # Forwards: LIMIT_NEG is away, LIMIT_POS stops the motion and drops the queued move; once.
+    await start_move(tb, fwd, "forwards")
+    await ignored("LIMIT_NEG", "LIMIT_NEG while moving forwards")
+    await tb.write(off("CTRL"), cmd("QUEUE"))
+    assert (await status(tb))["PENDING"] == 1
+    await stops("LIMIT_POS", "soft_stop", "LIMIT_POS while moving forwards")
+    assert (await status(tb))["PENDING"] == 0, "the limit stop kept the queued move"
+    tb.release("LIMIT_POS")
+    await tb.idle()
+    await ignored("LIMIT_POS", "LIMIT_POS again in the same motion")
+    got = await engine_done(tb)
+    assert got["start"] == 0, "the dropped queued move started"
+    await clear_all(tb)
+
+    # Idle with LIMIT_POS (and LIMIT_NEG) active: refused forwards, backwards too; with LIMIT_NEG released
+    # backwards starts and LIMIT_POS does not stop it; LIMIT_NEG's activation does.
+    await tb.write(off("STEPS"), fwd)
+    await refused_start(tb, "LIMIT", "START towards LIMIT_POS")
+    await tb.write(off("STEPS"), back & WORD)
+    await refused_start(tb, "LIMIT", "START towards LIMIT_NEG")
+    tb.release("LIMIT_NEG")
+    await start_move(tb, back, "backwards away from LIMIT_POS")
+    await tb.idle(3)
+    await flagged(tb, None, "backwards with LIMIT_POS active")
+    await stops("LIMIT_NEG", "soft_stop", "LIMIT_NEG while moving backwards")
+    # The driver backs off: a queued move away from the limit (queued after the stop) starts at the done.
+    await tb.write(off("STEPS"), fwd)
+    await tb.write(off("CTRL"), cmd("QUEUE"))
+    tb.release("LIMIT_POS")
+    got = await engine_done(tb)
+    assert got["start"] == 1, "the queued move away from LIMIT_NEG did not start"
+    await clear_all(tb)
+    tb.set_engine(eng_busy=1, eng_state=1, eng_dir=0)
+    tb.release("LIMIT_NEG")
+    await tb.idle()
+    await ignored("LIMIT_NEG", "LIMIT_NEG while the queued move runs forwards")
+    await stops("LIMIT_POS", "soft_stop", "LIMIT_POS stops the queued move (its direction)")
+    await engine_done(tb)
+    tb.set_engine(in_level=0)
+    await clear_all(tb)
+
+    # LIMIT_HARD: the hard stop; a written SOFT_STOP at that edge pulses too (ORed).
+    await tb.write(off("INPUT_CFG"), limit_en | limit_hard)
+    await start_move(tb, back, "hard")
+    await stops("LIMIT_NEG", "hard_stop", "LIMIT_NEG, LIMIT_HARD")
+    tb.release("LIMIT_NEG")
+    await engine_done(tb)
+    await start_move(tb, back, "hard, with SOFT_STOP")
+    await stops(
+        "LIMIT_NEG", "hard_stop", "LIMIT_HARD with a written SOFT_STOP", wr=1, addr=off("CTRL"), wdata=cmd("SOFT_STOP")
+    )
+    tb.release("LIMIT_NEG")
+    await engine_done(tb)
+    await tb.write(off("INPUT_CFG"), limit_en)
+    await start_move(tb, fwd, "soft, with HARD_STOP")
+    await stops(
+        "LIMIT_POS", "soft_stop", "soft limit with a written HARD_STOP", wr=1, addr=off("CTRL"), wdata=cmd("HARD_STOP")
+    )
+    tb.release("LIMIT_POS")
+    await engine_done(tb)
+    await clear_all(tb)
+
+    # The limit active after the START but before busy (the start held for DIR timing): the stop at busy's edge.
+    await tb.write(off("STEPS"), fwd)
+    assert (await tb.write(off("CTRL"), cmd("START")))["start"] == 1
+    got = await tb.activate("LIMIT_POS")
+    assert got["soft_stop"] == 0, "a limit stop while not busy"
+    await fresh_error(tb)
+    tb.set_engine(eng_busy=1, eng_state=1)
+    got = await tb.idle()
+    assert got["soft_stop"] == 1, "no limit stop at the first busy edge"
+    await flagged(tb, "LIMIT", "limit active before busy")
+    await engine_done(tb)
+
+    # A START while busy keeps the motion's direction: the forward motion still stops at LIMIT_POS only.
+    tb.set_engine(in_level=0)
+    await start_move(tb, fwd, "forwards, then a START backwards while busy")
+    await tb.write(off("STEPS"), back & WORD)
+    await fresh_error(tb)
+    assert (await tb.write(off("CTRL"), cmd("START")))["start"] == 1
+    await flagged(tb, None, "START while busy")
+    await ignored("LIMIT_NEG", "LIMIT_NEG after a START backwards while busy")
+    await stops("LIMIT_POS", "soft_stop", "LIMIT_POS after a START backwards while busy")
+    await engine_done(tb)
+    tb.set_engine(in_level=0)
+    await clear_all(tb)
+
+    # The queued move: towards an active limit refused at the done (ERROR LIMIT, no start); with an engine error the
+    # engine's code; a START written at the done goes with the refused queued move (the RTL's choice).
+    for error, write_start in ((0, False), (1, False), (0, True)):
+        await start_move(tb, fwd, "queued towards LIMIT_NEG")
+        await tb.activate("LIMIT_NEG")  # away from the running motion: no stop
+        await tb.write(off("STEPS"), back & WORD)
+        await tb.write(off("CTRL"), cmd("QUEUE"))
+        assert (await status(tb))["PENDING"] == 1
+        await fresh_error(tb)
+        drive = {"eng_error": error, "eng_err_code": ERR["LATE"] if error else 0}
+        if write_start:
+            drive.update(wr=1, addr=off("CTRL"), wdata=cmd("START"), be=0xF)
+        got = await engine_done(tb, **drive)
+        assert got["start"] == 0, f"queued move towards LIMIT_NEG started (error {error}, START {write_start})"
+        s = await status(tb)
+        assert s["PENDING"] == 0 and s["DONE"] == 1
+        # (a START written at this edge is refused for LIMIT on its own too: the same code)
+        await flagged(tb, "LATE" if error else "LIMIT", "queued move towards LIMIT_NEG")
+        tb.set_engine(eng_err_code=0)
+        tb.release("LIMIT_NEG")
+        await clear_all(tb)
+
+    # LIMIT_EN = 0: no refusal, no stop.
+    await tb.write(off("INPUT_CFG"), limit_hard)
+    await tb.activate("LIMIT_POS")
+    await fresh_error(tb)
+    await start_move(tb, fwd, "forwards with LIMIT_EN = 0")
+    await tb.idle(2)
+    tb.release("LIMIT_POS")
+    await tb.idle()
+    await ignored("LIMIT_POS", "LIMIT_POS with LIMIT_EN = 0")
+    await tb.write(off("STEPS"), fwd)
+    await tb.write(off("CTRL"), cmd("QUEUE"))
+    assert (await engine_done(tb))["start"] == 1, "queued move with LIMIT_EN = 0"
+    tb.set_engine(eng_busy=1, eng_state=1)
+    # INPUT_CFG is a configuration word: not written while busy (CFG_BUSY).
+    await fresh_error(tb)
+    await tb.write(off("INPUT_CFG"), limit_en)
+    await flagged(tb, "CFG_BUSY", "INPUT_CFG while busy")
+    assert await tb.reg("INPUT_CFG") == limit_hard
+    await engine_done(tb)
+    await tb.write(off("INPUT_CFG"), limit_en)
+    tb.set_engine(in_level=0)
+    await clear_all(tb)
+
+    # ERR_CODE when causes meet (the RTL's order): the limit stop over the engine's error and over eng_chg_refused ...
+    for pulse in ({"eng_error": 1, "eng_err_code": ERR["STEP_SPACE"]}, {"eng_chg_refused": 1}):
+        await start_move(tb, fwd, "a limit stop with another cause")
+        await stops("LIMIT_POS", "soft_stop", f"a limit stop with {pulse}", **pulse)
+        tb.set_engine(eng_err_code=0)
+        tb.release("LIMIT_POS")
+        await engine_done(tb)
+        await clear_all(tb)
+    # ... and the engine's error over a START refused for LIMIT.
+    await tb.activate("LIMIT_POS")
+    await tb.write(off("STEPS"), fwd)
+    await fresh_error(tb)
+    got = await tb.write(off("CTRL"), cmd("START"), eng_error=1, eng_err_code=ERR["RANGE"])
+    assert got["start"] == 0
+    s = await flagged(tb, "RANGE", "START refused for LIMIT with an engine error")
+    assert s["DONE"] == 1
+
+
+@cocotb.test(timeout_time=1, timeout_unit="ms")
+async def estop_fault(dut) -> None:
+    """ESTOP's activation sets ESTOP_FAULT (estop_fault high, enable low from that edge), clears CTRL.ENABLE, drops a
+    queued move and sets ERROR with ESTOP; while ESTOP is active CTRL.ENABLE cannot be set, a QUEUE is dropped at once,
+    the fault's W1C clear is refused and a START is refused (ESTOP). Released, the fault stays (START still refused,
+    ENABLE written 1 reads 1 but the pin stays low) until the W1C clear, which brings the pin back. Codes: STEPS and
+    LIMIT before ESTOP at a START; ESTOP's activation over the engine's code. Pinned as the RTL has them: a queued
+    move whose done comes at ESTOP's activation edge, or while the fault is set with ESTOP released, starts (no ESTOP
+    check of the queued START)."""
+    tb = await new_bench(dut)
+    enable_m, fault_m = CTRL.field("ENABLE").mask, status_bits("ESTOP_FAULT")
+
+    async def ctrl_enable() -> int:
+        return field_of("CTRL", "ENABLE", await tb.reg("CTRL"))
+
+    await tb.write(off("CTRL"), enable_m, 0b0100)
+    await start_move(tb, 100, "before ESTOP")
+    await tb.write(off("CTRL"), cmd("QUEUE"), 0b0001)
+    assert (await status(tb))["PENDING"] == 1
+    assert (await tb.idle())["enable"] == 1 and await ctrl_enable() == 1
+    await fresh_error(tb)
+    got = await tb.activate("ESTOP")
+    assert got["estop_fault"] == 1 and got["enable"] == 0
+    s = await flagged(tb, "ESTOP", "ESTOP's activation")
+    assert s["ESTOP"] == 1 and s["ESTOP_FAULT"] == 1 and s["PENDING"] == 0, s
+    assert await ctrl_enable() == 0
+
+    # While ESTOP is active.
+    await tb.write(off("CTRL"), enable_m, 0b0100)
+    assert await ctrl_enable() == 0, "CTRL.ENABLE set while ESTOP is active"
+    got = await tb.write(off("STATUS"), fault_m)
+    assert got["estop_fault"] == 1 and (await status(tb))["ESTOP_FAULT"] == 1
+    await fresh_error(tb)
+    await tb.write(off("CTRL"), cmd("QUEUE"))  # busy: taken (no error), and dropped at that edge
+    s = await flagged(tb, None, "QUEUE while ESTOP is active")
+    assert s["PENDING"] == 0
+    await engine_done(tb)
+    await refused_start(tb, "ESTOP", "START while ESTOP is active")
+    await refused_start(tb, "ESTOP", "ext_start while ESTOP is active", ext=1)
+
+    # Released: the fault stays until cleared.
+    tb.release("ESTOP")
+    got = await tb.idle()
+    assert got["estop_fault"] == 1 and got["enable"] == 0
+    s = await status(tb)
+    assert s["ESTOP"] == 0 and s["ESTOP_FAULT"] == 1
+    await refused_start(tb, "ESTOP", "START while the fault is set")
+    got = await tb.write(off("CTRL"), enable_m, 0b0100)
+    assert got["enable"] == 0 and await ctrl_enable() == 1, "ENABLE: the pin follows CTRL.ENABLE during the fault"
+    got = await tb.write(off("STATUS"), fault_m, 0b1011)  # byte 2 not enabled: kept
+    assert got["estop_fault"] == 1
+    got = await tb.write(off("STATUS"), fault_m)
+    assert got["estop_fault"] == 0 and got["enable"] == 1
+    assert (await status(tb))["ESTOP_FAULT"] == 0
+    await fresh_error(tb)
+    assert (await tb.write(off("CTRL"), cmd("START")))["start"] == 1, "START refused after the fault's clear"
+    await flagged(tb, None, "START after the fault's clear")
+
+    # A rise in the cycle of the clear wins; ESTOP's code over the engine's; STEPS and LIMIT over ESTOP at a START.
+    await fresh_error(tb)
+    await tb.activate("ESTOP", wr=1, addr=off("STATUS"), wdata=fault_m, be=0xF, eng_error=1, eng_err_code=ERR["LATE"])
+    s = await flagged(tb, "ESTOP", "ESTOP's activation with an engine error")
+    assert s["ESTOP_FAULT"] == 1
+    await tb.write(off("STEPS"), STEPS_REJECTED)
+    await refused_start(tb, "STEPS", "START with STEPS = 0x80000000 and ESTOP active")
+    await tb.write(off("STEPS"), 100)
+    await tb.activate("LIMIT_POS")
+    await refused_start(tb, "LIMIT", "START towards a limit with ESTOP active")
+    tb.set_engine(in_level=0)
+    await tb.idle()
+    await refused_start(tb, "ESTOP", "START during the fault, after the levels' release")
+    await clear_all(tb)
+    assert (await status(tb))["ESTOP_FAULT"] == 0
+
+    # Pinned as the RTL has them (the queued START is not checked against ESTOP): the engine's done at ESTOP's
+    # activation edge starts the queued move ...
+    await start_move(tb, 100, "queued, done at ESTOP")
+    await tb.write(off("CTRL"), cmd("QUEUE"))
+    tb.set_engine(eng_busy=0, eng_state=0)
+    got = await tb.activate("ESTOP", eng_done=1)
+    assert got["start"] == 1 and got["estop_fault"] == 1
+    s = await flagged(tb, "ESTOP", "queued move at ESTOP's activation")
+    assert s["PENDING"] == 0
+    # ... and a QUEUE while the fault is set (ESTOP released, the engine still busy) stays queued and starts.
+    tb.release("ESTOP")
+    tb.set_engine(eng_busy=1, eng_state=1)
+    await tb.idle()
+    await fresh_error(tb)
+    await tb.write(off("CTRL"), cmd("QUEUE"))
+    s = await flagged(tb, None, "QUEUE during the fault")
+    assert s["PENDING"] == 1 and s["ESTOP_FAULT"] == 1
+    got = await engine_done(tb)
+    assert got["start"] == 1 and got["estop_fault"] == 1
+    await flagged(tb, None, "queued move during the fault")
+    await clear_all(tb)
+
+
+@cocotb.test(timeout_time=500, timeout_unit="us")
+async def time_and_latch_registers(dut) -> None:
+    """TIME_LO reads time_count bits 31:0, and its read copies bits 63:32 of the same edge into TIME_HI, which reads
+    that copy (0 after reset) until the next TIME_LO read: a TIME_HI read, other reads and writes copy nothing.
+    LATCH_POS, LATCH_TIME_LO / HI and STATUS.LATCHED read their inputs and ignore writes. A W1C write of
+    STATUS.LATCHED (byte 3 enabled) pulses latch_clr for one clock after its edge, whatever latched is; other writes
+    do not. in_filter, in_pol, latch_src, latch_active, latch_release follow INPUT_FILTER and INPUT_CFG."""
+    tb = await new_bench(dut)
+    rng = random.Random(16)
+    tb.set_engine(time_count=0x1234_5678_9ABC_DEF0)
+    assert await tb.reg("TIME_HI") == 0, "TIME_HI before any read of TIME_LO"
+    assert await tb.reg("TIME_LO") == 0x9ABC_DEF0
+    tb.set_engine(time_count=0xAAAA_BBBB_CCCC_DDDD)
+    assert await tb.reg("TIME_HI") == 0x1234_5678, "TIME_HI is not the copy of the TIME_LO read"
+    # The 64-bit count read as LO then HI, across carries into bit 32, the count running on between the reads.
+    for base in (0x0000_0005_FFFF_FFFD, 0xFFFF_FFFF_FFFF_FFFE, rng.getrandbits(64)):
+        for k in range(4):
+            value = (base + k) & TIME_MASK
+            tb.set_engine(time_count=value)
+            low = await tb.read(off("TIME_LO"))
+            tb.set_engine(time_count=(value + 1) & TIME_MASK)
+            await tb.write(off("TIME_HI"), WORD)  # RO: ignored, copies nothing
+            await tb.read(off("TIME_HI") + 2)
+            await tb.reg("CUR_DELAY")
+            high = await tb.reg("TIME_HI")
+            assert high << 32 | low == value, f"{value:#x}: read {high:#x}_{low:#x}"
+    # A reset clears the copy.
+    await tb.reset(1)
+    assert await tb.reg("TIME_HI") == 0, "TIME_HI after a reset"
+
+    # The latch registers read their inputs; writes to them change nothing.
+    for _ in range(4):
+        pos, t = rng.getrandbits(32), rng.getrandbits(64)
+        tb.set_engine(latch_pos=pos, latch_time=t)
+        for name in ("LATCH_POS", "LATCH_TIME_LO", "LATCH_TIME_HI"):
+            await tb.write(off(name), ~pos & WORD)
+        assert await tb.reg("LATCH_POS") == pos
+        assert await tb.reg("LATCH_TIME_LO") == t & WORD
+        assert await tb.reg("LATCH_TIME_HI") == t >> 32
+
+    # STATUS.LATCHED and latch_clr.
+    latched_m = status_bits("LATCHED")
+    for latched in (0, 1):
+        tb.set_engine(latched=latched)
+        assert (await status(tb))["LATCHED"] == latched
+        for data, be, pulse in (
+            (latched_m, 0xF, 1),
+            (latched_m, 0b1000, 1),
+            (latched_m, 0b0111, 0),
+            (WORD & ~latched_m, 0xF, 0),
+            (0, 0xF, 0),
+            (WORD, 0xF, 1),
+        ):
+            got = await tb.write(off("STATUS") + rng.randrange(4), data, be)
+            assert got["latch_clr"] == pulse, f"latch_clr after {data:#x} be={be:#x}"
+            assert (await tb.idle())["latch_clr"] == 0, "latch_clr longer than one clock"
+            assert (await status(tb))["LATCHED"] == latched, "LATCHED is the input's"
+    got = await tb.write(off("STATUS"), latched_m)
+    assert got["latch_clr"] == 1
+    got = await tb.write(off("STATUS"), latched_m)  # back to back: two pulses
+    assert got["latch_clr"] == 1
+    got = await tb.cycle(rst=1, wr=1, addr=off("STATUS"), wdata=latched_m)  # a write at a reset edge: no pulse
+    assert got["latch_clr"] == 0
+    await tb.write(off("LATCH_POS"), latched_m)  # another register: nothing
+    assert (await tb.idle())["latch_clr"] == 0
+
+    # The machine inputs' configuration outputs (engine_outputs covers each field; here whole words).
+    for filt, cfg in ((WORD, WORD), (0, 0), (0x5_4321, 0x0000_0A25), (0x1234_5678, 0x0000_05DA)):
+        await tb.write(off("INPUT_FILTER"), filt)
+        got = await tb.write(off("INPUT_CFG"), cfg)
+        assert got["in_filter"] == filt & 0xF_FFFF
+        assert got["in_pol"] == cfg & 0xF
+        assert got["latch_src"] == (cfg >> 8) & 3
+        assert got["latch_active"] == (cfg >> 10) & 1 and got["latch_release"] == (cfg >> 11) & 1
+        assert await tb.reg("INPUT_CFG") == cfg & access_mask(INPUT_CFG, RW)
+
+
+@cocotb.test(timeout_time=500, timeout_unit="us")
+async def external_start(dut) -> None:
+    """ext_start acts as a START written at its edge: while idle the start strobe (one clock) with the direction of
+    STEPS recorded for the limit stop, or refused (no strobe, DONE, ERROR) for STEPS = 0x80000000, a limit towards
+    STEPS' direction or the ESTOP fault, in that order; a refusal's DONE wins over a W1C clear at that edge; while busy
+    the strobe passes and nothing changes; with a written START at the same edge one strobe; at the done of a queued
+    move with an engine error it is dropped with the queued move. Pinned as the RTL has it: ext_start judges the state
+    before its edge: at the edge of the fault's W1C clear it is refused (ESTOP), at the edge of a STEPS write it
+    judges (and records the direction of) STEPS before the write."""
+    tb = await new_bench(dut)
+    await tb.write(off("STEPS"), 100)
+    await fresh_error(tb)
+    got = await tb.cycle(ext_start=1)
+    assert got["start"] == 1
+    assert (await tb.idle())["start"] == 0, "start longer than one clock"
+    s = await flagged(tb, None, "ext_start")
+    assert s["DONE"] == 0
+    got = await tb.write(off("CTRL"), cmd("START"), ext_start=1)
+    assert got["start"] == 1
+    assert (await tb.idle())["start"] == 0
+    await flagged(tb, None, "ext_start with a written START")
+
+    # Refusals, in order STEPS, LIMIT, ESTOP.
+    await tb.activate("LIMIT_NEG")
+    await tb.activate("ESTOP")
+    tb.release("ESTOP")
+    await tb.write(off("STEPS"), STEPS_REJECTED)
+    await refused_start(tb, "STEPS", "ext_start with STEPS = 0x80000000", ext=1)
+    await tb.write(off("STEPS"), -5 & WORD)
+    await refused_start(tb, "LIMIT", "ext_start towards LIMIT_NEG", ext=1)
+    await tb.write(off("STEPS"), 5)
+    await refused_start(tb, "ESTOP", "ext_start during the fault", ext=1)
+    # At the edge of the fault's clear the fault still counts (as it was before the edge): refused, then cleared.
+    await fresh_error(tb)
+    got = await tb.write(off("STATUS"), status_bits("ESTOP_FAULT"), ext_start=1)
+    assert got["start"] == 0 and got["estop_fault"] == 0
+    await flagged(tb, "ESTOP", "ext_start at the fault's clear")
+    # The refusal's DONE over a W1C clear of DONE at the same edge.
+    await tb.write(off("STEPS"), STEPS_REJECTED)
+    await fresh_error(tb)
+    got = await tb.write(off("STATUS"), WORD, ext_start=1)
+    assert got["start"] == 0
+    s = await flagged(tb, "STEPS", "ext_start refused at a clear")
+    assert s["DONE"] == 1
+    await clear_all(tb)
+
+    # Accepted backwards: the direction is recorded, so LIMIT_NEG stops the motion; ext_start while busy passes and
+    # keeps that direction.
+    tb.release("LIMIT_NEG")
+    await tb.write(off("STEPS"), -5 & WORD)
+    await fresh_error(tb)
+    assert (await tb.cycle(ext_start=1))["start"] == 1
+    tb.set_engine(eng_busy=1, eng_state=1, eng_dir=1)
+    await tb.idle()
+    await tb.write(off("STEPS"), 5)
+    assert (await tb.cycle(ext_start=1))["start"] == 1
+    await flagged(tb, None, "ext_start while busy")
+    got = await tb.activate("LIMIT_POS")
+    assert got["soft_stop"] == 0, "ext_start while busy changed the motion's direction"
+    got = await tb.activate("LIMIT_NEG")
+    assert got["soft_stop"] == 1, "no limit stop after ext_start backwards"
+    await flagged(tb, "LIMIT", "limit stop after ext_start")
+    tb.set_engine(in_level=0)
+
+    # At the done of a queued move with an engine error: dropped with it.
+    await tb.write(off("CTRL"), cmd("QUEUE"))  # LIMIT_NEG's stop is taken: the queue is kept
+    assert (await status(tb))["PENDING"] == 1
+    got = await engine_done(tb, ext_start=1, eng_error=1, eng_err_code=ERR["LATE"])
+    assert got["start"] == 0
+    await flagged(tb, "LATE", "ext_start at a done with error")
+    await clear_all(tb)
+
+    # Pinned: ext_start at the edge of a STEPS write judges the old STEPS: 0x80000000 written then is not refused
+    # (the strobe goes out with steps = 0, direction = 1) ...
+    await tb.write(off("STEPS"), 5)
+    await fresh_error(tb)
+    got = await tb.write(off("STEPS"), STEPS_REJECTED, ext_start=1)
+    assert got["start"] == 1 and got["steps"] == 0 and got["direction"] == 1
+    await flagged(tb, None, "ext_start at a STEPS write of 0x80000000")
+    # ... and a move written away from an active limit at that edge is refused by the old STEPS' direction, while
+    # one written towards it starts and records the old direction (no limit stop).
+    await tb.write(off("STEPS"), 5)
+    await tb.activate("LIMIT_POS")
+    got = await tb.write(off("STEPS"), -5 & WORD, ext_start=1)
+    assert got["start"] == 0 and got["direction"] == 1
+    await flagged(tb, "LIMIT", "ext_start at a STEPS write away from the limit")
+    await clear_all(tb)
+    tb.set_engine(in_level=0)
+    await tb.write(off("STEPS"), 5)
+    await tb.activate("LIMIT_NEG")
+    await fresh_error(tb)
+    got = await tb.write(off("STEPS"), -5 & WORD, ext_start=1)
+    assert got["start"] == 1 and got["direction"] == 1
+    tb.set_engine(eng_busy=1, eng_state=1, eng_dir=1)
+    for _ in range(3):
+        assert (await tb.idle())["soft_stop"] == 0, "the motion towards the active LIMIT_NEG was stopped"
+    await flagged(tb, None, "ext_start at a STEPS write towards the limit")
+
+
+# ---------------------------------------------------------------------------------------------------------------
 # The random sequence.
 
 #: Relative weights of the registers a random access picks (the ones with behaviour weigh more).
-WEIGHTS = {"CTRL": 9, "STATUS": 4, "STEPS": 4, "POSITION": 3, **dict.fromkeys(CONFIG, 2)}
+WEIGHTS = {
+    "CTRL": 9,
+    "STATUS": 4,
+    "STEPS": 4,
+    "POSITION": 3,
+    **dict.fromkeys(CONFIG, 2),
+    "INPUT_CFG": 3,
+    "TIME_LO": 2,
+    "TIME_HI": 2,
+}
 
 
 #: CTRL command bits a random CTRL write picks from.
@@ -1150,6 +1971,7 @@ COMMAND_MIXES = tuple(
         ("CHANGE",),
         ("QUEUE",),
         ("QUEUE",),
+        ("QUEUE",),
         ("SOFT_STOP",),
         ("HARD_STOP",),
         ("SOFT_STOP", "QUEUE"),
@@ -1158,6 +1980,41 @@ COMMAND_MIXES = tuple(
         ("START", "CHANGE"),
     )
 )
+
+
+def random_machine_inputs(rng: random.Random, tb: Bench) -> dict[str, int]:
+    """The machine inputs of one random cycle (the held ones are changed in tb directly), as stepramp_inputs and the
+    multi-axis top would give them: each level goes active now and then (ESTOP rarely) with its rise strobe at that
+    edge and inactive after a few cycles; latched rises with latch_pos / latch_time taken from eng_position and
+    time_count and falls after latch_clr (now and then on its own); time_count counts the edges, with jumps (to a
+    random count, or to a low word about to carry) so that TIME_HI sees many values. Returns in_rise and ext_start."""
+    ins = tb.ins
+    level, rise = ins["in_level"], 0
+    for i in range(len(INPUTS)):
+        bit = 1 << i
+        if level & bit:
+            if rng.random() < (0.05 if bit == ESTOP_BIT else 0.08):
+                level &= ~bit
+        elif rng.random() < (0.003 if bit == ESTOP_BIT else 0.015):
+            level |= bit
+            rise |= bit
+    ins["in_level"] = level
+    if ins["latched"]:
+        if tb.model.strobes["latch_clr"] or rng.random() < 0.01:
+            ins["latched"] = 0
+    elif rng.random() < 0.02:
+        ins["latched"] = 1
+        ins["latch_pos"], ins["latch_time"] = ins["eng_position"], ins["time_count"]
+    if rng.random() < 0.01:
+        ins["latch_pos"], ins["latch_time"] = rng.getrandbits(32), rng.getrandbits(64)
+    jump = rng.random()
+    if jump < 0.01:
+        ins["time_count"] = rng.getrandbits(64)
+    elif jump < 0.02:
+        ins["time_count"] = rng.getrandbits(32) << 32 | (WORD - rng.randrange(4))
+    else:
+        ins["time_count"] = (ins["time_count"] + 1) & TIME_MASK
+    return {"in_rise": rise, "ext_start": int(rng.random() < (0.01 if ins["eng_busy"] else 0.03))}
 
 
 def random_inputs(rng: random.Random, tb: Bench) -> dict[str, int]:
@@ -1179,18 +2036,27 @@ def random_inputs(rng: random.Random, tb: Bench) -> dict[str, int]:
     # A queued move (the model's state, so the sequence stays replayable) meets the engine's done sooner and more
     # often with an error.
     queued = tb.model.q_pend
-    done = int(rng.random() < (0.12 if queued else 0.04))
+    done = int(rng.random() < (0.25 if queued else 0.04))
     drive: dict[str, int] = {
         "eng_done": done,
-        "eng_error": int(rng.random() < (0.3 if done and queued else 0.03)),
+        "eng_error": int(rng.random() < (0.2 if done and queued else 0.03)),
         "eng_chg_refused": int(rng.random() < 0.01),
+        **random_machine_inputs(rng, tb),
         # Garbage on the bus when there is no strobe.
         "addr": rng.randrange(WINDOW),
         "wdata": rng.getrandbits(32),
         "be": rng.randrange(16),
     }
+    if done and queued and rng.random() < 0.4:  # the queued move's limit becomes active at its done
+        bit = 1 << INPUTS.index("LIMIT_NEG" if tb.model.store["STEPS"] >> 31 else "LIMIT_POS")
+        if not eng["in_level"] & bit:
+            eng["in_level"] |= bit
+            drive["in_rise"] |= bit
     if rng.random() < 0.002:
         drive["rst"] = 1
+    if eng["in_level"] & ESTOP_BIT and rng.random() < 0.05:  # the fault's clear while ESTOP is still active
+        drive.update(wr=1, addr=off("STATUS"), wdata=status_bits("ESTOP_FAULT"), be=0xF)
+        return drive
     kind = rng.random()
     if kind < 0.2:
         return drive
@@ -1206,8 +2072,10 @@ def random_inputs(rng: random.Random, tb: Bench) -> dict[str, int]:
         drive["rd"] = 1
         return drive
     drive["wr"] = 1
-    if offset == off("STEPS") and rng.random() < 0.5:
+    if offset == off("STEPS") and rng.random() < 0.4:
         drive["wdata"] = STEPS_REJECTED
+    elif offset == off("INPUT_CFG") and rng.random() < 0.75:  # the limits enabled mostly
+        drive["wdata"] |= INPUT_CFG.field("LIMIT_EN").mask
     elif offset == off("CTRL"):
         kind = rng.random()
         if kind < (0.3 if eng["eng_busy"] else 0.5):  # START mostly while idle, the commands mostly while busy
@@ -1215,17 +2083,23 @@ def random_inputs(rng: random.Random, tb: Bench) -> dict[str, int]:
         elif kind < 0.9:  # one command mix (QUEUE and CHANGE mostly), the other command bits 0
             drive["wdata"] = (drive["wdata"] & ~access_mask(CTRL, WS)) | rng.choice(COMMAND_MIXES)
     elif offset == off("STATUS"):
-        drive["wdata"] = rng.choice((WORD, 0, drive["wdata"]))
+        drive["wdata"] = rng.choice((WORD, 0, drive["wdata"], status_bits(*EVENT_FLAGS, "LATCHED")))
         if rng.random() < 0.3:  # an engine event in the cycle of the clear
             drive[rng.choice(("eng_done", "eng_error", "eng_chg_refused"))] = 1
+        if rng.random() < 0.1:  # an input's activation in the cycle of the clear
+            bit = 1 << rng.randrange(len(INPUTS))
+            if not eng["in_level"] & bit:
+                eng["in_level"] |= bit
+                drive["in_rise"] |= bit
     return drive
 
 
 @cocotb.test(timeout_time=20, timeout_unit="ms")  # room for REGFILE_CYCLES up to 1,000,000
 async def random_sequence(dut) -> None:
-    """A seeded random sequence of reads, writes, engine events and resets, compared cycle by cycle with the model
-    (REGFILE_SEED, REGFILE_CYCLES): CTRL writes with CHANGE / QUEUE mixes, eng_chg_pend held now and then, rare
-    eng_chg_refused strobes."""
+    """A seeded random sequence of reads, writes, engine events, machine inputs and resets, compared cycle by cycle
+    with the model (REGFILE_SEED, REGFILE_CYCLES): CTRL writes with CHANGE / QUEUE mixes, eng_chg_pend held now and
+    then, rare eng_chg_refused strobes, the four input levels with their rise strobes (ESTOP rarely), latched,
+    latch_pos / latch_time, a running time_count with jumps, ext_start pulses."""
     seed = env_int("REGFILE_SEED", 1)
     n = env_int("REGFILE_CYCLES", 4000)
     dut._log.info(f"REGFILE_SEED={seed} REGFILE_CYCLES={n}")
@@ -1258,9 +2132,21 @@ async def random_sequence(dut) -> None:
             "error CHANGE",
             "error STAGED",
             "chg_refused",
+            "error LIMIT",
+            "error ESTOP",
+            "start refused LIMIT",
+            "start refused ESTOP",
+            "ext_start",
+            "ext_start refused",
+            "latch_clr",
+            *(f"rise {name}" for name in INPUTS),
+            "event set wins over clear",
+            "fault clear while ESTOP active",
+            "ENABLE dropped by ESTOP",
         ):
             assert ev[key] >= 2, f"REGFILE_SEED={seed}: the sequence hit '{key}' {ev[key]} times"
-        assert ev["queued start"] >= 1, f"REGFILE_SEED={seed}: no queued move started"
+        for key in ("queued start", "limit stop soft", "limit stop hard", "queued move refused by a limit"):
+            assert ev[key] >= 1, f"REGFILE_SEED={seed}: the sequence never hit '{key}'"
         for reg in REGISTERS:
             assert ev[f"read {reg.name}"] >= 5 and ev[f"write {reg.name}"] >= 5, reg.name
 

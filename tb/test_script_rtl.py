@@ -4,8 +4,9 @@
 The driver's planner (stepramp.board.script.plan_script) turns a script into register writes and commits on the
 script's clock axis and predicts every STEP edge and POSITION after it; stepramp.sim.script_sim plays the same
 commits on stepramp_plb or stepramp_axil (each commit checked to land on its clock edge) and records what the RTL
-does. Every edge and position must be equal, and the core must flag no error (the planner never commits what the
-core would refuse).
+does. Every edge and position must be equal, and the core must flag exactly the errors the model predicts (none
+from a commit: the planner never commits what the core would refuse; LIMIT and ESTOP from the machine inputs,
+issue 16), and no STEP edge may come more than 2 clocks after a filtered ESTOP edge.
 
 * test_named_scripts: stepramp.board.script.NAMED_SCRIPTS (speed up and slow down in RUN, a change in ACCEL and in
   DECEL, a retarget inside the stop distance and behind the motor, jog through zero, queued moves in the same and
@@ -36,7 +37,9 @@ CHUNKS = 2
 
 
 def _check(name: str, planned: ScriptResult, rtl: dict[str, Any]) -> None:
-    assert rtl["core_errors"] == [], f"{name}: the core flagged errors (edge, code): {rtl['core_errors']}"
+    errors = [tuple(e) for e in rtl["core_errors"]]
+    assert errors == planned.errors, f"{name}: the core flagged (edge, code) {errors}, the model {planned.errors}"
+    assert not rtl["estop_violations"], f"{name}: {rtl['estop_violations']}"
     assert rtl["edges"] == planned.edges, f"{name}: STEP edges: {edges_differ(rtl['edges'], planned.edges)}"
     assert rtl["positions"] == planned.positions, f"{name}: positions differ from the model"
 
@@ -70,10 +73,16 @@ def test_random_scripts(top: str, chunk: int) -> None:
     rng = random.Random(f"{SEED}:{top}:{chunk}")
     scripts = [random_script(rng) for _ in range(count)]
     planned = [plan_script(load_script(s)) for s in scripts]
-    results = simulate_planned(planned, build_dir(f"script_random_{top}_{chunk}"), top)
-    assert len(results) == count
-    for i, (s, p, r) in enumerate(zip(scripts, planned, results, strict=True)):
-        _check(f"SCRIPT_SEED={SEED} {top} chunk {chunk} script {i}: {json.dumps(s)}", p, r)
+    # An input effect the model cannot time (within MARGIN of a START being taken, of a soft stop's decision): the
+    # script is not played (about 1 in 30; printed).
+    keep = [i for i, p in enumerate(planned) if not p.unsure]
+    with_inputs = sum(1 for i in keep if planned[i].pins)
+    print(f"{len(keep)} of {count} scripts played ({with_inputs} with inputs); not played: {count - len(keep)}")
+    assert len(keep) >= 0.9 * count
+    results = simulate_planned([planned[i] for i in keep], build_dir(f"script_random_{top}_{chunk}"), top)
+    assert len(results) == len(keep)
+    for i, r in zip(keep, results, strict=True):
+        _check(f"SCRIPT_SEED={SEED} {top} chunk {chunk} script {i}: {json.dumps(scripts[i])}", planned[i], r)
 
 
 def test_cli_sim_and_model_agree(tmp_path: Path) -> None:

@@ -84,6 +84,8 @@ int stepramp_init(stepramp_t *dev, uintptr_t base, double fclk, double spr, uint
     dev->prescale = prescale;
     dev->segment_dirty = 1u; /* SEGMENT .. HEAD_PROD_HI unknown: the first program writes them */
     dev->min_gap = STEPRAMP_MIN_GAP_RESET;
+    dev->input_filter = 0u; /* the reset values */
+    dev->input_cfg = STEPRAMP_INPUT_CFG_RESET;
     id = read_reg(dev, STEPRAMP_REG_ID);
     dev->version = id & 0xFFFFu;
     return (id >> 16) == STEPRAMP_ID_MAGIC ? STEPRAMP_OK : STEPRAMP_EID;
@@ -347,14 +349,168 @@ uint32_t stepramp_status(const stepramp_t *dev, stepramp_status_t *status)
         status->error = (raw & STEPRAMP_STATUS_ERROR_MASK) != 0u;
         status->err_code = (raw & STEPRAMP_STATUS_ERR_CODE_MASK) >> STEPRAMP_STATUS_ERR_CODE_SHIFT;
         status->pending = (raw & STEPRAMP_STATUS_PENDING_MASK) != 0u;
+        status->dir_fault = (raw & STEPRAMP_STATUS_DIR_FAULT_MASK) != 0u;
+        status->levels = (raw >> STEPRAMP_STATUS_LIMIT_NEG_SHIFT) & STEPRAMP_INPUT_ALL;
+        status->events = (raw >> STEPRAMP_STATUS_LIMIT_NEG_EV_SHIFT) & STEPRAMP_INPUT_ALL;
+        status->latched = (raw & STEPRAMP_STATUS_LATCHED_MASK) != 0u;
     }
     return raw;
 }
 
 void stepramp_clear_flags(const stepramp_t *dev)
 {
-    /* W1C bits are all in byte 0, the rest of STATUS is read only: a whole-word write is the strobe-0x1 write */
+    /* a whole-word write of 1 to DONE and ERROR only: the other W1C bits (the input events, ESTOP_FAULT, LATCHED)
+     * are written 0 and kept, the rest of STATUS is read only */
     write_reg(dev, STEPRAMP_REG_STATUS, STEPRAMP_STATUS_DONE_MASK | STEPRAMP_STATUS_ERROR_MASK);
+}
+
+/* The INPUT_CFG word of a configuration, or STEPRAMP_EINPUTS through *rc. */
+static uint32_t input_cfg_word(const stepramp_inputs_t *in, int *rc)
+{
+    uint32_t word;
+
+    if (in->filter > STEPRAMP_FILTER_MAX || (in->active_low & ~STEPRAMP_INPUT_ALL) != 0u ||
+        in->latch_source > STEPRAMP_LATCH_LIMIT_POS ||
+        (in->latch_source != STEPRAMP_LATCH_NONE && !in->latch_on_active && !in->latch_on_release)) {
+        *rc = STEPRAMP_EINPUTS;
+        return 0u;
+    }
+    word = in->active_low << STEPRAMP_INPUT_CFG_POL_LIMIT_NEG_SHIFT;
+    word |= in->limit_enable ? STEPRAMP_INPUT_CFG_LIMIT_EN_MASK : 0u;
+    word |= in->limit_hard ? STEPRAMP_INPUT_CFG_LIMIT_HARD_MASK : 0u;
+    word |= in->latch_source << STEPRAMP_INPUT_CFG_LATCH_SRC_SHIFT;
+    if (in->latch_source != STEPRAMP_LATCH_NONE) {
+        word |= in->latch_on_active ? STEPRAMP_INPUT_CFG_LATCH_ON_ACTIVE_MASK : 0u;
+        word |= in->latch_on_release ? STEPRAMP_INPUT_CFG_LATCH_ON_RELEASE_MASK : 0u;
+    }
+    *rc = STEPRAMP_OK;
+    return word;
+}
+
+int stepramp_configure_inputs(stepramp_t *dev, const stepramp_inputs_t *in)
+{
+    int rc;
+    uint32_t word;
+
+    if (dev == NULL || in == NULL) {
+        return STEPRAMP_EINPUTS;
+    }
+    word = input_cfg_word(in, &rc);
+    if (rc != STEPRAMP_OK) {
+        return rc; /* nothing written */
+    }
+    write_reg(dev, STEPRAMP_REG_INPUT_FILTER, in->filter);
+    write_reg(dev, STEPRAMP_REG_INPUT_CFG, word);
+    dev->input_filter = in->filter;
+    dev->input_cfg = word;
+    return STEPRAMP_OK;
+}
+
+/* Write 1 to the STATUS bits of mask: the byte lanes that hold them, each a byte write (the W1C flags of the other
+ * lanes are kept). */
+static void clear_status_bits(const stepramp_t *dev, uint32_t mask)
+{
+    uint32_t k;
+
+    for (k = 0u; k < 4u; k++) {
+        uint32_t byte = (mask >> (8u * k)) & 0xFFu;
+        if (byte != 0u) {
+            STEPRAMP_WRITE8(REG(dev, STEPRAMP_REG_STATUS + (STEPRAMP_CMD_BYTE_LANE == 0u ? k : 3u - k)),
+                            (uint8_t)byte);
+        }
+    }
+}
+
+int stepramp_arm_latch(stepramp_t *dev, uint32_t source, int on_active, int on_release)
+{
+    stepramp_inputs_t in;
+    int rc;
+    uint32_t word;
+    const uint32_t latch_bits = STEPRAMP_INPUT_CFG_LATCH_SRC_MASK | STEPRAMP_INPUT_CFG_LATCH_ON_ACTIVE_MASK |
+                                STEPRAMP_INPUT_CFG_LATCH_ON_RELEASE_MASK;
+
+    if (dev == NULL) {
+        return STEPRAMP_EINPUTS;
+    }
+    in.filter = dev->input_filter;
+    in.active_low = 0u;
+    in.limit_enable = 0;
+    in.limit_hard = 0;
+    in.latch_source = source;
+    in.latch_on_active = on_active;
+    in.latch_on_release = on_release;
+    word = input_cfg_word(&in, &rc);
+    if (rc != STEPRAMP_OK) {
+        return rc; /* nothing written */
+    }
+    dev->input_cfg = (dev->input_cfg & ~latch_bits) | word;
+    write_reg(dev, STEPRAMP_REG_INPUT_CFG, dev->input_cfg);
+    stepramp_rearm_latch(dev);
+    return STEPRAMP_OK;
+}
+
+void stepramp_rearm_latch(const stepramp_t *dev)
+{
+    clear_status_bits(dev, STEPRAMP_STATUS_LATCHED_MASK);
+}
+
+void stepramp_read_latch(const stepramp_t *dev, stepramp_latch_t *latch)
+{
+    uint32_t raw = read_reg(dev, STEPRAMP_REG_LATCH_POS);
+    uint32_t lo = read_reg(dev, STEPRAMP_REG_LATCH_TIME_LO);
+    uint32_t hi = read_reg(dev, STEPRAMP_REG_LATCH_TIME_HI);
+    uint32_t n = dev->input_filter > 1u ? dev->input_filter : 1u;
+
+    latch->position = raw <= UINT32_C(0x7FFFFFFF) ? (int32_t)raw : -(int32_t)(~raw) - 1;
+    latch->time = (uint64_t)hi << 32 | lo;
+    latch->pin_time = (int64_t)latch->time - (int64_t)n - 2; /* a 64-bit count of clocks stays far below 2^63 */
+}
+
+int stepramp_latch(const stepramp_t *dev, stepramp_latch_t *latch)
+{
+    if (dev == NULL || latch == NULL) {
+        return STEPRAMP_ENULL;
+    }
+    if ((stepramp_status(dev, NULL) & STEPRAMP_STATUS_LATCHED_MASK) == 0u) {
+        return STEPRAMP_ENOLATCH;
+    }
+    stepramp_read_latch(dev, latch);
+    return STEPRAMP_OK;
+}
+
+uint64_t stepramp_time(const stepramp_t *dev)
+{
+    uint32_t lo = read_reg(dev, STEPRAMP_REG_TIME_LO); /* first: copies bits 63:32 into TIME_HI */
+    uint32_t hi = read_reg(dev, STEPRAMP_REG_TIME_HI);
+
+    return (uint64_t)hi << 32 | lo;
+}
+
+void stepramp_clear_events(const stepramp_t *dev, uint32_t inputs)
+{
+    clear_status_bits(dev, (inputs & (STEPRAMP_INPUT_LIMIT_NEG | STEPRAMP_INPUT_LIMIT_POS | STEPRAMP_INPUT_HOME))
+                               << STEPRAMP_STATUS_LIMIT_NEG_EV_SHIFT);
+}
+
+int stepramp_clear_estop(const stepramp_t *dev, int enable)
+{
+    clear_status_bits(dev, STEPRAMP_STATUS_ESTOP_FAULT_MASK);
+    if ((stepramp_status(dev, NULL) & STEPRAMP_STATUS_ESTOP_FAULT_MASK) != 0u) {
+        return STEPRAMP_EESTOP;
+    }
+    if (enable) {
+        stepramp_set_enable(dev, 1);
+    }
+    return STEPRAMP_OK;
+}
+
+void stepramp_enable_input_irq(const stepramp_t *dev, int done, int error, uint32_t events, int latch)
+{
+    uint32_t value = (done ? STEPRAMP_CTRL_IRQ_DONE_EN_MASK : 0u) | (error ? STEPRAMP_CTRL_IRQ_ERROR_EN_MASK : 0u);
+
+    value |= (events & STEPRAMP_INPUT_ALL) << STEPRAMP_CTRL_IRQ_LIMIT_NEG_EN_SHIFT;
+    value |= latch ? STEPRAMP_CTRL_IRQ_LATCH_EN_MASK : 0u;
+    STEPRAMP_WRITE8(CTRL_BYTE(dev, 1u), (uint8_t)(value >> 8));
 }
 
 int32_t stepramp_position(const stepramp_t *dev)
@@ -429,7 +585,11 @@ int stepramp_wait_done(const stepramp_t *dev, uint32_t max_polls)
               "sign against the running direction, pulse CHANGE_AT - 1 already emitted or CHANGE_AT past the last "    \
               "pulse); the motion goes on unchanged")                                                                  \
     X(STAGED, "a staging register (STEPS .. STOP_RATIO, SEGMENT .. CHANGE_AT) was written while STATUS.PENDING; the "  \
-              "write was ignored")
+              "write was ignored")                                                                                     \
+    X(LIMIT, "a limit input stopped a motion towards it (soft or hard, INPUT_CFG.LIMIT_HARD), or a START or queued "   \
+             "move towards an active limit was refused (nothing moved)")                                               \
+    X(ESTOP, "the ESTOP input hard-stopped every motion and dropped ENABLE, or a START came while "                   \
+             "STATUS.ESTOP_FAULT was set (refused, nothing moved)")
 
 #define CORE_TABLE_SIZE 32u /* ERR_CODE is 5 bits */
 #define CAUSE(name, text) [STEPRAMP_ERR_##name] = text,
@@ -483,6 +643,34 @@ const char *stepramp_strresult(int result)
     }
     if (result == STEPRAMP_EPENDING) {
         return "a change or a queued move is pending (STATUS.PENDING): the staging registers are locked";
+    }
+    if (result == STEPRAMP_EINPUTS) {
+        return "invalid input configuration: the filter must be 0 .. 2^20 - 1 clocks, the latch source 0 .. 3 with an "
+               "edge selected, the polarity bits among the four inputs";
+    }
+    if (result == STEPRAMP_ENOLATCH) {
+        return "nothing latched: STATUS.LATCHED is 0";
+    }
+    if (result == STEPRAMP_EESTOP) {
+        return "the E-stop is active or its fault is set (STATUS.ESTOP_FAULT clears only once ESTOP is inactive)";
+    }
+    if (result == STEPRAMP_EHOMING) {
+        return "invalid homing: the switch must be HOME or a limit in its own direction, the direction -1 or +1, the "
+               "speeds and accelerations finite and positive, max_travel and max_polls at least 1";
+    }
+    if (result == STEPRAMP_ELATCH_SPEED) {
+        return "the homing latch speed is too high for an exact zero: a step must last at least the filter + the "
+               "switch's settle time + 5 clocks";
+    }
+    if (result == STEPRAMP_ETRAVEL) {
+        return "homing: no switch edge within max_travel steps (the motion was hard-stopped)";
+    }
+    if (result == STEPRAMP_EBUSY) {
+        return "the axis is moving";
+    }
+    if (result == STEPRAMP_ESWITCH) {
+        return "homing: the motion ended before the switch edge, or the switch was not active where the seek latched "
+               "it";
     }
     if (STEPRAMP_IS_ECORE(result)) {
         uint32_t code = STEPRAMP_ECORE_CODE(result);

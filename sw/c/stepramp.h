@@ -40,6 +40,10 @@
  * While a motion runs: stepramp_change_to(&motor, p, u, remaining, accel, decel, speed) takes a new plan over at
  * pulse p (u: the speed there, stepramp_speed_at_pulse), stepramp_queue_move(&motor, steps, ...) starts a move when
  * the running one ends.
+ *
+ * The machine inputs (docs/algorithm.md, "Machine inputs"): stepramp_configure_inputs (filter, polarities, limits,
+ * latch), stepramp_arm_latch / stepramp_latch (the position latch), stepramp_time, stepramp_clear_events,
+ * stepramp_clear_estop; homing on them is stepramp_homing.h.
  */
 #ifndef STEPRAMP_H
 #define STEPRAMP_H
@@ -75,6 +79,19 @@ enum {
     STEPRAMP_EIDLE = 72,      /**< stepramp_change_to: STATUS.BUSY is 0, there is no motion to take over */
     STEPRAMP_EPENDING = 73,   /**< stepramp_change_to: STATUS.PENDING, a change or a queued move is pending (the
                                    staging registers are locked) */
+    STEPRAMP_EINPUTS = 74,    /**< stepramp_configure_inputs / stepramp_arm_latch: NULL, a filter above
+                                   STEPRAMP_FILTER_MAX, an unknown input bit or latch source, or a latch source with
+                                   neither edge selected */
+    STEPRAMP_ENOLATCH = 75,   /**< stepramp_latch: STATUS.LATCHED is 0, nothing latched since the latch was armed */
+    STEPRAMP_EESTOP = 76,     /**< stepramp_clear_estop: ESTOP_FAULT still set (the ESTOP input is active);
+                                   stepramp_home: the E-stop is active or its fault is set */
+    STEPRAMP_EHOMING = 77,    /**< stepramp_home: an argument out of range (switch, direction, speeds, travel) */
+    STEPRAMP_ELATCH_SPEED = 78, /**< stepramp_home: the latch speed is too high for an exact zero (a step must
+                                     last at least filter + settle + STEPRAMP_LATCH_MARGIN clocks) */
+    STEPRAMP_ETRAVEL = 79,    /**< stepramp_home: no switch edge within max_travel steps (hard-stopped) */
+    STEPRAMP_EBUSY = 80,      /**< stepramp_home: the axis is moving */
+    STEPRAMP_ESWITCH = 81,    /**< stepramp_home: the motion ended before the switch edge, or the switch is not
+                                   active where the seek latched it */
     STEPRAMP_ECORE_BASE = 128 /**< STEPRAMP_ECORE(code): the core flagged STATUS.ERROR with ERR_CODE code */
 };
 
@@ -97,6 +114,25 @@ enum {
 /** STEP width + STEP space after reset (1 + 1 clocks): stepramp_t.min_gap until stepramp_configure_outputs. */
 #define STEPRAMP_MIN_GAP_RESET 2u
 
+/** The machine inputs as bits (INPUT_CFG.POL_*, stepramp_status_t.levels and .events, stepramp_clear_events). */
+#define STEPRAMP_INPUT_LIMIT_NEG 0x1u
+#define STEPRAMP_INPUT_LIMIT_POS 0x2u
+#define STEPRAMP_INPUT_HOME 0x4u
+#define STEPRAMP_INPUT_ESTOP 0x8u
+#define STEPRAMP_INPUT_ALL 0xFu
+
+/** INPUT_CFG.LATCH_SRC values: the input the position latch takes its edges from. */
+#define STEPRAMP_LATCH_NONE 0u
+#define STEPRAMP_LATCH_HOME 1u
+#define STEPRAMP_LATCH_LIMIT_NEG 2u
+#define STEPRAMP_LATCH_LIMIT_POS 3u
+
+/** The largest INPUT_FILTER (20 bits), clocks. */
+#define STEPRAMP_FILTER_MAX UINT32_C(0xFFFFF)
+
+/** INPUT_CFG after reset: LIMIT_EN set, everything else 0 (stepramp_t.input_cfg after stepramp_init). */
+#define STEPRAMP_INPUT_CFG_RESET STEPRAMP_INPUT_CFG_LIMIT_EN_MASK
+
 /**
  * One stepramp core: its base address and the parameters every move is planned with, and what the driver knows of
  * the registers it wrote (set by stepramp_init; the driver's own business, like the Python driver's attributes).
@@ -114,6 +150,10 @@ typedef struct {
     uint32_t min_gap;       /**< STEP width + STEP space, clocks (each 0 acting as 1), as stepramp_configure_outputs
                                  last wrote them (STEPRAMP_MIN_GAP_RESET after stepramp_init): a jog's shortest
                                  interval must hold it */
+    uint32_t input_filter;  /**< INPUT_FILTER as the driver last wrote it (0 after stepramp_init, the reset value):
+                                 stepramp_read_latch's pin_time uses max(input_filter, 1) */
+    uint32_t input_cfg;     /**< INPUT_CFG as the driver last wrote it (STEPRAMP_INPUT_CFG_RESET after init):
+                                 stepramp_arm_latch keeps its polarity and limit bits */
 } stepramp_t;
 
 /** STATUS decoded (like driver.Status). */
@@ -127,7 +167,32 @@ typedef struct {
     uint32_t err_code; /**< cause of the last error, STEPRAMP_ERR_* of stepramp_regs.h (kept after clearing) */
     int pending;       /**< STATUS.PENDING: a CHANGE or a QUEUE is pending, the staging registers are locked until
                             it is taken (or dropped) */
+    int dir_fault;     /**< STATUS.DIR_FAULT (never expected) */
+    uint32_t levels;   /**< the filtered input levels after polarity, STEPRAMP_INPUT_* bits (1: active) */
+    uint32_t events;   /**< sticky: STEPRAMP_INPUT_LIMIT_NEG / _LIMIT_POS / _HOME for LIMIT_NEG_EV, LIMIT_POS_EV,
+                            HOME_EV (the input became active), STEPRAMP_INPUT_ESTOP for ESTOP_FAULT */
+    int latched;       /**< sticky: STATUS.LATCHED, LATCH_POS and LATCH_TIME hold the selected edge */
 } stepramp_status_t;
+
+/** The machine inputs' configuration (registers INPUT_FILTER and INPUT_CFG; Python's driver.Inputs). */
+typedef struct {
+    uint32_t filter;       /**< clocks a synchronised level must hold, 0 .. STEPRAMP_FILTER_MAX (0 acts as 1) */
+    uint32_t active_low;   /**< STEPRAMP_INPUT_* bits of the inputs that are active low */
+    int limit_enable;      /**< nonzero: an active limit stops a motion towards it and refuses a START towards it */
+    int limit_hard;        /**< nonzero: a limit stops with a hard stop, else a soft stop at the decel in force */
+    uint32_t latch_source; /**< STEPRAMP_LATCH_NONE, _HOME, _LIMIT_NEG or _LIMIT_POS */
+    int latch_on_active;   /**< nonzero: latch on the source's activation edge (filtered) */
+    int latch_on_release;  /**< nonzero: latch on the source's release edge (filtered) */
+} stepramp_inputs_t;
+
+/** What the position latch took at its source's filtered edge F (Python's driver.Latch). */
+typedef struct {
+    int32_t position;  /**< LATCH_POS: POSITION after edge F */
+    uint64_t time;     /**< LATCH_TIME: TIME at edge F (clock edges since reset) */
+    int64_t pin_time;  /**< LATCH_TIME - N - 2, N = max(filter, 1): the pin changed between TIME's clock edges
+                            pin_time and pin_time + 1 (exact for a pin driven from the core's clock, within one clock
+                            for an asynchronous one) */
+} stepramp_latch_t;
 
 /**
  * Set up the device structure and check that a stepramp core answers at base (reads ID only; writes nothing). The
@@ -357,6 +422,67 @@ int stepramp_wait_done(const stepramp_t *dev, uint32_t max_polls);
  *         is 0), STEPRAMP_ECORE(err_code); with neither, STEPRAMP_ENOIRQ (nothing written)
  */
 int stepramp_isr(const stepramp_t *dev, stepramp_status_t *status);
+
+/**
+ * Configure the machine inputs: INPUT_FILTER, then INPUT_CFG. Only while stopped (the core ignores the writes during a
+ * motion and flags CFG_BUSY). Records both in dev->input_filter and dev->input_cfg.
+ *
+ * @return STEPRAMP_OK; STEPRAMP_EINPUTS (nothing written) for NULL, a filter above STEPRAMP_FILTER_MAX, active_low
+ *         bits outside STEPRAMP_INPUT_ALL, a latch source above STEPRAMP_LATCH_LIMIT_POS, or a latch source with
+ *         neither edge selected
+ */
+int stepramp_configure_inputs(stepramp_t *dev, const stepramp_inputs_t *in);
+
+/**
+ * Select the latch's source and edges (INPUT_CFG with the polarity and limit bits of dev->input_cfg; only while
+ * stopped), then clear STATUS.LATCHED, which arms it: the first selected filtered edge from now on takes POSITION
+ * and TIME. STEPRAMP_LATCH_NONE switches the latch off (the edges are then ignored).
+ *
+ * @return STEPRAMP_OK; STEPRAMP_EINPUTS (nothing written) for NULL, an unknown source, or a source with neither edge
+ */
+int stepramp_arm_latch(stepramp_t *dev, uint32_t source, int on_active, int on_release);
+
+/** Clear STATUS.LATCHED (write 1, byte 3 only): the latch takes the next selected edge (allowed while moving). */
+void stepramp_rearm_latch(const stepramp_t *dev);
+
+/**
+ * Read LATCH_POS and LATCH_TIME (LO then HI) into latch, with pin_time from dev->input_filter, whether STATUS.LATCHED
+ * is set or not.
+ */
+void stepramp_read_latch(const stepramp_t *dev, stepramp_latch_t *latch);
+
+/**
+ * The latch if STATUS.LATCHED is set (one STATUS read, then stepramp_read_latch).
+ *
+ * @return STEPRAMP_OK (latch filled in); STEPRAMP_ENOLATCH (latch untouched) when nothing is latched;
+ *         STEPRAMP_ENULL if dev or latch is NULL
+ */
+int stepramp_latch(const stepramp_t *dev, stepramp_latch_t *latch);
+
+/** TIME, the 64-bit clock count since reset: TIME_LO first (the read copies bits 63:32 into TIME_HI), then TIME_HI. */
+uint64_t stepramp_time(const stepramp_t *dev);
+
+/**
+ * Clear sticky input events (write 1 to LIMIT_NEG_EV, LIMIT_POS_EV, HOME_EV for the STEPRAMP_INPUT_LIMIT_NEG,
+ * _LIMIT_POS, _HOME bits of inputs; byte 2 of STATUS only: DONE, ERROR, ESTOP_FAULT and LATCHED are kept). Nothing
+ * is written for a mask without those bits.
+ */
+void stepramp_clear_events(const stepramp_t *dev, uint32_t inputs);
+
+/**
+ * Clear STATUS.ESTOP_FAULT (write 1) and, with enable, set CTRL.ENABLE again (the fault cleared it). The core keeps
+ * the fault while ESTOP is active.
+ *
+ * @return STEPRAMP_OK; STEPRAMP_EESTOP when the fault is still set (ENABLE then left as it is)
+ */
+int stepramp_clear_estop(const stepramp_t *dev, int enable);
+
+/**
+ * Every interrupt enable of CTRL byte 1 (a byte write: no command, ENABLE kept): irq follows STATUS.DONE (done),
+ * STATUS.ERROR (error), the input events of the STEPRAMP_INPUT_* bits in events (STEPRAMP_INPUT_ESTOP:
+ * ESTOP_FAULT) and STATUS.LATCHED (latch).
+ */
+void stepramp_enable_input_irq(const stepramp_t *dev, int done, int error, uint32_t events, int latch);
 
 /**
  * A STATUS.ERR_CODE value in words: the cause column of the error table of docs/registers.md

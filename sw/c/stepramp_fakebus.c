@@ -14,9 +14,20 @@ stepramp_fakebus_t stepramp_fakebus;
 
 #define WORD(name) (STEPRAMP_REG_##name / 4u)
 #define CTRL_CMD_MASK (STEPRAMP_CTRL_START_MASK | STEPRAMP_CTRL_SOFT_STOP_MASK | STEPRAMP_CTRL_HARD_STOP_MASK)
-#define CTRL_EN_MASK (STEPRAMP_CTRL_IRQ_DONE_EN_MASK | STEPRAMP_CTRL_IRQ_ERROR_EN_MASK)
+#define CTRL_EN_MASK UINT32_C(0x7F00) /* IRQ_DONE_EN .. IRQ_LATCH_EN, byte 1 */
 #define FLAGS_MASK (STEPRAMP_STATUS_DONE_MASK | STEPRAMP_STATUS_ERROR_MASK)
+/* the machine inputs' STATUS bits (levels, events, ESTOP_FAULT, LATCHED): the test sets them, writes keep them */
+#define INPUT_BITS UINT32_C(0x01FF0000)
+/* W1C: DONE, ERROR, the input events and LATCHED; ESTOP_FAULT only while ESTOP reads inactive */
+#define W1C_MASK                                                                                                      \
+    (FLAGS_MASK | STEPRAMP_STATUS_LIMIT_NEG_EV_MASK | STEPRAMP_STATUS_LIMIT_POS_EV_MASK |                              \
+     STEPRAMP_STATUS_HOME_EV_MASK | STEPRAMP_STATUS_LATCHED_MASK)
+#define INPUT_CFG_BITS UINT32_C(0x0F3F)
 #define STATE_STOP 0u /* STATUS.STATE of an idle core (docs/registers.md) */
+
+/* the core side's hook (stepramp_fakebus_set_hook) and TIME bits 63:32 (a TIME_LO read copies them to TIME_HI) */
+static stepramp_fakebus_hook_fn hook;
+static uint32_t time_hi_live;
 
 void stepramp_fakebus_clear_log(void)
 {
@@ -43,13 +54,27 @@ void stepramp_fakebus_reset(uintptr_t base, uint32_t id)
     f->regs[WORD(PRESCALE)] = 1u; /* reset values */
     f->regs[WORD(STEP_WIDTH)] = 1u;
     f->regs[WORD(STEP_SPACE)] = 1u;
+    f->regs[WORD(INPUT_CFG)] = STEPRAMP_INPUT_CFG_LIMIT_EN_MASK;
+    hook = NULL;
+    time_hi_live = 0u;
+}
+
+void stepramp_fakebus_set_hook(stepramp_fakebus_hook_fn fn)
+{
+    hook = fn;
+}
+
+void stepramp_fakebus_set_time(uint64_t time)
+{
+    stepramp_fakebus.regs[WORD(TIME_LO)] = (uint32_t)(time & UINT32_C(0xFFFFFFFF));
+    time_hi_live = (uint32_t)(time >> 32);
 }
 
 void stepramp_fakebus_set_status(uint32_t state, uint32_t busy, uint32_t dir, uint32_t err_code, uint32_t flags)
 {
     uint32_t *st = &stepramp_fakebus.regs[WORD(STATUS)];
 
-    *st = (*st & FLAGS_MASK) | (flags & FLAGS_MASK);
+    *st = (*st & (FLAGS_MASK | INPUT_BITS)) | (flags & FLAGS_MASK);
     *st |= (state << STEPRAMP_STATUS_STATE_SHIFT) & STEPRAMP_STATUS_STATE_MASK;
     *st |= busy ? STEPRAMP_STATUS_BUSY_MASK : 0u;
     *st |= (dir << STEPRAMP_STATUS_DIR_SHIFT) & STEPRAMP_STATUS_DIR_MASK;
@@ -74,7 +99,7 @@ static long window_offset(uintptr_t addr)
 
 static int mapped(uint32_t word)
 {
-    return word <= WORD(CHANGE_AT);
+    return word <= WORD(TIME_HI);
 }
 
 static uint32_t merge(uint32_t old, uint32_t data, uint32_t be)
@@ -116,7 +141,10 @@ static void write_word(uint32_t off, uint32_t data, uint32_t be)
             *reg = (*reg & ~STEPRAMP_CTRL_ENABLE_MASK) | (bits & STEPRAMP_CTRL_ENABLE_MASK);
         }
     } else if (word == WORD(STATUS)) {
-        *reg &= ~(bits & FLAGS_MASK);
+        *reg &= ~(bits & W1C_MASK);
+        if ((*reg & STEPRAMP_STATUS_ESTOP_MASK) == 0u) { /* the fault is kept while ESTOP is active */
+            *reg &= ~(bits & STEPRAMP_STATUS_ESTOP_FAULT_MASK);
+        }
     } else if (word == WORD(POSITION)) {
         if (status & STEPRAMP_STATUS_BUSY_MASK) { /* ignored, flagged */
             stepramp_fakebus_set_status((status & STEPRAMP_STATUS_STATE_MASK) >> STEPRAMP_STATUS_STATE_SHIFT, 1u,
@@ -125,17 +153,27 @@ static void write_word(uint32_t off, uint32_t data, uint32_t be)
         } else {
             *reg = merge(*reg, data, be);
         }
-    } else if ((word >= WORD(STEPS) && word <= WORD(STOP_RATIO)) || word >= WORD(SEGMENT)) {
+    } else if ((word >= WORD(STEPS) && word <= WORD(STOP_RATIO)) ||
+               (word >= WORD(SEGMENT) && word <= WORD(CHANGE_AT))) {
         *reg = merge(*reg, data, be); /* the motion and the segment registers: at any time */
-    } else if (word >= WORD(DRIVE) && word <= WORD(STEP_SPACE)) {
-        if (status & STEPRAMP_STATUS_BUSY_MASK) { /* stepping configuration: only while stopped */
+    } else if ((word >= WORD(DRIVE) && word <= WORD(STEP_SPACE)) || word == WORD(INPUT_FILTER) ||
+               word == WORD(INPUT_CFG)) {
+        if (status & STEPRAMP_STATUS_BUSY_MASK) { /* stepping and input configuration: only while stopped */
             stepramp_fakebus_set_status((status & STEPRAMP_STATUS_STATE_MASK) >> STEPRAMP_STATUS_STATE_SHIFT, 1u,
                                         (status & STEPRAMP_STATUS_DIR_MASK) != 0u, STEPRAMP_ERR_CFG_BUSY,
                                         STEPRAMP_STATUS_ERROR_MASK);
         } else {
             *reg = merge(*reg, data, be);
+            if (word == WORD(INPUT_FILTER)) {
+                *reg &= UINT32_C(0xFFFFF); /* 20 bits */
+            } else if (word == WORD(INPUT_CFG)) {
+                *reg &= INPUT_CFG_BITS;
+            }
         }
-    } /* ID, CUR_DELAY, STEP_COUNT: read only */
+    } /* ID, CUR_DELAY, STEP_COUNT, LATCH_POS .. TIME_HI: read only */
+    if (hook != NULL) {
+        hook(off, 1);
+    }
 }
 
 uint32_t stepramp_hostbus_read32(uintptr_t addr)
@@ -150,6 +188,12 @@ uint32_t stepramp_hostbus_read32(uintptr_t addr)
     if ((off & 3) != 0 || !mapped((uint32_t)off / 4u)) {
         f->bus_errors++;
         return 0u;
+    }
+    if (hook != NULL) {
+        hook((uint32_t)off, 0);
+    }
+    if ((uint32_t)off == STEPRAMP_REG_TIME_LO) {
+        f->regs[WORD(TIME_HI)] = time_hi_live;
     }
     if ((uint32_t)off == STEPRAMP_REG_STATUS) {
         f->status_reads++;

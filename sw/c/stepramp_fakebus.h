@@ -3,11 +3,14 @@
  * A fake stepramp register bank for host tests (not for the target): a uint32_t array behind the driver's
  * STEPRAMP_READ32 / STEPRAMP_WRITE32 / STEPRAMP_WRITE8, with the core's register semantics -- byte-lane
  * writes (little-endian lanes: byte address offset b is bits 8b+7:8b), ID and the status fields read only,
- * CTRL command bits act on write and read 0, STATUS.DONE / ERROR cleared by writing 1, POSITION writes
- * ignored (ERROR, POS_BUSY) while busy, bus errors counted for addresses outside the 256-byte window (or past
- * CHANGE_AT, the last register) -- and
+ * CTRL command bits act on write and read 0, STATUS.DONE / ERROR / the input events / LATCHED cleared by writing 1
+ * (ESTOP_FAULT only while STATUS.ESTOP reads 0), POSITION writes ignored (ERROR, POS_BUSY) while busy, the stepping
+ * and input configuration (DRIVE .. STEP_SPACE, INPUT_FILTER, INPUT_CFG) too (CFG_BUSY), LATCH_POS .. TIME_HI read
+ * only (a TIME_LO read copies TIME bits 63:32 into TIME_HI), bus errors counted for addresses outside the 256-byte
+ * window (or past TIME_HI, the last register) -- and
  * a log of every write and a count of the driver's STEPRAMP_IDLE() calls. The "core" side is driven by the test:
- * stepramp_fakebus_set_status() and stepramp_fakebus_finish_after().
+ * stepramp_fakebus_set_status(), stepramp_fakebus_finish_after(), stepramp_fakebus_set_time(), the registers
+ * themselves, and a hook called at every access (stepramp_fakebus_set_hook: a test's model of the core).
  *
  * The bank implements the host build's register access (stepramp_hostbus.h): the driver reaches it through that
  * header alone, and the bank does not know the driver. The ctypes entry points that run the driver on the bank
@@ -67,6 +70,17 @@ void stepramp_fakebus_set_status(uint32_t state, uint32_t busy, uint32_t dir, ui
  * ERROR with ERR_CODE err_code when err_code != 0 (with 0, ERR_CODE and ERROR stay as they are). n = 0 disarms.
  */
 void stepramp_fakebus_finish_after(uint32_t n, uint32_t err_code);
+
+/**
+ * Core side: a function called at every access of the driver with the register's byte offset and write = 1 for a
+ * write (called after the write took effect) or 0 for a read (called before the value is read), so that a test can
+ * model the core (move, raise flags) between two accesses. NULL removes it; stepramp_fakebus_reset() does too.
+ */
+typedef void (*stepramp_fakebus_hook_fn)(uint32_t offset, int write);
+void stepramp_fakebus_set_hook(stepramp_fakebus_hook_fn fn);
+
+/** Core side: TIME (TIME_LO now; bits 63:32 reach TIME_HI at the next TIME_LO read, as in the core). */
+void stepramp_fakebus_set_time(uint64_t time);
 
 /* Bus side: the bank defines the functions of stepramp_hostbus.h. */
 

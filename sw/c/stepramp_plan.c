@@ -356,7 +356,7 @@ stepramp_err_t stepramp_plan_move(stepramp_plan_t *plan, int64_t steps, double a
 
 const char *stepramp_strerror(stepramp_err_t err)
 {
-    switch ((int)err) { /* an int: the results of stepramp_plan_change beyond the enum are named here too */
+    switch ((int)err) { /* an int: the results of stepramp_plan_change and _coordinated beyond the enum too */
     case STEPRAMP_OK:
         return "success";
     case STEPRAMP_EACCEL:
@@ -401,6 +401,14 @@ const char *stepramp_strerror(stepramp_err_t err)
         return "a step count of the segment is more than 2^31 - 1 (does not fit 31 bits): the stop distance from the "
                "speed at the change, the stop from the jog speed or the accel ramp's index at the speed at the change; "
                "or a Segment.<field> does not fit its register";
+    case STEPRAMP_ECOORD_AXES:
+        return "no axes, or more than 8 axes: at most 8 axes are coordinated";
+    case STEPRAMP_ECOORD_ZERO:
+        return "every axis has 0 steps: there is no move to coordinate";
+    case STEPRAMP_ECOORD_END:
+        return "an axis's last interval, set to end with the path, would be shorter than the move's shortest interval";
+    case STEPRAMP_ECOORD_LONG:
+        return "the path lasts 2^48 ticks or more: too long to put the axes' ends on one tick; use a larger prescale";
     default:
         return "unknown error";
     }

@@ -105,17 +105,23 @@ typedef enum {
 } stepramp_err_t;
 
 /**
- * The results of stepramp_plan_change (stepramp_change.h) beyond stepramp_err_t, which stays plan.py's errors one to
- * one: the ValueErrors that change.py adds. Values 32 .. 63, between stepramp_err_t and the driver's results
- * (stepramp.h); stepramp_strerror names them too.
+ * The results of stepramp_plan_change (stepramp_change.h) and stepramp_plan_coordinated (stepramp_coord.h) beyond
+ * stepramp_err_t, which stays plan.py's errors one to one: the ValueErrors that change.py and coord.py add. Values
+ * 32 .. 63, between stepramp_err_t and the driver's results (stepramp.h); stepramp_strerror names them too.
  */
 enum {
     STEPRAMP_ECHANGE_SPEED = 32, /**< "the speed at the change must be finite and >= 0" */
     STEPRAMP_EREMAINING = 33,    /**< "remaining must be in 0 .. 2^31 - 1 steps" */
-    STEPRAMP_ESEGMENT = 34       /**< a step count of the segment does not fit 31 bits: "the stop distance from the
+    STEPRAMP_ESEGMENT = 34,      /**< a step count of the segment does not fit 31 bits: "the stop distance from the
                                       speed at the change is ... more than 2^31 - 1", "the stop from the jog speed
                                       ...", "the accel ramp's index at the speed at the change ... does not fit 31
                                       bits", or "Segment.<field> = ... does not fit" (a negative register value) */
+    STEPRAMP_ECOORD_AXES = 35,   /**< stepramp_plan_coordinated (stepramp_coord.h): "no axes" or "... axes: at most 8
+                                      axes are coordinated" */
+    STEPRAMP_ECOORD_ZERO = 36,   /**< stepramp_plan_coordinated: "every axis has 0 steps" */
+    STEPRAMP_ECOORD_END = 37,    /**< stepramp_plan_coordinated: an axis's last interval, set to end with the path,
+                                      "would be ... shorter than the move's shortest interval" (not expected) */
+    STEPRAMP_ECOORD_LONG = 38    /**< stepramp_plan_coordinated: "the path lasts ... ticks, 2^48 or more" */
 };
 
 /**
@@ -146,7 +152,8 @@ stepramp_err_t stepramp_plan_move_info(stepramp_plan_t *plan, stepramp_info_t *i
 /**
  * The reason for an error in words, like plan.py's (and change.py's) ValueError messages without the numbers.
  *
- * @param err a stepramp_err_t, or a result of stepramp_plan_change (STEPRAMP_ECHANGE_SPEED .. STEPRAMP_ESEGMENT, cast)
+ * @param err a stepramp_err_t, or a result of stepramp_plan_change or stepramp_plan_coordinated (STEPRAMP_ECHANGE_SPEED
+ *            .. STEPRAMP_ECOORD_LONG, cast)
  * @return a static string; "success" for STEPRAMP_OK, "unknown error" for a value that is none of these
  */
 const char *stepramp_strerror(stepramp_err_t err);

@@ -61,7 +61,14 @@ enum {
     O_RUN_STOP = 0x80,
     O_HEAD_PROD_LO = 0x84,
     O_HEAD_PROD_HI = 0x88,
-    O_CHANGE_AT = 0x8C
+    O_CHANGE_AT = 0x8C,
+    O_INPUT_FILTER = 0x90,
+    O_INPUT_CFG = 0x94,
+    O_LATCH_POS = 0x98,
+    O_LATCH_TIME_LO = 0x9C,
+    O_LATCH_TIME_HI = 0xA0,
+    O_TIME_LO = 0xA4,
+    O_TIME_HI = 0xA8
 };
 
 #define N_MOTION 19 /* STEPS .. STOP_RATIO: (0x54 - 0x0C) / 4 + 1 */
@@ -1074,6 +1081,163 @@ static void test_position(void)
     CHECK_EQ(stepramp_wait_done(&dev, 10u), STEPRAMP_ECORE(STEPRAMP_ERR_POS_BUSY));
 }
 
+/* INPUT_FILTER then INPUT_CFG, the words of docs/registers.md (POL_* bits 3:0, LIMIT_EN 4, LIMIT_HARD 5,
+ * LATCH_SRC 9:8, LATCH_ON_ACTIVE 10, LATCH_ON_RELEASE 11); bad configurations write nothing */
+static void test_configure_inputs(void)
+{
+    stepramp_t dev = fresh(1e6, 200.0, 1u);
+    stepramp_inputs_t in = {150u, STEPRAMP_INPUT_HOME | STEPRAMP_INPUT_ESTOP, 1, 1, STEPRAMP_LATCH_LIMIT_POS, 0, 1};
+    stepramp_inputs_t bad;
+
+    CHECK_EQ(dev.input_filter, 0u);
+    CHECK_EQ(dev.input_cfg, 0x10u); /* the reset value: LIMIT_EN */
+    CHECK_EQ(reg(O_INPUT_CFG), 0x10u);
+    CHECK_EQ(stepramp_configure_inputs(&dev, &in), STEPRAMP_OK);
+    CHECK_EQ(bus->writes, 2u);
+    CHECK(bus->log[0].offset == O_INPUT_FILTER && bus->log[0].value == 150u && bus->log[0].be == 0xFu);
+    CHECK(bus->log[1].offset == O_INPUT_CFG && bus->log[1].value == (0xCu | 0x10u | 0x20u | 3u << 8 | 0x800u));
+    CHECK(dev.input_filter == 150u && dev.input_cfg == bus->log[1].value);
+    /* no latch source: the edge bits are not written */
+    in.latch_source = STEPRAMP_LATCH_NONE;
+    in.latch_on_active = 1;
+    in.limit_enable = 0;
+    in.limit_hard = 0;
+    in.active_low = 0u;
+    in.filter = STEPRAMP_FILTER_MAX;
+    CHECK_EQ(stepramp_configure_inputs(&dev, &in), STEPRAMP_OK);
+    CHECK(reg(O_INPUT_CFG) == 0u && reg(O_INPUT_FILTER) == 0xFFFFFu);
+    stepramp_fakebus_clear_log();
+    bad = in;
+    bad.filter = STEPRAMP_FILTER_MAX + 1u;
+    CHECK_EQ(stepramp_configure_inputs(&dev, &bad), STEPRAMP_EINPUTS);
+    bad = in;
+    bad.active_low = 0x10u;
+    CHECK_EQ(stepramp_configure_inputs(&dev, &bad), STEPRAMP_EINPUTS);
+    bad = in;
+    bad.latch_source = 4u;
+    CHECK_EQ(stepramp_configure_inputs(&dev, &bad), STEPRAMP_EINPUTS);
+    bad = in;
+    bad.latch_source = STEPRAMP_LATCH_HOME;
+    bad.latch_on_active = 0;
+    bad.latch_on_release = 0;
+    CHECK_EQ(stepramp_configure_inputs(&dev, &bad), STEPRAMP_EINPUTS);
+    CHECK_EQ(stepramp_configure_inputs(&dev, NULL), STEPRAMP_EINPUTS);
+    CHECK_EQ(stepramp_configure_inputs(NULL, &in), STEPRAMP_EINPUTS);
+    CHECK_EQ(bus->writes, 0u);
+    CHECK_EQ(dev.input_filter, STEPRAMP_FILTER_MAX);
+    CHECK(strstr(stepramp_strresult(STEPRAMP_EINPUTS), "filter") != NULL);
+    /* during a motion the core ignores the configuration (CFG_BUSY) */
+    stepramp_fakebus_set_status(STEPRAMP_STATE_RUN, 1u, 0u, 0u, 0u);
+    in.filter = 7u;
+    CHECK_EQ(stepramp_configure_inputs(&dev, &in), STEPRAMP_OK);
+    CHECK_EQ(reg(O_INPUT_FILTER), 0xFFFFFu);
+    CHECK_EQ((reg(O_STATUS) & STEPRAMP_STATUS_ERR_CODE_MASK) >> 8, STEPRAMP_ERR_CFG_BUSY);
+}
+
+/* arm_latch keeps the polarity and limit bits, then clears LATCHED with a byte write; latch, read_latch, time */
+static void test_latch_and_time(void)
+{
+    stepramp_t dev = fresh(1e6, 200.0, 1u);
+    stepramp_inputs_t in = {50u, STEPRAMP_INPUT_LIMIT_NEG, 1, 0, STEPRAMP_LATCH_NONE, 0, 0};
+    stepramp_latch_t latch = {7, 7u, 7};
+
+    CHECK_EQ(stepramp_configure_inputs(&dev, &in), STEPRAMP_OK);
+    stepramp_fakebus_clear_log();
+    bus->regs[O_STATUS / 4u] = 0x01000000u | 0x10u; /* LATCHED, DONE */
+    CHECK_EQ(stepramp_arm_latch(&dev, STEPRAMP_LATCH_HOME, 1, 1), STEPRAMP_OK);
+    CHECK_EQ(bus->writes, 2u);
+    CHECK(bus->log[0].offset == O_INPUT_CFG && bus->log[0].value == (0x1u | 0x10u | 1u << 8 | 0x400u | 0x800u));
+    CHECK(bus->log[1].offset == O_STATUS && bus->log[1].be == 0x8u && bus->log[1].value == 0x01000000u);
+    CHECK_EQ(reg(O_STATUS), 0x10u); /* LATCHED cleared, DONE kept */
+    CHECK_EQ(dev.input_cfg, reg(O_INPUT_CFG));
+    stepramp_fakebus_clear_log();
+    CHECK_EQ(stepramp_arm_latch(&dev, STEPRAMP_LATCH_LIMIT_NEG, 0, 1), STEPRAMP_OK);
+    CHECK_EQ(reg(O_INPUT_CFG), 0x1u | 0x10u | 2u << 8 | 0x800u);
+    CHECK_EQ(stepramp_arm_latch(&dev, STEPRAMP_LATCH_NONE, 1, 1), STEPRAMP_OK); /* off: no edges */
+    CHECK_EQ(reg(O_INPUT_CFG), 0x1u | 0x10u);
+    stepramp_fakebus_clear_log();
+    CHECK_EQ(stepramp_arm_latch(&dev, STEPRAMP_LATCH_HOME, 0, 0), STEPRAMP_EINPUTS);
+    CHECK_EQ(stepramp_arm_latch(&dev, 5u, 1, 0), STEPRAMP_EINPUTS);
+    CHECK_EQ(stepramp_arm_latch(NULL, STEPRAMP_LATCH_HOME, 1, 0), STEPRAMP_EINPUTS);
+    CHECK_EQ(bus->writes, 0u);
+    /* nothing latched: one STATUS read, latch untouched */
+    stepramp_fakebus_clear_log();
+    CHECK_EQ(stepramp_latch(&dev, &latch), STEPRAMP_ENOLATCH);
+    CHECK(bus->reads == 1u && latch.position == 7 && latch.time == 7u);
+    CHECK_EQ(stepramp_latch(&dev, NULL), STEPRAMP_ENULL);
+    CHECK(strstr(stepramp_strresult(STEPRAMP_ENOLATCH), "LATCHED") != NULL);
+    /* latched: a negative position, a 64-bit time, pin_time = time - max(filter, 1) - 2 */
+    bus->regs[O_STATUS / 4u] = 0x01000000u;
+    bus->regs[O_LATCH_POS / 4u] = 0xFFFFFF85u; /* -123 */
+    bus->regs[O_LATCH_TIME_LO / 4u] = 0x00000010u;
+    bus->regs[O_LATCH_TIME_HI / 4u] = 0x00000002u;
+    CHECK_EQ(stepramp_latch(&dev, &latch), STEPRAMP_OK);
+    CHECK(latch.position == -123 && latch.time == UINT64_C(0x200000010));
+    CHECK(latch.pin_time == (int64_t)UINT64_C(0x200000010) - 50 - 2);
+    dev.input_filter = 0u; /* 0 acts as 1 */
+    stepramp_read_latch(&dev, &latch);
+    CHECK(latch.pin_time == (int64_t)UINT64_C(0x200000010) - 1 - 2);
+    /* TIME: LO first, whose read brings bits 63:32 into TIME_HI (a stale TIME_HI shows a wrong order) */
+    stepramp_fakebus_set_time(UINT64_C(0x123456789ABC));
+    bus->regs[O_TIME_HI / 4u] = 0xDEADu;
+    stepramp_fakebus_clear_log();
+    CHECK(stepramp_time(&dev) == UINT64_C(0x123456789ABC));
+    CHECK(bus->reads == 2u && bus->writes == 0u);
+}
+
+/* input events (byte 2 of STATUS), the E-stop fault (kept while ESTOP is active), the interrupt enables, decoding */
+static void test_events_and_estop(void)
+{
+    stepramp_t dev = fresh(1e6, 200.0, 1u);
+    stepramp_status_t st;
+
+    bus->regs[O_STATUS / 4u] = 0x00F00030u; /* the four events, DONE, ERROR */
+    stepramp_clear_events(&dev, STEPRAMP_INPUT_HOME | STEPRAMP_INPUT_ESTOP);
+    CHECK_EQ(bus->writes, 1u);
+    CHECK(bus->log[0].offset == O_STATUS && bus->log[0].be == 0x4u && bus->log[0].value == 0x00400000u);
+    CHECK_EQ(reg(O_STATUS), 0x00B00030u); /* HOME_EV only: ESTOP_FAULT, DONE, ERROR kept */
+    stepramp_clear_events(&dev, STEPRAMP_INPUT_LIMIT_NEG | STEPRAMP_INPUT_LIMIT_POS);
+    CHECK_EQ(reg(O_STATUS), 0x00800030u);
+    stepramp_fakebus_clear_log();
+    stepramp_clear_events(&dev, STEPRAMP_INPUT_ESTOP); /* not an event: nothing written */
+    CHECK_EQ(bus->writes, 0u);
+    /* ESTOP active: the fault stays, ENABLE is not set */
+    bus->regs[O_STATUS / 4u] = 0x00880000u;
+    CHECK_EQ(stepramp_clear_estop(&dev, 1), STEPRAMP_EESTOP);
+    CHECK(bus->writes == 1u && bus->log[0].be == 0x4u && bus->log[0].value == 0x00800000u);
+    CHECK_EQ(reg(O_CTRL), 0u);
+    CHECK(strstr(stepramp_strresult(STEPRAMP_EESTOP), "ESTOP") != NULL);
+    /* inactive: cleared, ENABLE set again (byte 2 of CTRL) */
+    bus->regs[O_STATUS / 4u] = 0x00800000u;
+    stepramp_fakebus_clear_log();
+    CHECK_EQ(stepramp_clear_estop(&dev, 1), STEPRAMP_OK);
+    CHECK(reg(O_STATUS) == 0u && reg(O_CTRL) == 0x10000u);
+    CHECK(bus->writes == 2u && bus->log[1].offset == O_CTRL && bus->log[1].be == 0x4u);
+    bus->regs[O_STATUS / 4u] = 0x00800000u;
+    stepramp_fakebus_clear_log();
+    CHECK_EQ(stepramp_clear_estop(&dev, 0), STEPRAMP_OK);
+    CHECK_EQ(bus->writes, 1u);
+    /* every interrupt enable in byte 1 */
+    stepramp_enable_input_irq(&dev, 1, 0, STEPRAMP_INPUT_HOME | STEPRAMP_INPUT_ESTOP, 1);
+    CHECK_EQ(reg(O_CTRL), 0x10000u | 0x100u | 0x1000u | 0x2000u | 0x4000u);
+    CHECK_EQ(bus->log[bus->writes - 1u].be, 0x2u);
+    stepramp_enable_input_irq(&dev, 0, 1, STEPRAMP_INPUT_LIMIT_NEG | STEPRAMP_INPUT_LIMIT_POS, 0);
+    CHECK_EQ(reg(O_CTRL), 0x10000u | 0x200u | 0x400u | 0x800u);
+    stepramp_enable_irq(&dev, 1, 1); /* the old call: the input enables off */
+    CHECK_EQ(reg(O_CTRL), 0x10300u);
+    /* decoding: levels bits 19:16, events 23:20, LATCHED 24, DIR_FAULT 6 */
+    bus->regs[O_STATUS / 4u] = 0x015A0040u;
+    (void)stepramp_status(&dev, &st);
+    CHECK(st.levels == 0xAu && st.events == 0x5u && st.latched && st.dir_fault && !st.done && !st.busy);
+    bus->regs[O_STATUS / 4u] = 0x00A50000u;
+    (void)stepramp_status(&dev, &st);
+    CHECK(st.levels == 0x5u && st.events == 0xAu && !st.latched && !st.dir_fault);
+    /* clear_flags writes DONE and ERROR only: the events and LATCHED stay */
+    bus->regs[O_STATUS / 4u] = 0x01F00030u;
+    stepramp_clear_flags(&dev);
+    CHECK_EQ(reg(O_STATUS), 0x01F00000u);
+}
+
 /* an invalid move returns the plan's error and writes nothing */
 static void test_invalid_move_writes_nothing(void)
 {
@@ -1126,7 +1290,7 @@ static void test_error_texts(void)
                  "POSITION written while a move runs (the write was ignored)") == 0);
     CHECK(strcmp(stepramp_corename(STEPRAMP_ERR_LATE), "LATE") == 0);
     CHECK(strcmp(stepramp_corename(STEPRAMP_ERR_ZERO_TICKS), "ZERO_TICKS") == 0);
-    for (a = 0; a <= STEPRAMP_ERR_STAGED; a++) {
+    for (a = 0; a <= STEPRAMP_ERR_ESTOP; a++) {
         CHECK(strcmp(stepramp_strcoreerror(a), "unknown error code") != 0);
         CHECK(strcmp(stepramp_corename(a), "UNKNOWN") != 0);
         CHECK(strstr(stepramp_strresult(STEPRAMP_ECORE(a)), stepramp_strcoreerror(a)) != NULL);
@@ -1135,7 +1299,9 @@ static void test_error_texts(void)
             CHECK(strcmp(stepramp_strcoreerror(a), stepramp_strcoreerror(b)) != 0);
         }
     }
-    CHECK(strcmp(stepramp_strcoreerror(STEPRAMP_ERR_STAGED + 1u), "unknown error code") == 0);
+    CHECK(strcmp(stepramp_strcoreerror(STEPRAMP_ERR_ESTOP + 1u), "unknown error code") == 0);
+    CHECK(strcmp(stepramp_corename(STEPRAMP_ERR_LIMIT), "LIMIT") == 0);
+    CHECK(strcmp(stepramp_corename(STEPRAMP_ERR_ESTOP), "ESTOP") == 0);
     CHECK(strcmp(stepramp_corename(STEPRAMP_ERR_CHANGE), "CHANGE") == 0);
     CHECK(strcmp(stepramp_corename(STEPRAMP_ERR_STAGED), "STAGED") == 0);
     CHECK(strstr(stepramp_strresult(STEPRAMP_ECORE(STEPRAMP_ERR_STAGED)), "STATUS.PENDING") != NULL);
@@ -1155,14 +1321,14 @@ static void test_error_texts(void)
     /* the driver's results do not collide with the plan's errors */
     CHECK((int)STEPRAMP_ENULL < STEPRAMP_EID && STEPRAMP_EID != STEPRAMP_ETIMEOUT);
     CHECK(STEPRAMP_ETIMEOUT < STEPRAMP_ECORE(0));
-    for (a = (uint32_t)STEPRAMP_EID; a <= (uint32_t)STEPRAMP_EPENDING; a++) {
+    for (a = (uint32_t)STEPRAMP_EID; a <= (uint32_t)STEPRAMP_ESWITCH; a++) {
         CHECK(strcmp(stepramp_strresult((int)a), "unknown error") != 0);
         for (b = (uint32_t)STEPRAMP_EID; b < a; b++) {
             CHECK(strcmp(stepramp_strresult((int)a), stepramp_strresult((int)b)) != 0);
         }
     }
-    CHECK(strcmp(stepramp_strresult(STEPRAMP_EPENDING + 1), "unknown error") == 0);
-    CHECK(STEPRAMP_EPENDING < STEPRAMP_ECORE_BASE);
+    CHECK(strcmp(stepramp_strresult(STEPRAMP_ESWITCH + 1), "unknown error") == 0);
+    CHECK(STEPRAMP_ESWITCH < STEPRAMP_ECORE_BASE);
 }
 
 int main(void)
@@ -1184,6 +1350,9 @@ int main(void)
     test_wait_done();
     test_isr();
     test_position();
+    test_configure_inputs();
+    test_latch_and_time();
+    test_events_and_estop();
     test_invalid_move_writes_nothing();
     test_error_texts();
     return test_report("test_stepramp");

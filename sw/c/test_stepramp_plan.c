@@ -1,8 +1,9 @@
 /* SPDX-License-Identifier: MIT */
 /*
- * Host unit tests of stepramp_plan and stepramp_change: expected values from the physics of the move (not from the
- * code under test), every error code, the empty moves. The bit-for-bit comparison with the Python driver is done by
- * sw/tests/test_c_plan.py and sw/tests/test_c_change.py. Exit status 0 when every check passes.
+ * Host unit tests of stepramp_plan, stepramp_change and stepramp_coord: expected values from the physics of the move
+ * (not from the code under test), every error code, the empty moves. The bit-for-bit comparison with the Python driver
+ * is done by sw/tests/test_c_plan.py, sw/tests/test_c_change.py and sw/tests/test_c_coord.py. Exit status 0 when every
+ * check passes.
  */
 #include "stepramp_plan.h"
 
@@ -12,6 +13,7 @@
 #include <string.h>
 
 #include "stepramp_change.h"
+#include "stepramp_coord.h"
 #include "test_check.h"
 
 #define PI 3.141592653589793
@@ -544,11 +546,11 @@ static void test_change_errors(void)
     CHECK(change(NULL, 0.0, 100) == STEPRAMP_ENULL);
     CHECK(change(&ch, near_far, 10) == STEPRAMP_OK);
     CHECK(ch.segment.length == 2147483647u && ch.has_back && ch.back.steps == 2147483637u && ch.back.direction == 1);
-    for (e = STEPRAMP_ECHANGE_SPEED; e <= STEPRAMP_ESEGMENT; e++) {
+    for (e = STEPRAMP_ECHANGE_SPEED; e <= STEPRAMP_ECOORD_LONG; e++) { /* the change's results, then coord's */
         const char *s = stepramp_strerror((stepramp_err_t)e);
         CHECK(strcmp(s, "unknown error") != 0 && strcmp(s, stepramp_strerror((stepramp_err_t)(e - 1))) != 0);
     }
-    CHECK(strcmp(stepramp_strerror((stepramp_err_t)(STEPRAMP_ESEGMENT + 1)), "unknown error") == 0);
+    CHECK(strcmp(stepramp_strerror((stepramp_err_t)(STEPRAMP_ECOORD_LONG + 1)), "unknown error") == 0);
 }
 
 /* Segment.head_prod and Segment.registers */
@@ -615,6 +617,182 @@ static void test_speed_at_pulse(void)
     CHECK(stepramp_speed_at_pulse(NULL, 50) == 0.0);
 }
 
+/* The engine's tick of a plan's last pulse, by the spec's rules (docs/algorithm.md, "Which value each interval gets",
+ * the recurrences and the accumulator) run interval by interval: an independent model for short moves. */
+static uint64_t engine_last_tick(const stepramp_plan_t *p)
+{
+    int64_t length = (int64_t)p->steps - 1;
+    int64_t sa = p->sa;
+    int64_t sd = p->sd;
+    int64_t i;
+    int64_t an = 0;
+    int64_t dm = -1;
+    uint64_t a = p->accel_seed;
+    uint64_t ar = 0;
+    uint64_t d = p->decel_seed;
+    uint64_t dr = 0;
+    uint64_t t = 0;
+    uint64_t acc = 0;
+
+    for (i = 1; i <= length; i++) {
+        uint64_t value;
+        uint64_t s;
+        int cruise = 0;
+        if (i == 1) {
+            value = p->c_first;
+        } else if (i == length) {
+            value = p->c_last;
+        } else if (i == sa) {
+            value = p->c_sa;
+        } else if (i == sd) {
+            value = p->c_sd;
+        } else if (i < sa) {
+            while (an < i - 1) { /* A_n from A_(n-1): den 4n + 1 */
+                uint64_t num = 2u * a + ar;
+                uint64_t den = 4u * (uint64_t)(++an) + 1u;
+                a -= num / den;
+                ar = num % den;
+            }
+            value = a;
+        } else if (i > sd) {
+            if (dm < 0) {
+                dm = length - sd - 1; /* D_m0 = decel_seed, r = 0 */
+            }
+            while (dm > length - i) { /* D_(m-1) from D_m: den 4m - 1 */
+                uint64_t num = 2u * d + dr;
+                uint64_t den = 4u * (uint64_t)dm - 1u;
+                d += num / den;
+                dr = num % den;
+                dm--;
+            }
+            value = d;
+        } else {
+            value = p->cruise;
+            cruise = 1;
+        }
+        s = acc + (cruise ? value : value << 16);
+        t += s >> 32;
+        acc = s & 0xFFFFFFFFu;
+    }
+    return t;
+}
+
+/* the ideal end of a move (ticks), from the physics: accel to the peak, cruise, decel */
+static double ideal_end_ticks(int64_t steps, double accel, double decel, double speed, double spr, double fclk,
+                              uint32_t prescale)
+{
+    phys_t p = physics(steps, accel, decel, speed, spr, fclk, prescale);
+    double n_a = p.v * p.v / (2.0 * p.a);
+    double n_d = p.v * p.v / (2.0 * p.d);
+    double peak = p.v;
+    double cruise = 0.0;
+    if (n_a + n_d <= p.length) {
+        cruise = (p.length - n_a - n_d) / p.v;
+    } else {
+        peak = sqrt(2.0 * p.a * p.length * p.d / (p.a + p.d));
+    }
+    return (peak / p.a + cruise + peak / p.d) * p.f_tick;
+}
+
+/* a coordinated move: every axis of 2 steps or more ends on the tick nearest the ideal end, by the engine's rules */
+static void check_coordinated(const int64_t *steps, uint32_t count, double accel, double decel, double speed,
+                              double spr, double fclk, uint32_t prescale)
+{
+    stepramp_plan_t plans[STEPRAMP_COORD_MAX_AXES];
+    stepramp_plan_t plain[STEPRAMP_COORD_MAX_AXES];
+    stepramp_coord_info_t info;
+    uint32_t i;
+    int64_t lead = 0;
+    double t_end;
+
+    for (i = 0; i < count; i++) {
+        int64_t n = steps[i] < 0 ? -steps[i] : steps[i];
+        lead = n > lead ? n : lead;
+    }
+    t_end = ideal_end_ticks(lead, accel, decel, speed, spr, fclk, prescale);
+    CHECK(stepramp_plan_coordinated_info(plans, &info, steps, count, accel, decel, speed, spr, fclk, prescale) ==
+          STEPRAMP_OK);
+    CHECK(stepramp_plan_coordinated(plain, steps, count, accel, decel, speed, spr, fclk, prescale) == STEPRAMP_OK);
+    CHECK(memcmp(plans, plain, count * sizeof plans[0]) == 0);
+    CHECK(info.failed_axis == STEPRAMP_COORD_NO_AXIS && info.count == count);
+    CHECK(rel_near_d(info.t_end, t_end, 1e-12));
+    CHECK(info.end_tick == floor(t_end + 0.5));
+    for (i = 0; i < count; i++) {
+        int64_t n = steps[i] < 0 ? -steps[i] : steps[i];
+        double r = n >= 2 ? (double)(n - 1) / (double)(lead - 1) : 0.0;
+        stepramp_plan_t base;
+        CHECK(info.ratio[i] == r);
+        if (n < 2) { /* 0 and 1 step: plan_move's plan with the path's values */
+            CHECK(stepramp_plan_move(&base, steps[i], accel, decel, speed, spr, fclk, prescale) == STEPRAMP_OK);
+            CHECK(memcmp(&plans[i], &base, sizeof base) == 0);
+            continue;
+        }
+        CHECK(stepramp_plan_move(&base, steps[i], accel * r, decel * r, speed * r, spr, fclk, prescale) ==
+              STEPRAMP_OK);
+        CHECK(plans[i].steps == base.steps && plans[i].direction == base.direction && plans[i].sa == base.sa &&
+              plans[i].sd == base.sd && plans[i].cruise == base.cruise && plans[i].decel_seed == base.decel_seed);
+        CHECK(plans[i].accel_seed <= base.accel_seed); /* less the recurrence's truncation */
+        CHECK(near((double)plans[i].c_last, (double)base.c_last, 0.01 * (double)base.c_last + 2.0 * Q16));
+        CHECK(engine_last_tick(&plans[i]) == (uint64_t)info.end_tick);
+    }
+}
+
+static void test_coordinated(void)
+{
+    const int64_t demo[3] = {400, 200, -100};
+    const int64_t small[4] = {50, 17, -3, 2};
+    const int64_t with_empty[5] = {400, 1, -1, 0, 250};
+    const int64_t eight[8] = {1000, -999, 500, 250, 7, 3, 2, -1};
+    const int64_t zeros[2] = {0, 0};
+    const int64_t too_big[3] = {3, 2147483648LL, 2};
+    const int64_t slow_two[3] = {100000, 50000, -2};
+    const int64_t one[1] = {329689501};
+    stepramp_plan_t plans[STEPRAMP_COORD_MAX_AXES];
+    stepramp_plan_t before[STEPRAMP_COORD_MAX_AXES];
+    stepramp_coord_info_t info;
+    double a;
+    double v;
+
+    check_coordinated(demo, 3, 40.0, 40.0, 20.0, 400.0, 1e6, 1); /* the AVR446 demo move on three axes */
+    check_coordinated(demo, 3, 83.7, 2.94, 62.25, 200.0, 129297.4, 1); /* decel 28 times slower than accel */
+    check_coordinated(demo, 3, 2.94, 83.7, 62.25, 200.0, 129297.4, 1); /* and the other way */
+    check_coordinated(small, 4, 40.0, 30.0, 200.0, 400.0, 1e6, 3);     /* triangles */
+    check_coordinated(with_empty, 5, 40.0, 40.0, 20.0, 400.0, 1e6, 1);
+    check_coordinated(eight, 8, 40.0, 40.0, 20.0, 400.0, 1e6, 1);
+    check_coordinated(demo, 1, 40.0, 40.0, 20.0, 400.0, 1e6, 1); /* one axis */
+    CHECK(stepramp_plan_coordinated_info(plans, &info, demo, 3, 40.0, 40.0, 20.0, 400.0, 1e6, 1) == STEPRAMP_OK);
+    CHECK(info.lead == 0 && info.ratio[0] == 1.0 && info.ratio[1] == 199.0 / 399.0 && info.ratio[2] == 99.0 / 399.0);
+
+    /* errors: the result, the failed axis, nothing written */
+    memset(plans, 0x5A, sizeof plans);
+    memcpy(before, plans, sizeof plans);
+    CHECK(stepramp_plan_coordinated_info(plans, &info, demo, 0, 40.0, 40.0, 20.0, 400.0, 1e6, 1) ==
+          STEPRAMP_ECOORD_AXES);
+    CHECK(info.failed_axis == STEPRAMP_COORD_NO_AXIS);
+    CHECK(stepramp_plan_coordinated(plans, eight, 9, 40.0, 40.0, 20.0, 400.0, 1e6, 1) == STEPRAMP_ECOORD_AXES);
+    CHECK(stepramp_plan_coordinated(plans, zeros, 2, 40.0, 40.0, 20.0, 400.0, 1e6, 1) == STEPRAMP_ECOORD_ZERO);
+    CHECK(stepramp_plan_coordinated(plans, demo, 3, 0.0, 40.0, 20.0, 400.0, 1e6, 1) == STEPRAMP_EACCEL);
+    CHECK(stepramp_plan_coordinated(plans, demo, 3, 40.0, 40.0, 20.0, 400.0, 1e6, 0) == STEPRAMP_EPRESCALE);
+    CHECK(stepramp_plan_coordinated_info(plans, &info, too_big, 3, 40.0, 40.0, 20.0, 400.0, 1e6, 1) ==
+          STEPRAMP_ESTEPS);
+    CHECK(info.failed_axis == 1u);
+    /* a 2-step axis beside a long, slow lead (cruise 60,000 ticks, 10-step ramps): its one interval lasts the whole
+     * move, more than 2^32 ticks */
+    v = 2.0 * PI / 200.0 * (1e6 / 60000.0);
+    a = v * (1e6 / 60000.0) / 20.0;
+    CHECK(stepramp_plan_coordinated_info(plans, &info, slow_two, 3, a, a, v, 200.0, 1e6, 1) == STEPRAMP_EOVERFLOW);
+    CHECK(info.failed_axis == 2u);
+    /* a path of 2^48 ticks or more */
+    CHECK(stepramp_plan_coordinated_info(plans, &info, one, 1, 3.8e7, 1.55e5, 8.77e-7, 10756.75, 84743112.2, 64) ==
+          STEPRAMP_ECOORD_LONG);
+    CHECK(info.failed_axis == STEPRAMP_COORD_NO_AXIS);
+    CHECK(stepramp_plan_coordinated(NULL, demo, 3, 40.0, 40.0, 20.0, 400.0, 1e6, 1) == STEPRAMP_ENULL);
+    CHECK(stepramp_plan_coordinated(plans, NULL, 3, 40.0, 40.0, 20.0, 400.0, 1e6, 1) == STEPRAMP_ENULL);
+    CHECK(memcmp(plans, before, sizeof plans) == 0);
+    CHECK(stepramp_time_before_last(NULL) == 0.0 && stepramp_ideal_end(NULL) == 0.0);
+    CHECK(stepramp_seed_without_truncation(NULL) == 0u);
+}
+
 int main(void)
 {
     test_long_symmetric_trapezoid();
@@ -632,5 +810,6 @@ int main(void)
     test_change_errors();
     test_segment_registers();
     test_speed_at_pulse();
+    test_coordinated();
     return test_report("test_stepramp_plan");
 }

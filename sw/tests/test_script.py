@@ -17,6 +17,7 @@ one too late, stops before and after the second change).
 
 from __future__ import annotations
 
+import bisect
 import itertools
 import json
 import math
@@ -31,7 +32,7 @@ import pytest
 from stepramp.board.change import Change, Segment, plan_change, speed_at_pulse, speed_at_segment_pulse
 from stepramp.board.driver import plan_writes, segment_writes
 from stepramp.board.plan import plan_move, plan_move_info
-from stepramp.board.regmap import offset
+from stepramp.board.regmap import ERROR_CODES, offset
 from stepramp.board.script import (
     CHANGE,
     HARD_STOP,
@@ -970,7 +971,8 @@ def test_named_scripts_are_all_tested() -> None:
     tested = {
         "speed_up_in_run", "slow_down_in_run", "change_in_accel", "change_in_decel", "retarget_inside_stop_distance",
         "retarget_behind", "jog_through_zero", "jog_changes", "queue_same_direction", "queue_opposite_direction",
-        "soft_stop_in_jog", "hard_stop_in_jog",
+        "soft_stop_in_jog", "hard_stop_in_jog", "limit_soft_in_run", "limit_hard_in_jog", "estop_and_recover",
+        "limit_bounce",
     }  # fmt: skip
     assert set(NAMED_SCRIPTS) == tested
 
@@ -1004,3 +1006,94 @@ def test_model_script_on_the_command_line(tmp_path: Path, capsys: pytest.Capture
     assert "required (without --script): --accel" in capsys.readouterr().err
     assert main(["model", "--script", str(path), "--steps", "10"]) == 2
     assert "--script takes no move options (--steps)" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Machine inputs in scripts (issue 16; docs/algorithm.md, "Machine inputs")
+# ---------------------------------------------------------------------------------------------------------------
+
+
+def _filtered(obj: dict[str, Any], pin: str) -> list[int]:
+    """Where a clean pin change arrives, from the documented rule alone: F = a + max(FILTER, 1) + 2 for each change
+    of `pin` that holds at least N samples (the named scripts' bounces are shorter than N)."""
+    n = max(obj.get("inputs", {}).get("filter", 0), 1)
+    changes = [c for c in obj["commands"] if c["op"] == "input" and c["name"] == pin]
+    out = []
+    for c, nxt in zip(changes, [*changes[1:], None], strict=True):
+        if nxt is None or nxt["at"] - c["at"] >= n:
+            out.append(c["at"] + n + 2)
+    return out
+
+
+def _inputs_named(name: str) -> tuple[dict[str, Any], ScriptResult]:
+    obj = NAMED_SCRIPTS[name]
+    got = run(obj)
+    assert not got.unsure, got.unsure
+    return obj, got
+
+
+def test_named_limit_soft_stop_and_move_away() -> None:
+    """LIMIT_POS in RUN: the move's own edges up to the stop's sample at F + 2, then a decel at d to rest: the stop
+    distance v^2 / (2 d) from the pulse that decides it, the last interval that of the decel to rest (within 1 %);
+    ERROR LIMIT at F + 1; the move away from the active limit runs whole (200 steps back)."""
+    obj, got = _inputs_named("limit_soft_in_run")
+    (f,) = _filtered(obj, "limit_pos")[:1]
+    plain = _plain(600, NAMED_MOVE)
+    k = bisect.bisect_right(plain, f + 2)  # the pulses due up to the sample are the move's
+    assert got.edges[:k] == plain[:k]
+    first_back = _reversals(got.positions)[0]
+    v = NAMED_MOVE["speed"] / ALPHA
+    stop = v * v / (2.0 * NAMED_MOVE["decel"] / ALPHA)
+    assert abs(first_back - (k + 1) - stop) <= 1.5, (first_back, k, stop)
+    assert abs(_intervals(got.edges[:first_back])[-1] - _cd0(NAMED_MOVE["decel"])) <= 0.01 * _cd0(NAMED_MOVE["decel"])
+    assert got.positions[-1] == got.positions[first_back - 1] - 200
+    assert got.errors == [(f + 1, ERROR_CODES["LIMIT"][0])]
+
+
+def test_named_limit_hard_stop_in_a_jog() -> None:
+    """LIMIT_NEG hard-stops a jog down (LIMIT_HARD): no STEP edge after F + 2 (the engine's sample, plus the STEP
+    register); a jog further down is refused, one up runs."""
+    obj, got = _inputs_named("limit_hard_in_jog")
+    f = _filtered(obj, "limit_neg")[0]
+    before = [e for e in got.edges if e <= f + 2]
+    assert before and not [e for e in got.edges if f + 2 < e < obj["commands"][3]["at"]]
+    assert [r["op"] for r in got.rejected] == ["jog"] and "limit_neg is active" in got.rejected[0]["reason"]
+    assert got.positions[len(before) - 1] == -len(before)
+    assert got.positions[-1] > got.positions[len(before) - 1], "the jog up did not run"
+
+
+def test_named_estop_and_recover() -> None:
+    """ESTOP in RUN: the move's edges up to F + 1 and none after it (the engine samples the stop at F + 1); a move
+    during the fault is refused; after the release and clear_fault the next move runs whole (300 steps back)."""
+    obj, got = _inputs_named("estop_and_recover")
+    f = _filtered(obj, "estop")[0]
+    plain = _plain(600, NAMED_MOVE)
+    k = bisect.bisect_right(plain, f + 1)
+    assert got.edges[:k] == plain[:k] and got.positions[k - 1] == k
+    assert all(e > obj["commands"][5]["at"] for e in got.edges[k:]), "a pulse during the fault"
+    assert len(got.edges) == k + 300 and got.positions[-1] == k - 300
+    assert [r["op"] for r in got.rejected] == ["move"] and "ESTOP" in got.rejected[0]["reason"]
+    assert got.errors == [(f + 1, ERROR_CODES["ESTOP"][0])]
+
+
+def test_named_limit_bounce_is_filtered() -> None:
+    """Bounces of 100, 100 and 20 clocks on LIMIT_POS with FILTER 300 reach nothing: the move is stopped by the last,
+    clean edge only (its soft stop sampled at F + 2)."""
+    obj, got = _inputs_named("limit_bounce")
+    f = _filtered(obj, "limit_pos")[-1]
+    plain = _plain(600, NAMED_MOVE)
+    k = bisect.bisect_right(plain, f + 2)
+    assert got.edges[:k] == plain[:k] and len(got.edges) < 600
+    assert got.errors == [(f + 1, ERROR_CODES["LIMIT"][0])]
+
+
+def test_inputs_in_scripts_are_checked() -> None:
+    base = {"fclk": 1e6, "spr": 200.0, "commands": []}
+    with pytest.raises(ValueError, match="name must be one of"):
+        load_script({**base, "commands": [{"at": 0, "op": "input", "name": "probe", "level": 1}]})
+    with pytest.raises(ValueError, match="level must be 0 or 1"):
+        load_script({**base, "commands": [{"at": 0, "op": "input", "name": "home", "level": 2}]})
+    with pytest.raises(ValueError, match="axis 1"):
+        load_script({**base, "commands": [{"at": 0, "op": "soft_stop", "axis": 1}]})
+    with pytest.raises(ValueError, match="filter"):
+        load_script({**base, "inputs": {"filter": 1 << 20}})

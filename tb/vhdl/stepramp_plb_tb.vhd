@@ -28,9 +28,9 @@ architecture sim of stepramp_plb_tb is
   constant C_STOP_RATIO : natural := 16#54#;
   constant C_POSITION   : natural := 16#58#;
   constant C_STEP_COUNT : natural := 16#60#;
-  constant C_UNMAPPED   : natural := 16#90#;
+  constant C_UNMAPPED   : natural := 16#AC#;
 
-  constant C_ID_VALUE : std_logic_vector(31 downto 0) := x"5352_0005";
+  constant C_ID_VALUE : std_logic_vector(31 downto 0) := x"5352_0006";
 
   type t_reg_write is record
     offset : natural;
@@ -175,7 +175,11 @@ begin
       ip2bus_error => ip2bus_error,
       irq          => irq,
       step         => step,
-      dir          => dir
+      dir          => dir,
+      limit_neg    => '0',
+      limit_pos    => '0',
+      home         => '0',
+      estop        => '0'
     );
 
   step_mon_proc : process is

@@ -12,6 +12,7 @@ advance while the driver waits; on a board the methods simply run to completion.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import mmap
 import os
@@ -41,7 +42,9 @@ class StepRampError(RuntimeError):
 
 @dataclass(frozen=True)
 class Status:
-    """STATUS decoded."""
+    """STATUS decoded. The machine inputs (docs/algorithm.md, "Machine inputs"): limit_neg .. estop are the filtered
+    levels after polarity (True: active); the *_ev flags, estop_fault and latched are sticky (clear_events,
+    clear_estop, arm_latch)."""
 
     state: str
     busy: bool
@@ -50,10 +53,26 @@ class Status:
     error: bool
     err_code: int
     pending: bool = False  # a CHANGE or QUEUE waits (the staging registers are locked)
+    dir_fault: bool = False
+    limit_neg: bool = False
+    limit_pos: bool = False
+    home: bool = False
+    estop: bool = False
+    limit_neg_ev: bool = False
+    limit_pos_ev: bool = False
+    home_ev: bool = False
+    estop_fault: bool = False
+    latched: bool = False
 
     @property
     def err_name(self) -> str:
         return ERROR_NAMES.get(self.err_code, f"code {self.err_code}")
+
+    def level(self, pin: str) -> bool:
+        """The filtered level of an input by its name in INPUTS ("limit_neg", "limit_pos", "home", "estop")."""
+        if pin not in INPUTS:
+            raise ValueError(f"pin must be one of {list(INPUTS)}, got {pin!r}")
+        return bool(getattr(self, pin))
 
     @classmethod
     def decode(cls, raw: int) -> Status:
@@ -71,11 +90,19 @@ class Status:
             bool(get("ERROR")),
             get("ERR_CODE"),
             bool(get("PENDING")),
+            bool(get("DIR_FAULT")),
+            *(bool(get(name)) for name in ("LIMIT_NEG", "LIMIT_POS", "HOME", "ESTOP")),
+            *(bool(get(name)) for name in ("LIMIT_NEG_EV", "LIMIT_POS_EV", "HOME_EV", "ESTOP_FAULT", "LATCHED")),
         )
 
 
 def _bit(register: str, field: str) -> int:
     return 1 << REGISTERS_BY_NAME[register].field(field).lsb
+
+
+def _strobe(mask: int) -> int:
+    """The byte enables that cover the set bits of a 32-bit mask."""
+    return sum(1 << b for b in range(4) if mask >> (8 * b) & 0xFF)
 
 
 #: The registers written for a move, from a Plan: (register, Plan field or None, word: 0 = LO/whole, 1 = HI).
@@ -118,6 +145,76 @@ NO_SEGMENT = {"head_down": 0, "endless": 0, "head_index": 0, "run_stop": 0, "hea
 #: DRIVE.MODE values.
 MODES = {"stepdir": 0, "wave": 1, "full": 2, "half": 3, "pwm": 4}
 
+#: The machine inputs of an axis, in the order of their bits (INPUT_CFG.POL_*, STATUS levels and events).
+INPUTS = ("limit_neg", "limit_pos", "home", "estop")
+
+#: INPUT_CFG.LATCH_SRC values: which input the position latch takes its edges from.
+LATCH_SOURCES = {"none": 0, "home": 1, "limit_neg": 2, "limit_pos": 3}
+
+#: INPUT_FILTER's width: the filter holds up to 2^20 - 1 clocks.
+FILTER_MAX = (1 << REGISTERS_BY_NAME["INPUT_FILTER"].field("VALUE").width) - 1
+
+
+@dataclass(frozen=True)
+class Inputs:
+    """Configuration of the machine inputs (registers INPUT_FILTER and INPUT_CFG; docs/algorithm.md, "Machine
+    inputs"): the filter in clocks (0 acts as 1), which pins are active low, whether the limits stop a motion towards
+    them (limit_enable, the reset value) and how (limit_hard: a hard stop, else a soft stop at the decel in force), and
+    the position latch's source and edges."""
+
+    filter: int = 0
+    active_low: frozenset[str] = frozenset()
+    limit_enable: bool = True
+    limit_hard: bool = False
+    latch_source: str = "none"
+    latch_on_active: bool = False
+    latch_on_release: bool = False
+
+    @property
+    def filter_clocks(self) -> int:
+        """N = max(INPUT_FILTER, 1): a level must hold N clocks; a clean pin edge after clock edge a reaches the
+        filtered level at edge a + N + 2."""
+        return max(self.filter, 1)
+
+    def check(self) -> None:
+        """ValueError with the reason if a field does not fit its register."""
+        if isinstance(self.filter, bool) or not isinstance(self.filter, int) or not 0 <= self.filter <= FILTER_MAX:
+            raise ValueError(
+                f"the input filter must be an integer number of clocks in 0 .. {FILTER_MAX}, got {self.filter!r}"
+            )
+        unknown = sorted(set(self.active_low) - set(INPUTS))
+        if unknown:
+            raise ValueError(f"active_low names unknown inputs {unknown}: the inputs are {list(INPUTS)}")
+        if self.latch_source not in LATCH_SOURCES:
+            raise ValueError(f"latch_source must be one of {list(LATCH_SOURCES)}, got {self.latch_source!r}")
+        if self.latch_source != "none" and not (self.latch_on_active or self.latch_on_release):
+            raise ValueError(f"a latch on {self.latch_source} needs latch_on_active, latch_on_release or both")
+
+    def cfg_word(self) -> int:
+        """The INPUT_CFG word."""
+        self.check()
+        word = sum(_bit("INPUT_CFG", f"POL_{pin.upper()}") for pin in self.active_low)
+        word |= _bit("INPUT_CFG", "LIMIT_EN") if self.limit_enable else 0
+        word |= _bit("INPUT_CFG", "LIMIT_HARD") if self.limit_hard else 0
+        word |= LATCH_SOURCES[self.latch_source] << REGISTERS_BY_NAME["INPUT_CFG"].field("LATCH_SRC").lsb
+        if self.latch_source != "none":  # without a source the edge bits are not written
+            word |= _bit("INPUT_CFG", "LATCH_ON_ACTIVE") if self.latch_on_active else 0
+            word |= _bit("INPUT_CFG", "LATCH_ON_RELEASE") if self.latch_on_release else 0
+        return word
+
+
+@dataclass(frozen=True)
+class Latch:
+    """What the position latch took at its source's filtered edge: POSITION after edge F (LATCH_POS), TIME there
+    (LATCH_TIME = F - r), and the TIME of the pin's own edge it implies, pin_time = LATCH_TIME - N - 2 with
+    N = max(INPUT_FILTER, 1): the pin changed between clock edges pin_time and pin_time + 1 of TIME's count (exact
+    for a pin driven from the core's clock, within one clock for an asynchronous one; for a bouncing pin, the last
+    bounce)."""
+
+    position: int
+    time: int
+    pin_time: int
+
 
 @dataclass(frozen=True)
 class Outputs:
@@ -157,6 +254,7 @@ class StepRamp:
         self.spr = spr
         self.prescale = prescale
         self.outputs = Outputs()
+        self.inputs = Inputs()  # as configure_inputs last wrote them (the reset values until then)
         # Whether SEGMENT .. HEAD_PROD_HI are known to hold what a move from rest to rest needs (all 0), so that
         # program() need not write them. Not at first: an earlier program (a restart without a core reset) or
         # another master may have left them set, so the first program() writes them; a jog sets them again.
@@ -296,6 +394,103 @@ class StepRamp:
         if not -(1 << 31) <= value < 1 << 31:
             raise ValueError(f"position {value} does not fit 32 bits signed")
         await self.access.write(offset("POSITION"), value & 0xFFFF_FFFF)
+
+    # -- machine inputs: limits, home, E-stop, the position latch, TIME (docs/algorithm.md, "Machine inputs") ------
+    async def configure_inputs(self, inputs: Inputs) -> None:
+        """Write INPUT_FILTER and INPUT_CFG (only while stopped: the core ignores them during a motion and flags
+        CFG_BUSY). ValueError with the reason, nothing written, if a field does not fit."""
+        word = inputs.cfg_word()
+        await self.access.write(offset("INPUT_FILTER"), inputs.filter)
+        await self.access.write(offset("INPUT_CFG"), word)
+        self.inputs = inputs
+
+    async def arm_latch(self, source: str, on_active: bool = True, on_release: bool = False) -> None:
+        """Select the latch's source and edges (INPUT_CFG alone, the polarity and limit settings of configure_inputs
+        kept; only while stopped), then clear STATUS.LATCHED, which arms the latch: the first selected filtered edge
+        from now on takes POSITION and TIME. source "none" switches the latch off. ValueError, nothing written, for an
+        unknown source or a source with neither edge."""
+        inputs = dataclasses.replace(
+            self.inputs,
+            latch_source=source,
+            latch_on_active=on_active and source != "none",
+            latch_on_release=on_release and source != "none",
+        )
+        await self.access.write(offset("INPUT_CFG"), inputs.cfg_word())
+        self.inputs = inputs
+        await self.rearm_latch()
+
+    async def rearm_latch(self) -> None:
+        """Clear STATUS.LATCHED (write 1): the latch takes the next selected edge (allowed during a motion)."""
+        bit = _bit("STATUS", "LATCHED")
+        await self.access.write(offset("STATUS"), bit, strobe=_strobe(bit))
+
+    async def latch(self) -> Latch | None:
+        """The latched position and time, or None while STATUS.LATCHED is 0 (nothing latched since it was armed)."""
+        if not (await self.status()).latched:
+            return None
+        return await self.read_latch()
+
+    async def read_latch(self) -> Latch:
+        """LATCH_POS and LATCH_TIME (LO then HI) as they are, whether STATUS.LATCHED is set or not."""
+        raw = await self.access.read(offset("LATCH_POS"))
+        lo = await self.access.read(offset("LATCH_TIME_LO"))
+        hi = await self.access.read(offset("LATCH_TIME_HI"))
+        time = hi << 32 | lo
+        position = raw - (1 << 32) if raw >> 31 else raw
+        return Latch(position, time, time - self.inputs.filter_clocks - 2)
+
+    async def time(self) -> int:
+        """TIME, the 64-bit clock count since reset: TIME_LO first (that read copies bits 63:32 into TIME_HI), then
+        TIME_HI, so the two words belong together."""
+        lo = await self.access.read(offset("TIME_LO"))
+        hi = await self.access.read(offset("TIME_HI"))
+        return hi << 32 | lo
+
+    async def clear_events(self, limit_neg: bool = True, limit_pos: bool = True, home: bool = True) -> None:
+        """Clear the sticky input events STATUS.LIMIT_NEG_EV, LIMIT_POS_EV, HOME_EV (write 1; byte 2 of STATUS only,
+        so DONE, ERROR, ESTOP_FAULT and LATCHED are kept)."""
+        mask = 0
+        for pin, on in (("LIMIT_NEG", limit_neg), ("LIMIT_POS", limit_pos), ("HOME", home)):
+            mask |= _bit("STATUS", f"{pin}_EV") if on else 0
+        if mask:
+            await self.access.write(offset("STATUS"), mask, strobe=_strobe(mask))
+
+    async def clear_estop(self, enable: bool = True) -> Status:
+        """Clear STATUS.ESTOP_FAULT (write 1) and, with enable, set CTRL.ENABLE again (the fault cleared it). The core
+        keeps the fault while ESTOP is active: StepRampError then, and ENABLE is left off. Returns STATUS after."""
+        bit = _bit("STATUS", "ESTOP_FAULT")
+        await self.access.write(offset("STATUS"), bit, strobe=_strobe(bit))
+        status = await self.status()
+        if status.estop_fault:
+            why = "the ESTOP input is still active" if status.estop else "the fault is still set"
+            raise StepRampError(f"STATUS.ESTOP_FAULT not cleared: {why}")
+        if enable:
+            await self.set_enable(True)
+        return status
+
+    async def enable_input_irq(
+        self,
+        limit_neg: bool = False,
+        limit_pos: bool = False,
+        home: bool = False,
+        estop: bool = False,
+        latch: bool = False,
+        done: bool = True,
+        error: bool = True,
+    ) -> None:
+        """All interrupt enables of CTRL byte 1 (irq follows DONE, ERROR, the input events, ESTOP_FAULT, LATCHED)."""
+        value = 0
+        for name, on in (
+            ("IRQ_DONE_EN", done),
+            ("IRQ_ERROR_EN", error),
+            ("IRQ_LIMIT_NEG_EN", limit_neg),
+            ("IRQ_LIMIT_POS_EN", limit_pos),
+            ("IRQ_HOME_EN", home),
+            ("IRQ_ESTOP_EN", estop),
+            ("IRQ_LATCH_EN", latch),
+        ):
+            value |= _bit("CTRL", name) if on else 0
+        await self.access.write(offset("CTRL"), value, strobe=0x2)
 
     async def wait_done(self, idle: Callable[[], Awaitable[None]] | None = None, polls: int = 1_000_000) -> Status:
         """Poll STATUS until DONE, clear the flags, and return the status; raise StepRampError on ERROR.

@@ -105,6 +105,11 @@ def _span(first: str, last: str) -> tuple[str, ...]:
 STAGING: tuple[str, ...] = _span("STEPS", "STOP_RATIO") + _span("SEGMENT", "CHANGE_AT")
 
 
+#: Registers that change on their own, every clock: TIME_LO, the clock count since reset (a read also copies the
+#: count's bits 63:32 into TIME_HI). Tests that read "every register" expect the clock count there, not a constant.
+LIVE: tuple[str, ...] = ("TIME_LO",)
+
+
 def split_wide(value: int, width: int) -> tuple[int, int]:
     """A wide unsigned register value as its (LO, HI) 32-bit words."""
     if not 0 <= value < (1 << width):

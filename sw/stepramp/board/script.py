@@ -31,8 +31,9 @@ from typing import Any, cast
 from stepramp.board.change import Change, Segment, plan_change, speed_at_pulse, speed_at_segment_pulse
 from stepramp.board.driver import NO_SEGMENT, Outputs, RegisterAccess, StepRamp, plan_writes, segment_writes
 from stepramp.board.plan import FRAC_CRUISE, MAX_PRESCALE, MoveInfo, Plan, plan_move_info, steps_units
-from stepramp.board.regmap import REGISTERS_BY_NAME, offset
+from stepramp.board.regmap import ERROR_CODES, REGISTERS_BY_NAME, offset
 from stepramp.models.engine import change_pulse, segment_runs, segment_stop_values
+from stepramp.models.inputs import PINS, filter_length, filtered_edges
 from stepramp.models.stepping import START_TO_FIRST_STEP, GateTiming, gate_timing
 
 PREP_CLOCKS = 300
@@ -69,7 +70,11 @@ OPS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "queue": (("steps", "accel", "decel", "speed"), ()),
     "soft_stop": ((), ()),
     "hard_stop": ((), ()),
+    "input": (("name", "level"), ()),
+    "clear_fault": ((), ()),
 }
+#: Fields any command may carry: the axis of the multi-axis top (0, the only one of a single-axis core).
+COMMON_FIELDS = ("axis",)
 
 
 @dataclass(frozen=True)
@@ -83,6 +88,8 @@ class Command:
     speed: float | None = None
     accel: float | None = None
     decel: float | None = None
+    name: str | None = None
+    level: int | None = None
 
 
 @dataclass(frozen=True)
@@ -95,6 +102,9 @@ class Script:
     commands: tuple[Command, ...]
     until: int | None
     source: dict[str, Any] = field(compare=False, repr=False)
+    #: "inputs": INPUT_FILTER in clocks and INPUT_CFG.LIMIT_HARD, written before the first command.
+    input_filter: int = 0
+    limit_hard: bool = False
 
 
 @dataclass(frozen=True)
@@ -119,6 +129,17 @@ class ScriptResult:
     positions: list[int]
     rejected: list[dict[str, Any]]
     until: int
+    #: (after edge a, pin, level): the input pins to drive (level after polarity, 1: active).
+    pins: list[tuple[int, str, int]] = field(default_factory=list)
+    #: The core's errors the model predicts, (edge, ERR_CODE), as STATUS shows them: the first, then each change.
+    errors: list[tuple[int, int]] = field(default_factory=list)
+    #: Input effects the model cannot time exactly (within MARGIN of a START being taken, of a soft stop's decision
+    #: or of a take-over): a script with any is not played on the RTL.
+    unsure: list[str] = field(default_factory=list)
+    #: The script's "inputs": INPUT_FILTER and INPUT_CFG.LIMIT_HARD for the testbench to write before the first
+    #: command.
+    input_filter: int = 0
+    limit_hard: bool = False
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -156,12 +177,14 @@ def _load_command(n: int, raw: object, previous_at: int) -> Command:
         raise ValueError(f"{where}: unknown op {op!r} (one of {', '.join(OPS)})")
     where = f"command {n} ({op} at {at})"
     required, optional = OPS[op]
-    unknown = sorted(set(raw) - {"at", "op", *required, *optional})
+    unknown = sorted(set(raw) - {"at", "op", *required, *optional, *COMMON_FIELDS})
     if unknown:
         raise ValueError(f"{where}: unknown field(s) {', '.join(unknown)}")
     missing = [name for name in required if name not in raw]
     if missing:
         raise ValueError(f"{where}: missing field(s) {', '.join(missing)}")
+    if raw.get("axis", 0) != 0:
+        raise ValueError(f"{where}: axis {raw['axis']!r}: a single-axis script has axis 0 only")
     if op == "set" and not any(name in raw for name in optional):
         raise ValueError(f"{where}: set needs at least one of {', '.join(optional)}")
     fields: dict[str, Any] = {}
@@ -169,7 +192,15 @@ def _load_command(n: int, raw: object, previous_at: int) -> Command:
         if name not in raw:
             continue
         value = raw[name]
-        if name in ("steps", "position"):
+        if name == "name":
+            if value not in PINS:
+                raise ValueError(f"{where}: name must be one of {', '.join(PINS)}, got {value!r}")
+            fields[name] = value
+        elif name == "level":
+            if value not in (0, 1) or isinstance(value, bool):
+                raise ValueError(f"{where}: level must be 0 or 1, got {value!r}")
+            fields[name] = value
+        elif name in ("steps", "position"):
             if not _is_int(value):
                 raise ValueError(f"{where}: {name} must be an integer, got {value!r}")
             fields[name] = value
@@ -188,7 +219,7 @@ def load_script(obj: dict[str, Any]) -> Script:
     order or after `until`)."""
     if not isinstance(obj, dict):
         raise ValueError(f"a script must be an object, got {type(obj).__name__}")
-    unknown = sorted(set(obj) - {"fclk", "spr", "prescale", "commands", "until"})
+    unknown = sorted(set(obj) - {"fclk", "spr", "prescale", "commands", "until", "inputs"})
     if unknown:
         raise ValueError(f"unknown key(s) {', '.join(unknown)}")
     for name in ("fclk", "spr", "commands"):
@@ -210,7 +241,18 @@ def load_script(obj: dict[str, Any]) -> Script:
         commands.append(_load_command(n, raw, commands[-1].at if commands else 0))
     if until is not None and commands and commands[-1].at > until:
         raise ValueError(f"script: command {len(commands) - 1} at {commands[-1].at} is after until = {until}")
-    return Script(fclk, spr, prescale, tuple(commands), until, obj)
+    inputs = obj.get("inputs", {})
+    if not isinstance(inputs, dict) or set(inputs) - {"filter", "limit_hard"}:
+        raise ValueError(f"script: inputs must be an object with 'filter' and 'limit_hard', got {inputs!r}")
+    input_filter = inputs.get("filter", 0)
+    try:
+        filter_length(input_filter)
+    except ValueError as why:
+        raise ValueError(f"script: inputs: {why}") from None
+    limit_hard = inputs.get("limit_hard", False)
+    if not isinstance(limit_hard, bool):
+        raise ValueError(f"script: inputs: limit_hard must be true or false, got {limit_hard!r}")
+    return Script(fclk, spr, prescale, tuple(commands), until, obj, input_filter, limit_hard)
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -290,6 +332,7 @@ class _Motion:
         self.hard: int | None = None
         self.stop: _Stop | None = None
         self.queue_pending: list[int] | None = None
+        self.limit_hit = False  # a limit stopped it (once per motion)
         self.drops: list[tuple[list[int], int]] = []  # PENDING spans a soft stop on this copy ends: (span, edge)
         self._edges: list[int] = []
         self._gen: Iterator[int] | None = None
@@ -420,6 +463,98 @@ class _Run:
         self.pending: list[list[int]] = []  # PENDING spans [from, to] of changes and queued moves
         self.chained: _Chained | None = None  # a queued move's change B, not committed yet
         self.index = 0  # the command being planned
+        # The machine inputs (docs/algorithm.md, "Machine inputs"): each pin's filtered edges, and their effects in
+        # time order, (edge it acts at, pin, level, filtered edge F): a limit's stop is committed at F + 1, ESTOP's
+        # hard stop at F.
+        self.pins: list[tuple[int, str, int]] = [
+            (c.at, cast(str, c.name), cast(int, c.level)) for c in script.commands if c.op == "input"
+        ]
+        self.filtered: dict[str, list[tuple[int, int]]] = {
+            pin: filtered_edges([(a, lv) for a, name, lv in self.pins if name == pin], script.input_filter)
+            for pin in PINS
+        }
+        self.events = sorted(
+            (f + (0 if pin == "estop" else 1), pin, level, f) for pin in PINS for f, level in self.filtered[pin]
+        )
+        self.fault = False
+        self.errors: list[tuple[int, int]] = []
+        self.unsure: list[str] = []
+
+    # -- the machine inputs -------------------------------------------------------------------------------------
+
+    def level_at(self, pin: str, edge: int) -> int:
+        """The pin's filtered level after edge `edge` (what the register file samples at edge + 1)."""
+        level = 0
+        for f, value in self.filtered[pin]:
+            if f > edge:
+                break
+            level = value
+        return level
+
+    def limit_towards(self, direction: int, w: int) -> str | None:
+        """The limit that guards `direction` (1: LIMIT_NEG) if it is active for a command committed at w."""
+        pin = "limit_neg" if direction else "limit_pos"
+        return pin if self.level_at(pin, w - 1) else None
+
+    def input_events(self, upto: float) -> None:
+        """Apply the inputs' effects that act before edge `upto`."""
+        while self.events and self.events[0][0] < upto:
+            w, pin, level, f = self.events.pop(0)
+            if pin == "home" or level == 0:
+                continue  # (HOME: the latch only; a release stops nothing, and the fault stays)
+            if self.chained is not None:  # (the driver would not know of it; the script is not played)
+                self.unsure.append(f"{pin} at filtered edge {f} before a queued move's second change")
+                self.pending.remove(self.chained.reserved)
+                self.chained = None
+            try:
+                cur, queued = self.situation(w)
+                if pin == "estop":
+                    self.fault = True
+                    self.errors.append((f + 1, ERROR_CODES["ESTOP"][0]))
+                    if cur is not None:
+                        self.hard_stop(cur, queued, w)
+                    else:
+                        self.drop_queue(queued, w)
+                    continue
+                toward = 1 if pin == "limit_neg" else 0
+                if queued is not None and queued.direction == toward and (cur is None or cur.direction != toward):
+                    self.unsure.append(f"{pin} active at {f} with a queued move towards it")
+                if cur is None or cur.direction != toward or cur.limit_hit:
+                    continue
+                self.errors.append((w, ERROR_CODES["LIMIT"][0]))
+                if self.script.limit_hard:
+                    self.hard_stop(cur, queued, w)
+                else:
+                    twin = cur.clone()
+                    self.soft(twin, w + 1)
+                    self.drop_queue(queued, w)
+                    self.adopt(cur, twin)
+                    cur = twin
+                cur.limit_hit = True
+            except _RejectError as why:
+                self.unsure.append(f"{pin} at filtered edge {f}: {why}")
+
+    def clear_fault(self, w: int) -> _Proposal | None:
+        """STATUS.ESTOP_FAULT written 1 in the PREP_CLOCKS before w: it clears once ESTOP is inactive."""
+        if not self.fault:
+            return None
+        first = w - PREP_CLOCKS - 1
+        if self.level_at("estop", first) or any(first <= f <= w for f, _ in self.filtered["estop"]):
+            raise _RejectError("ESTOP is active: the fault stays")
+
+        def apply() -> None:
+            self.fault = False
+
+        return _Proposal([(offset("STATUS"), REGISTERS_BY_NAME["STATUS"].field("ESTOP_FAULT").mask)], 0, apply)
+
+    def hard_stop(self, running: _Motion, queued: _Motion | None, w: int) -> None:
+        """HARD_STOP committed at w (the engine samples it at w + 1): no pulse from its edge w + 1 on."""
+        self.drop_queue(queued, w)
+        for part in running.parts:
+            if part.pending is not None:
+                part.pending[1] = min(part.pending[1], w + 1)
+        running.hard = w
+        running.changed()
 
     # -- the state at an edge -----------------------------------------------------------------------------------
 
@@ -499,6 +634,11 @@ class _Run:
     def start(self, w: int, direction: int, origin: int, part: _Part, queued_after: _Motion | None) -> _Motion:
         """The motion of a START committed at w, or queued after a motion (requested one clock after its last STEP
         edge)."""
+        if self.fault:
+            raise _RejectError("an ESTOP fault is latched (clear_fault first)")
+        limit = self.limit_towards(direction, w)
+        if limit is not None:
+            raise _RejectError(f"{limit} is active: no motion towards it")
         if queued_after is None:
             request, last_step = w + 1, self.last_step_edge()
         else:
@@ -771,22 +911,15 @@ class _Run:
         """The action a command makes (None: none), or a rejection."""
         w, op = cmd.at, cmd.op
         cur, queued = self.situation(w)
+        if op == "clear_fault":
+            return self.clear_fault(w)
         if op in ("soft_stop", "hard_stop"):
             if cur is None:
                 return None
             if op == "soft_stop":
                 return self.stop_proposal(cur, w, queued)
             running = cur
-
-            def hard() -> None:
-                self.drop_queue(queued, w)
-                for part in running.parts:
-                    if part.pending is not None:
-                        part.pending[1] = min(part.pending[1], w + 1)
-                running.hard = w
-                running.changed()
-
-            return _Proposal([], HARD_STOP, hard)
+            return _Proposal([], HARD_STOP, lambda: self.hard_stop(running, queued, w))
         if op == "jog" and cmd.speed == 0 and (cur is None or cur.stopping(w)):
             return None  # nothing to stop
         if op == "move_to" and cur is None and cmd.position == self.position():
@@ -864,10 +997,16 @@ class _Run:
     def command(self, n: int, cmd: Command) -> None:
         """Command n: its action (and the model's change), or its refusal. A queued move's change B not committed
         yet is committed first when the command comes at or after its edge; a stop written before cancels it."""
+        if cmd.op == "input":
+            return  # (the pin: self.pins; its effects: input_events)
+        self.input_events(cmd.at - MARGIN)
         self.flush(cmd.at)
         self.index = n
         stop = cmd.op in ("soft_stop", "hard_stop") or (cmd.op == "jog" and cmd.speed == 0)
         try:
+            near = [e for e in self.events if e[0] <= cmd.at + MARGIN and e[2] == 1 and e[1] != "home"]
+            if near:
+                raise _RejectError(f"{near[0][1]} acts at {near[0][0]}, within {MARGIN} clocks of it")
             prop = self.proposal(cmd)
             if prop is not None:
                 self.check_window(cmd.at, bool(prop.writes))
@@ -902,6 +1041,7 @@ class _Run:
 
     def finish(self) -> ScriptResult:
         until = self.script.until
+        self.input_events(math.inf if until is None else until + 1)
         self.flush(math.inf if until is None else until)  # (one after until changes nothing up to it)
         if until is None:
             for motion in self.motions:
@@ -919,7 +1059,30 @@ class _Run:
                     break
                 edges.append(edge)
                 positions.append(motion.origin + motion.sign * (k + 1))
-        return ScriptResult(self.actions, edges, positions, self.rejected, until)
+        errors: list[tuple[int, int]] = []
+        for edge, code in sorted(self.errors):
+            if edge <= until and (not errors or errors[-1][1] != code):
+                errors.append((edge, code))
+        s = self.script
+        return ScriptResult(
+            self.actions,
+            edges,
+            positions,
+            self.rejected,
+            until,
+            self.pins,
+            errors,
+            self.unsure,
+            s.input_filter,
+            s.limit_hard,
+        )
+
+
+def core_rejections(errors: list[tuple[int, int]] | list[list[int]]) -> list[dict[str, Any]]:
+    """The core's errors, (edge, ERR_CODE) as the RTL flagged them or the model predicts them, as "rejected" entries
+    ({"at", "op": "core", "reason"})."""
+    names = {code: name for name, (code, _) in ERROR_CODES.items()}
+    return [{"at": at, "op": "core", "reason": f"the core flagged {names.get(code, str(code))}"} for at, code in errors]
 
 
 def plan_script(script: Script) -> ScriptResult:
@@ -1043,7 +1206,42 @@ def random_script(rng: random.Random, n_commands: int = 6) -> dict[str, Any]:
             jogging = 0
         commands.append(cmd)
     until = min(at + rng.randint(3_000, 12_000), RANDOM_SPAN)
-    return {"fclk": RANDOM_FCLK, "spr": RANDOM_SPR, "prescale": 1, "commands": commands, "until": until}
+    out: dict[str, Any] = {"fclk": RANDOM_FCLK, "spr": RANDOM_SPR, "prescale": 1, "commands": commands, "until": until}
+    if rng.random() < RANDOM_INPUTS:
+        _random_inputs(rng, out)
+    return out
+
+
+RANDOM_INPUTS = 0.35
+"""The share of random scripts that also drive the machine inputs (_random_inputs)."""
+
+
+def _random_inputs(rng: random.Random, script: dict[str, Any]) -> None:
+    """One or two pins of a random script switched on, sometimes with a bounce shorter than the filter first, and
+    off again after a while; after ESTOP, sometimes a clear_fault. The filter is 0 .. 200 clocks, the limits soft or
+    hard."""
+    filter_clocks = rng.choice([0, 1, 4, 30, 200])
+    script["inputs"] = {"filter": filter_clocks, "limit_hard": rng.random() < 0.4}
+    until = script["until"]
+    added: list[dict[str, Any]] = []
+    for _ in range(rng.randint(1, 2)):
+        pin = rng.choice(["limit_neg", "limit_pos", "limit_neg", "limit_pos", "estop", "home"])
+        t = rng.randrange(300, max(until - 300, 301))
+        if filter_clocks >= 4 and rng.random() < 0.3:  # a bounce: shorter than the filter, then the real edge
+            for _ in range(rng.randint(1, 3)):
+                width = rng.randint(1, filter_clocks - 1)
+                added += [
+                    {"at": t, "op": "input", "name": pin, "level": 1},
+                    {"at": t + width, "op": "input", "name": pin, "level": 0},
+                ]
+                t += width + rng.randint(1, filter_clocks - 1)
+        added.append({"at": t, "op": "input", "name": pin, "level": 1})
+        off = t + rng.randint(50, 8_000)
+        if off < until:
+            added.append({"at": off, "op": "input", "name": pin, "level": 0})
+            if pin == "estop" and rng.random() < 0.7 and off + 3 * PREP_CLOCKS < until:
+                added.append({"at": off + rng.randint(2 * PREP_CLOCKS, 3 * PREP_CLOCKS), "op": "clear_fault"})
+    script["commands"] = sorted([*script["commands"], *added], key=lambda c: c["at"])
 
 
 _NAMED_BASE: dict[str, Any] = {"fclk": 1e6, "spr": 200.0, "prescale": 1}
@@ -1058,7 +1256,7 @@ NAMED_SCALE = 3
 /3): the same pulses, a third of the clocks to simulate."""
 
 
-def _named(*commands: dict[str, Any], until: int | None = None) -> dict[str, Any]:
+def _named(*commands: dict[str, Any], until: int | None = None, inputs: dict[str, Any] | None = None) -> dict[str, Any]:
     scaled = []
     for cmd in commands:
         out_cmd = dict(cmd, at=cmd["at"] // NAMED_SCALE)
@@ -1069,6 +1267,8 @@ def _named(*commands: dict[str, Any], until: int | None = None) -> dict[str, Any
                 out_cmd[key] = cmd[key] * NAMED_SCALE**2
         scaled.append(out_cmd)
     out: dict[str, Any] = {**_NAMED_BASE, "commands": scaled}
+    if inputs is not None:
+        out["inputs"] = inputs
     if until is not None:
         out["until"] = until // NAMED_SCALE
     return out
@@ -1131,4 +1331,49 @@ NAMED_SCRIPTS: dict[str, dict[str, Any]] = {
     "soft_stop_in_jog": _named({"at": 0, "op": "jog", "speed": 100.0, **_JOG}, {"at": 120_000, "op": "soft_stop"}),
     # a hard stop in a jog (down): no pulse after the write's next edge
     "hard_stop_in_jog": _named({"at": 0, "op": "jog", "speed": -100.0, **_JOG}, {"at": 120_000, "op": "hard_stop"}),
+    # issue 16. LIMIT_POS in RUN (filter 30 clocks): a soft stop committed at F + 1, the decel's 80 steps past it;
+    # then a move away (allowed with the limit active), during which the switch releases
+    "limit_soft_in_run": _named(
+        {"at": 0, "op": "move", "steps": 600, **_MOVE},
+        {"at": 100_000, "op": "input", "name": "limit_pos", "level": 1},
+        {"at": 200_000, "op": "move", "steps": -200, **_MOVE},
+        {"at": 230_000, "op": "input", "name": "limit_pos", "level": 0},
+        inputs={"filter": 30},
+    ),
+    # LIMIT_NEG hard-stops a jog down: no pulse after F + 2; a jog further down is refused while the limit is
+    # active, a jog up runs and is soft-stopped
+    "limit_hard_in_jog": _named(
+        {"at": 0, "op": "jog", "speed": -100.0, **_JOG},
+        {"at": 120_000, "op": "input", "name": "limit_neg", "level": 1},
+        {"at": 150_000, "op": "jog", "speed": -100.0},
+        {"at": 160_000, "op": "jog", "speed": 100.0},
+        {"at": 200_000, "op": "input", "name": "limit_neg", "level": 0},
+        {"at": 250_000, "op": "soft_stop"},
+        until=330_000,
+        inputs={"filter": 5, "limit_hard": True},
+    ),
+    # ESTOP in RUN: no pulse after F + 1; a move is refused during the fault, runs once ESTOP is released and the
+    # fault cleared
+    "estop_and_recover": _named(
+        {"at": 0, "op": "move", "steps": 600, **_MOVE},
+        {"at": 100_000, "op": "input", "name": "estop", "level": 1},
+        {"at": 120_000, "op": "move", "steps": 100, **_MOVE},
+        {"at": 130_000, "op": "input", "name": "estop", "level": 0},
+        {"at": 140_000, "op": "clear_fault"},
+        {"at": 150_000, "op": "move", "steps": -300, **_MOVE},
+        inputs={"filter": 12},
+    ),
+    # LIMIT_POS bounces (active for 100, 100 and 20 clocks after scaling, filter 300) before it closes for good:
+    # only the last edge stops the move
+    "limit_bounce": _named(
+        {"at": 0, "op": "move", "steps": 600, **_MOVE},
+        {"at": 100_000, "op": "input", "name": "limit_pos", "level": 1},
+        {"at": 100_300, "op": "input", "name": "limit_pos", "level": 0},
+        {"at": 100_600, "op": "input", "name": "limit_pos", "level": 1},
+        {"at": 100_900, "op": "input", "name": "limit_pos", "level": 0},
+        {"at": 101_200, "op": "input", "name": "limit_pos", "level": 1},
+        {"at": 101_260, "op": "input", "name": "limit_pos", "level": 0},
+        {"at": 120_000, "op": "input", "name": "limit_pos", "level": 1},
+        inputs={"filter": 300},
+    ),
 }

@@ -37,14 +37,15 @@ C_TYPES: dict[str, Any] = {
 }
 
 
-def c_struct(header: Path, name: str) -> type[ctypes.Structure]:
+def c_struct(header: Path, name: str, types: dict[str, Any] | None = None) -> type[ctypes.Structure]:
     """The typedef struct `name` of a C header as a ctypes structure, its fields read from the header (so a field
-    added in C cannot silently shift the Python view)."""
+    added in C cannot silently shift the Python view); `types` names further C types (a struct the struct holds)."""
     match = re.search(r"typedef struct \{([^{}]*)\} " + re.escape(name) + ";", header.read_text())
     if match is None:
         raise ValueError(f"no typedef struct {name} in {header}")
     body = re.sub(r"/\*.*?\*/", "", match.group(1), flags=re.S)
-    fields = [(field, C_TYPES[ctype]) for ctype, field in re.findall(r"(\w+)\s+(\w+)\s*;", body)]
+    known = C_TYPES | (types or {})
+    fields = [(field, known[ctype]) for ctype, field in re.findall(r"(\w+)\s+(\w+)\s*;", body)]
     return type(name, (ctypes.Structure,), {"_fields_": fields})
 
 

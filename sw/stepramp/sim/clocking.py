@@ -59,6 +59,21 @@ async def start_clock_and_reset(
     await apply_reset(clk, rst, cycles=cycles, settle=settle)
 
 
+#: The machine inputs of the tops and of stepramp_core (and the core's multi-axis start), held at 0 unless a test
+#: drives them: an undriven top-level input would read 'U'.
+QUIET_INPUTS = ("limit_neg", "limit_pos", "home", "estop", "sync_start")
+
+
+def quiet_inputs(dut: Any) -> None:
+    """Drive every machine input a top has (QUIET_INPUTS) to 0."""
+    for name in QUIET_INPUTS:
+        try:
+            handle = getattr(dut, name)
+        except AttributeError:
+            continue
+        handle.value = 0
+
+
 def now_periods(period_ps: float = CLK_PERIOD_PS) -> float:
     """Simulation time in clock periods, not rounded (rising edge e of a clock started at time 0 is at e.0)."""
     return get_sim_time("ps") / period_ps
@@ -73,10 +88,12 @@ def now_cycles(period_ps: float = CLK_PERIOD_PS) -> int:
 __all__ = [
     "CLK_PERIOD_NS",
     "CLK_PERIOD_PS",
+    "QUIET_INPUTS",
     "RESET_CYCLES",
     "apply_reset",
     "now_cycles",
     "now_periods",
+    "quiet_inputs",
     "reset_held",
     "start_clock",
     "start_clock_and_reset",

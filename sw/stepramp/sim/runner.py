@@ -22,9 +22,16 @@ HDL_FILES: tuple[str, ...] = (
     "stepramp_engine.vhd",
     "stepramp_stepper.vhd",
     "stepramp_regfile.vhd",
+    "stepramp_inputs.vhd",
     "stepramp_core.vhd",
     "stepramp_plb.vhd",
     "stepramp_axil.vhd",
+    "stepramp_multi_pkg.vhd",
+    "stepramp_multi.vhd",
+    "stepramp_plb_slave.vhd",
+    "stepramp_axil_slave.vhd",
+    "stepramp_multi_plb.vhd",
+    "stepramp_multi_axil.vhd",
 )
 
 #: Entities that are synthesised and checked for latches, with the generics they are checked at.
@@ -36,8 +43,12 @@ SYNTH_TOPS: dict[str, dict[str, int]] = {
     "stepramp_engine": {},
     "stepramp_stepper": {},
     "stepramp_regfile": {},
+    "stepramp_inputs": {},
     "stepramp_plb": {},
     "stepramp_axil": {},
+    # the multi-axis tops (stepramp_multi and the bus slaves under them): 3 axes, not a power of two
+    "stepramp_multi_plb": {"G_AXES": 3},
+    "stepramp_multi_axil": {"G_AXES": 3},
 }
 
 

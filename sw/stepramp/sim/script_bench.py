@@ -23,19 +23,21 @@ import cocotb
 from cocotb.triggers import FallingEdge, First, ReadOnly, RisingEdge, Timer, ValueChange
 from cocotb.utils import get_sim_time
 
-from stepramp.board.regmap import offset
+from stepramp.board.regmap import REGISTERS_BY_NAME, offset
 from stepramp.sim.clocking import (
     CLK_PERIOD_NS,
     CLK_PERIOD_PS,
     apply_reset,
     now_cycles,
     now_periods,
+    quiet_inputs,
     start_clock,
 )
 from stepramp.sim.coverage import watch_core
 from stepramp.sim.ipif import IpifMaster
 
 CTRL = offset("CTRL")
+INPUT_CFG = REGISTERS_BY_NAME["INPUT_CFG"]
 #: Clocks between the reset of a script and its clock 0 (its first commit's preparing writes fit in them).
 LEAD_CLOCKS = 400
 
@@ -166,12 +168,49 @@ async def _latency(bus: Any, clk: Any, rec: _Recorder) -> int:
     return rec.writes[seen][0] - issued
 
 
+async def _drive_pins(dut: Any, clk: Any, origin: int, pins: list[list[Any]]) -> None:
+    """Each (a, pin, level) of the script: the pin (active high) takes the level after edge origin + a."""
+    for a, name, level in pins:
+        edge = origin + int(a)
+        now = get_sim_time("ps")
+        half = edge * CLK_PERIOD_PS + CLK_PERIOD_PS // 2
+        assert now <= half, f"the pin change after edge {a} is late"
+        if half > now:
+            await Timer(half - now, unit="ps")
+        getattr(dut, str(name)).value = int(level)
+
+
+async def _estop_watch(dut: Any, violations: list[str], origin: int) -> None:
+    """docs/algorithm.md, "Machine inputs": no STEP rising edge more than 2 clocks after the filtered ESTOP edge, while
+    the ESTOP stop (the filtered level or the fault) holds."""
+    stop = dut.core_inst.estop_stop
+    while True:
+        await RisingEdge(stop)
+        f = now_cycles(CLK_PERIOD_PS)
+        while int(stop.value):
+            await First(RisingEdge(dut.step), FallingEdge(stop))
+            late = now_cycles(CLK_PERIOD_PS) - f
+            if int(stop.value) and int(dut.step.value) and late > 2:
+                violations.append(f"STEP rose {late} clocks after the filtered ESTOP edge {f - origin}")
+
+
 async def _play(dut: Any, top: str, script: dict[str, Any]) -> dict[str, Any]:
     clk = dut.aclk if top == "stepramp_axil" else dut.clk
+    quiet_inputs(dut)
     bus = await _reset(dut, top)
+    if script.get("pins") or script.get("input_filter") or script.get("limit_hard"):
+        cfg = 1 << INPUT_CFG.field("LIMIT_EN").lsb
+        cfg |= int(bool(script.get("limit_hard"))) << INPUT_CFG.field("LIMIT_HARD").lsb
+        await bus.write(offset("INPUT_FILTER"), int(script.get("input_filter", 0)))
+        await bus.write(offset("INPUT_CFG"), cfg)
     rec = _Recorder(dut, clk)
     latency = await _latency(bus, clk, rec)
     origin = now_cycles(CLK_PERIOD_PS) + LEAD_CLOCKS
+    estop_violations: list[str] = []
+    watchers = [
+        cocotb.start_soon(_drive_pins(dut, clk, origin, script.get("pins", []))),
+        cocotb.start_soon(_estop_watch(dut, estop_violations, origin)),
+    ]
     commits: list[int] = []
     for action in script["actions"]:
         at = origin + int(action["at"])
@@ -196,12 +235,15 @@ async def _play(dut: Any, top: str, script: dict[str, Any]) -> dict[str, Any]:
         commits.append(committed - origin)
     await _at_edge(clk, origin + int(script["until"]) + 2)
     rec.running = False
+    for task in watchers:
+        task.cancel()
     keep = [i for i, e in enumerate(rec.edges) if e - origin <= int(script["until"])]
     return {
         "edges": [rec.edges[i] - origin for i in keep],
         "positions": [rec.positions[i] for i in keep],
         "core_errors": [[e - origin, code] for e, code in rec.errors],
         "commits": commits,
+        "estop_violations": estop_violations,
     }
 
 
@@ -220,6 +262,7 @@ async def play_scripts(dut: Any) -> None:
     request = json.loads(Path(os.environ["STEPRAMP_SCRIPT_REQUEST"]).read_text())
     top = dut._name
     start_clock(dut.aclk if top == "stepramp_axil" else dut.clk)
+    quiet_inputs(dut)
     watch_core(dut.core_inst)
     results = []
     for script in request["scripts"]:

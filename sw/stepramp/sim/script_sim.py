@@ -14,23 +14,11 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from stepramp.board.script import PREP_CLOCKS, ScriptResult, load_script, plan_script
+from stepramp.board.script import PREP_CLOCKS, ScriptResult, core_rejections, load_script, plan_script
 from stepramp.sim.runner import run_cocotb
 
 #: The bus tops by their short names.
 TOPS = {"plb": "stepramp_plb", "axil": "stepramp_axil"}
-
-#: The register file's error codes by number (for "rejected" entries of errors the core flagged).
-_ERR_NAMES: dict[int, str] | None = None
-
-
-def _err_name(code: int) -> str:
-    global _ERR_NAMES
-    if _ERR_NAMES is None:
-        from stepramp.board.regmap import ERROR_CODES
-
-        _ERR_NAMES = {c: name for name, (c, _) in ERROR_CODES.items()}
-    return _ERR_NAMES.get(code, str(code))
 
 
 def simulate_planned(
@@ -47,6 +35,9 @@ def simulate_planned(
             "actions": [{"at": a.at, "writes": [list(w) for w in a.writes], "ctrl": a.ctrl} for a in p.actions],
             "until": p.until,
             "prep_clocks": PREP_CLOCKS,
+            "pins": [list(pin) for pin in p.pins],
+            "input_filter": p.input_filter,
+            "limit_hard": p.limit_hard,
         }
         for p in planned
     ]
@@ -70,7 +61,5 @@ def simulate_script(script: dict[str, Any], build: Path, top: str = "plb", waves
     flagged as {"at", "op": "core", "reason"}."""
     planned = plan_script(load_script(script))
     res = simulate_planned([planned], build, top, waves)[0]
-    rejected = list(planned.rejected) + [
-        {"at": at, "op": "core", "reason": f"the core flagged {_err_name(code)}"} for at, code in res["core_errors"]
-    ]
+    rejected = list(planned.rejected) + core_rejections(res["core_errors"])
     return {"edges": res["edges"], "positions": res["positions"], "rejected": rejected}

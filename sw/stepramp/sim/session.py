@@ -221,7 +221,7 @@ try:
     from cocotb.triggers import ClockCycles, First, RisingEdge, SimTimeoutError, Timer, with_timeout
     from cocotb.utils import get_sim_time
 
-    from stepramp.sim.clocking import apply_reset, start_clock
+    from stepramp.sim.clocking import apply_reset, quiet_inputs, start_clock
 except ImportError:  # the front end does not need cocotb
     cocotb = None  # type: ignore[assignment]
 
@@ -238,6 +238,7 @@ if cocotb is not None:
         cfg: dict[str, Any] = json.loads(os.environ["STEPRAMP_SESSION_CONFIG"])
         period_ps = round(1e12 / cfg["fclk"])
         start_clock(dut.clk, period_ps)
+        quiet_inputs(dut)
 
         async def limited(work: Any, clocks: int, what: str) -> Any:
             """Await work within a simulated-time limit of `clocks` clock periods; fail clearly if it hangs."""

@@ -216,7 +216,10 @@ def run_script(tool: str, args: argparse.Namespace) -> tuple[dict[str, Any], int
         out["error"] = str(exc)
         return out, 2
     if tool == "model":
-        out |= {"edges": planned.edges, "positions": planned.positions, "rejected": planned.rejected}
+        from stepramp.board.script import core_rejections
+
+        rejected = planned.rejected + core_rejections(planned.errors)
+        out |= {"edges": planned.edges, "positions": planned.positions, "rejected": rejected}
         return out, 0
 
     from stepramp.sim.script_sim import simulate_script  # needs cocotb and GHDL, the model does not

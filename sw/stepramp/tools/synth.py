@@ -14,6 +14,10 @@ and build/synth/report.md.
 
     python -m stepramp.tools.synth [--out DIR] [--no-pnr] [--record] [--docs] [TOP ...]
 
+The multi-axis top is reported at 1, 2 and 4 axes: `stepramp_multi_plb@N` is stepramp_multi_plb with G_AXES = N
+(VARIANTS; each in a folder of its own under --out, no per-entity fmax), and the markdown ends with the cost of one
+more axis, read off between the smallest and the largest count.
+
 --record writes the iCE40 LUT4 / FF counts per entity (synth_ice40 -noflatten, with the entities below it) to
 scripts/synth_baseline.json, the figures the regression's size test (tb/test_synth_size.py) holds every entity of
 the PLB-like top to (it fails above +10 %). --docs rewrites the entity rows of the pages in docs/ (each page's
@@ -40,8 +44,16 @@ from stepramp.tools.rtlcheck import analyse, synth
 #: The recorded size the regression holds the tops to.
 BASELINE = Path(__file__).resolve().parents[3] / "scripts" / "synth_baseline.json"
 
-#: The tops of the report (the peripheral as users instantiate it).
-REPORT_TOPS = ("stepramp_plb", "stepramp_axil")
+#: The multi-axis top at these axis counts, so that the cost of one more axis reads off the report.
+MULTI_AXES = (1, 2, 4)
+
+#: Report names of a top at other generics than SYNTH_TOPS's: name -> (entity, generics).
+VARIANTS: dict[str, tuple[str, dict[str, int]]] = {
+    f"stepramp_multi_plb@{n}": ("stepramp_multi_plb", {"G_AXES": n}) for n in MULTI_AXES
+}
+
+#: The tops of the report (the peripheral as users instantiate it), then the multi-axis variants.
+REPORT_TOPS = ("stepramp_plb", "stepramp_axil", *VARIANTS)
 
 #: The clock nextpnr is asked for: the goal (issue 12). nextpnr stops improving timing once a design meets its
 #: target, so a lower target reports a lower "Max frequency" for the same netlist.
@@ -72,11 +84,12 @@ def _cells(stat: str) -> dict[str, int]:
     return {m.group(1): int(m.group(2)) for m in re.finditer(r"^\s+(\S+)\s+(\d+)\s*$", block, re.M)}
 
 
-def netlist(top: str, out: Path) -> Path:
-    """ghdl synth of a top to Verilog in out/ (no latch: synth refuses them); returns the .v path."""
+def netlist(top: str, out: Path, generics: dict[str, int] | None = None) -> Path:
+    """ghdl synth of a top to Verilog in out/ (no latch: synth refuses them) at its SYNTH_TOPS generics, or at
+    `generics`; returns the .v path."""
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
-        errors = analyse("08", work) or synth(top, SYNTH_TOPS.get(top, {}), work, out)
+        errors = analyse("08", work) or synth(top, SYNTH_TOPS.get(top, {}) if generics is None else generics, work, out)
     if errors:
         raise RuntimeError("\n".join(errors))
     return out / f"{top}.v"
@@ -270,8 +283,12 @@ def xc7(top: str, verilog: Path, out: Path) -> dict[str, int]:
     }
 
 
-def report_top(top: str, out: Path, pnr: bool = True) -> dict[str, Any]:
-    verilog = netlist(top, out)
+def report_top(
+    top: str, out: Path, pnr: bool = True, generics: dict[str, int] | None = None, entity_pnr: bool = True
+) -> dict[str, Any]:
+    """One top's entry of the report (at `generics`, else its SYNTH_TOPS generics); entity_pnr: the HX8K fmax of each
+    entity too."""
+    verilog = netlist(top, out, generics)
     cells, _ = ice40_cells(top, verilog, out)
     entry: dict[str, Any] = {}
     wrapped: Path | None = None
@@ -304,7 +321,7 @@ def report_top(top: str, out: Path, pnr: bool = True) -> dict[str, Any]:
     entry["entities"] = {}
     for name, cells in sorted(entities.items(), key=lambda kv: -kv[1].get("SB_LUT4", 0)):
         row: dict[str, Any] = dict(ice40_summary(cells))
-        if pnr and name != top:
+        if pnr and entity_pnr and name != top:
             try:
                 row["fmax_mhz"] = entity_fmax(modules[name], verilog, out)
             except RuntimeError as exc:
@@ -312,6 +329,28 @@ def report_top(top: str, out: Path, pnr: bool = True) -> dict[str, Any]:
                 row["pnr_error"] = str(exc).splitlines()[-1][:200]
         entry["entities"][name] = row
     return entry
+
+
+def report_entry(name: str, out: Path, pnr: bool = True) -> dict[str, Any]:
+    """A report top (REPORT_TOPS) by its name: a variant (VARIANTS) in out/<name with @ as _x>, without the
+    entities' fmax (they are the single-axis top's), or a top of SYNTH_TOPS in out."""
+    if name in VARIANTS:
+        top, generics = VARIANTS[name]
+        folder = out / name.replace("@", "_x")
+        folder.mkdir(parents=True, exist_ok=True)
+        return report_top(top, folder, pnr=pnr, generics=generics, entity_pnr=False)
+    return report_top(name, out, pnr=pnr)
+
+
+def axis_cost(report: dict[str, Any]) -> dict[str, float] | None:
+    """iCE40 LUT4 and FF (flattened, HX8K figures) of one more axis of the multi-axis top: the difference between
+    the largest and the smallest axis count of the report, per axis; None with fewer than two counts."""
+    counts = sorted(n for n in MULTI_AXES if f"stepramp_multi_plb@{n}" in report)
+    if len(counts) < 2:
+        return None
+    low, high = (report[f"stepramp_multi_plb@{n}"]["ice40_hx8k"] for n in (counts[0], counts[-1]))
+    span = counts[-1] - counts[0]
+    return {key: (high[key] - low[key]) / span for key in ("lut4", "ff", "carry")}
 
 
 def _fmax(entry: dict[str, Any]) -> str:
@@ -336,6 +375,13 @@ def markdown(report: dict[str, Any]) -> str:
             f"| {top} | {hx['lut4']} | {hx['ff']} | {hx['carry']} | {hx.get('ebr', 0)} | {_fmax(hx)} | {_fmax(up)} | "
             f"{x['lut']} | {x.get('lutram', 0)} | {x['ff']} |"
         )
+    cost = axis_cost(report)
+    if cost is not None:
+        lines += [
+            "",
+            f"One more axis of stepramp_multi_plb (iCE40, flattened): {cost['lut4']:.0f} LUT4, {cost['ff']:.0f} FF, "
+            f"{cost['carry']:.0f} carry.",
+        ]
     for top, e in report.items():
         lines += [
             "",
@@ -399,7 +445,7 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     out: Path = args.out.resolve()
     out.mkdir(parents=True, exist_ok=True)
-    report = {top: report_top(top, out, pnr=not args.no_pnr) for top in args.tops}
+    report = {top: report_entry(top, out, pnr=not args.no_pnr) for top in args.tops}
     (out / "report.json").write_text(json.dumps(report, indent=2) + "\n")
     (out / "report.md").write_text(markdown(report))
     if args.record:

@@ -1,0 +1,198 @@
+-- SPDX-License-Identifier: MIT
+-- stepramp_inputs: the machine inputs of one axis (LIMIT_NEG, LIMIT_POS, HOME, ESTOP). Each pin passes a two-flop
+-- synchroniser, its polarity and a filter: the filtered level follows the synchronised one once it has differed for
+-- FILTER clocks in a row. The block also keeps the free-running 64-bit clock count (TIME) and the position latch.
+-- Timing and the model of the filter: docs/stepramp_inputs.md and docs/algorithm.md, "Machine inputs".
+
+library ieee;
+  use ieee.std_logic_1164.all;
+  use ieee.numeric_std.all;
+
+entity stepramp_inputs is
+  generic (
+    -- Width of the filter counter: INPUT_FILTER holds up to 2^G_FILTER_BITS - 1 clocks.
+    G_FILTER_BITS : positive := 20
+  );
+  port (
+    clk : in    std_logic;
+    rst : in    std_logic;
+    -- Pins, asynchronous: bit 0 LIMIT_NEG, 1 LIMIT_POS, 2 HOME, 3 ESTOP.
+    pins : in    std_logic_vector(3 downto 0);
+    -- Configuration: the filter length in clocks (0 acts as 1) and the polarity per pin (1: active low).
+    filter : in    std_logic_vector(G_FILTER_BITS - 1 downto 0);
+    pol    : in    std_logic_vector(3 downto 0);
+    -- Filtered active levels, and one-clock strobes at the edge where a level became active (rise) or inactive
+    -- (fall): level and strobe change at the same clock edge.
+    level : out   std_logic_vector(3 downto 0);
+    rise  : out   std_logic_vector(3 downto 0);
+    fall  : out   std_logic_vector(3 downto 0);
+    -- Position latch: the source (0 none, 1 HOME, 2 LIMIT_NEG, 3 LIMIT_POS) and its edges; latch_clr re-arms.
+    latch_src     : in    std_logic_vector(1 downto 0);
+    latch_active  : in    std_logic;
+    latch_release : in    std_logic;
+    latch_clr     : in    std_logic;
+    position      : in    std_logic_vector(31 downto 0);
+    latched       : out   std_logic;
+    latch_pos     : out   std_logic_vector(31 downto 0);
+    latch_time    : out   std_logic_vector(63 downto 0);
+    -- Clock edges since reset: 0 in the cycle after the last reset edge, then one more per clock.
+    time_count : out   std_logic_vector(63 downto 0)
+  );
+end entity stepramp_inputs;
+
+architecture rtl of stepramp_inputs is
+
+  type cnt_array_t is array (0 to 3) of unsigned(G_FILTER_BITS - 1 downto 0);
+
+  signal sync1     : std_logic_vector(3 downto 0);
+  signal sync2     : std_logic_vector(3 downto 0);
+  signal level_r   : std_logic_vector(3 downto 0);
+  signal rise_r    : std_logic_vector(3 downto 0);
+  signal fall_r    : std_logic_vector(3 downto 0);
+  signal cnt       : cnt_array_t;
+  signal last      : unsigned(G_FILTER_BITS - 1 downto 0);
+  signal time_r    : unsigned(63 downto 0);
+  signal latched_r : std_logic;
+  signal lpos_r    : std_logic_vector(31 downto 0);
+  signal ltime_r   : unsigned(63 downto 0);
+
+begin
+
+  -- The ASYNC_REG-style pair: sync1 is the only flip-flop that sees a pin.
+  sync_proc : process (clk) is
+  begin
+
+    if rising_edge(clk) then
+      if (rst = '1') then
+        sync1 <= (others => '0');
+        sync2 <= (others => '0');
+      else
+        sync1 <= pins xor pol;
+        sync2 <= sync1;
+      end if;
+    end if;
+
+  end process sync_proc;
+
+  -- The count a mismatch must reach: FILTER - 1 (0 for FILTER 0 and 1), registered off the compare's path.
+  last_proc : process (clk) is
+  begin
+
+    if rising_edge(clk) then
+      if (rst = '1' or unsigned(filter) = 0) then
+        last <= (others => '0');
+      else
+        last <= unsigned(filter) - 1;
+      end if;
+    end if;
+
+  end process last_proc;
+
+  -- The filter: a synchronised level that differs from the filtered one for FILTER edges in a row replaces it; any
+  -- sample that agrees restarts the count (a bounce).
+  filter_proc : process (clk) is
+  begin
+
+    if rising_edge(clk) then
+      rise_r <= (others => '0');
+      fall_r <= (others => '0');
+
+      for i in 0 to 3 loop
+
+        if (sync2(i) /= level_r(i)) then
+          if (cnt(i) >= last) then
+            level_r(i) <= sync2(i);
+            rise_r(i)  <= sync2(i);
+            fall_r(i)  <= not sync2(i);
+            cnt(i)     <= (others => '0');
+          else
+            cnt(i) <= cnt(i) + 1;
+          end if;
+        else
+          cnt(i) <= (others => '0');
+        end if;
+
+      end loop;
+
+      if (rst = '1') then
+        level_r <= (others => '0');
+        rise_r  <= (others => '0');
+        fall_r  <= (others => '0');
+
+        for i in 0 to 3 loop
+
+          cnt(i) <= (others => '0');
+
+        end loop;
+
+      end if;
+    end if;
+
+  end process filter_proc;
+
+  -- TIME and the latch: the first selected edge of the source since the last clear takes POSITION and TIME, both as
+  -- they are in the clock after the filtered level changed (docs/stepramp_inputs.md, "Latch timing").
+  latch_proc : process (clk) is
+
+    variable hit : std_logic;
+
+  begin
+
+    if rising_edge(clk) then
+      time_r <= time_r + 1;
+      hit    := '0';
+
+      case latch_src is
+
+        when "01" =>
+
+          hit := (rise_r(2) and latch_active) or (fall_r(2) and latch_release);
+
+        when "10" =>
+
+          hit := (rise_r(0) and latch_active) or (fall_r(0) and latch_release);
+
+        when "11" =>
+
+          hit := (rise_r(1) and latch_active) or (fall_r(1) and latch_release);
+
+        when others =>
+
+          hit := '0';
+
+      end case;
+
+      if (latch_clr = '1') then
+        latched_r <= '0';
+      end if;
+
+      -- (a clear and an edge in the same clock: the edge is latched)
+      if (hit = '1' and (latched_r = '0' or latch_clr = '1')) then
+        latched_r <= '1';
+        lpos_r    <= position;
+        ltime_r   <= time_r;
+      end if;
+
+      if (rst = '1') then
+        time_r    <= (others => '0');
+        latched_r <= '0';
+        lpos_r    <= (others => '0');
+        ltime_r   <= (others => '0');
+      end if;
+    end if;
+
+  end process latch_proc;
+
+  level      <= level_r;
+  rise       <= rise_r;
+  fall       <= fall_r;
+  latched    <= latched_r;
+  latch_pos  <= lpos_r;
+  latch_time <= std_logic_vector(ltime_r);
+  time_count <= std_logic_vector(time_r);
+
+  assert G_FILTER_BITS >= 1 and G_FILTER_BITS <= 32
+    report "stepramp_inputs: G_FILTER_BITS must be 1 .. 32"
+    severity failure;
+
+end architecture rtl;
