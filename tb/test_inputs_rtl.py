@@ -29,6 +29,7 @@ from stepramp.board.regmap import ERROR_CODES, REGISTERS_BY_NAME, offset
 from stepramp.models.engine import edges as model_edges
 from stepramp.models.engine import edges_with_stop, segment_edges
 from stepramp.sim.clocking import CLK_PERIOD_PS, now_periods
+from stepramp.sim.coverage import watch_coverage
 from stepramp.sim.profiles import PROFILES_BY_NAME
 from stepramp.sim.runner import run_cocotb
 from tbutil import build_dir, cocotb, edges_differ
@@ -89,6 +90,7 @@ class InputsTb:
 
         task = cocotb.start_soon(release())
         await tb.reset()
+        tb.bus = watch_coverage(dut.core_inst, tb.bus)
         assert task.done() and seen, "the reset's release was not seen"
         # rst falls between edge r (the last that saw it) and edge r + 1.
         return cls(tb, math.floor(seen[0]))
@@ -438,14 +440,15 @@ async def position_latch(dut) -> None:
         pulses = sum(1 for e in model_edges(plan) if start + e <= f)
         return start_pos + sign * pulses, f - ib.reset_edge
 
-    for release in (0, 1):
+    # HOME's activation in ACCEL, RUN and DECEL, its release in RUN
+    for release, pulses in ((0, 10), (0, 100), (0, 185), (1, 100)):
         await ib.configure(6, latch_src=1, on_active=1 - release, on_release=release)
         await bus.write(offset("CTRL"), field(CTRL, "IRQ_LATCH_EN"), strobe=0x2)
         if release:
             await ib.pin("home", 1)
             await ClockCycles(ib.clk, 20)
         plan = trap(200)
-        n0, s0 = await move_until(ib, drv, plan, 60 + 50 * release)
+        n0, s0 = await move_until(ib, drv, plan, pulses)
         a = await ib.pin("home", 1 - release)
         await ClockCycles(ib.clk, 20)
         f = ib.filtered_at(2, a)

@@ -2047,7 +2047,8 @@ def random_inputs(rng: random.Random, tb: Bench) -> dict[str, int]:
         "wdata": rng.getrandbits(32),
         "be": rng.randrange(16),
     }
-    if done and queued and rng.random() < 0.4:  # the queued move's limit becomes active at its done
+    # Once a few queued moves have started, the queued move's limit becomes active at its done now and then.
+    if done and queued and tb.model.events["queued start"] >= 3 and rng.random() < 0.5:
         bit = 1 << INPUTS.index("LIMIT_NEG" if tb.model.store["STEPS"] >> 31 else "LIMIT_POS")
         if not eng["in_level"] & bit:
             eng["in_level"] |= bit
@@ -2083,10 +2084,10 @@ def random_inputs(rng: random.Random, tb: Bench) -> dict[str, int]:
         elif kind < 0.9:  # one command mix (QUEUE and CHANGE mostly), the other command bits 0
             drive["wdata"] = (drive["wdata"] & ~access_mask(CTRL, WS)) | rng.choice(COMMAND_MIXES)
     elif offset == off("STATUS"):
-        drive["wdata"] = rng.choice((WORD, 0, drive["wdata"], status_bits(*EVENT_FLAGS, "LATCHED")))
+        drive["wdata"] = rng.choice((WORD, 0, drive["wdata"]))
         if rng.random() < 0.3:  # an engine event in the cycle of the clear
             drive[rng.choice(("eng_done", "eng_error", "eng_chg_refused"))] = 1
-        if rng.random() < 0.1:  # an input's activation in the cycle of the clear
+        if rng.random() < 0.25:  # an input's activation in the cycle of the clear
             bit = 1 << rng.randrange(len(INPUTS))
             if not eng["in_level"] & bit:
                 eng["in_level"] |= bit

@@ -116,3 +116,42 @@ def test_jog_and_change_while_running_equal_the_model() -> None:
     assert out.getvalue().count("Running... OK") == 3, out.getvalue()[-2000:]
     assert got == want, (got, want)
     assert got[2] > 0 and got[3] < got[2] and got[4] == got[3] + 800
+
+
+def test_home_on_the_machine() -> None:
+    """`home` on the session's machine (stepramp.sim.session.MECHANICS: HOME active for carriage steps <= -100,
+    bouncing): from the start (off the switch) and from a place on the switch (the homing leaves it first), each
+    homing makes the switch edge, carriage step -99 (the physics), the position asked for; the carriage's step and
+    POSITION printed in the info line agree with that after each."""
+    from stepramp.sim.session import MECHANICS
+    from stepramp.tools.shell import SHELL_SESSION_CONFIG, Homed
+
+    class Recording(RtlBackend):
+        def __init__(self, session: RtlSession) -> None:
+            super().__init__(session)
+            self.homed: list[tuple[int, Homed]] = []
+
+        def home(self, offset: int, speed: float, accel: float) -> Homed:
+            homed = super().home(offset, speed, accel)
+            self.homed.append((offset, homed))
+            return homed
+
+    script = "a 32000\nhome 7\nm -10\nhome -20\nm 20\n"
+    out = io.StringIO()
+    with RtlSession(build_dir("shell_home"), config=SHELL_SESSION_CONFIG) as session:
+        backend = Recording(session)
+        Shell(backend, out, **SHELL_CONFIG).run(io.StringIO(script))
+    text = out.getvalue()
+    edge = MECHANICS["home_at"] + 1
+    assert text.count(f"Homing... OK: the switch edge (machine step {edge}) is position") == 2, text[-2000:]
+    assert [offset for offset, _ in backend.homed] == [7, -20]
+    for offset, homed in backend.homed:
+        assert homed.switch_edge == edge
+        # POSITION counts the carriage's steps: `offset` is where the carriage is at the switch edge
+        assert homed.position - offset == homed.carriage - edge, (offset, homed)
+    got = positions(text)
+    # start, a, home 7, m -10 (onto the switch), home -20, m 20
+    assert got[:2] == [0, 0]
+    assert got[2] == backend.homed[0][1].position and got[3] == got[2] - 10
+    assert got[3] - 7 + edge < edge, "m -10 did not put the carriage on the switch"
+    assert got[4] == backend.homed[1][1].position and got[5] == got[4] + 20

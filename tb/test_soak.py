@@ -25,7 +25,14 @@ or stepramp_axil (AXI4-Lite, with idle cycles and backpressure on every channel 
   that happen), as the move alone; POSITION either way;
 * ``queue``: a move and a second one queued during it (CTRL.QUEUE), either direction: both as the model says;
 * ``jog_zero``: a jog, then the jog the other way through zero (SOFT_STOP with QUEUE in one write), ended by a hard
-  stop: each jog's edges as stepramp.models.engine.segment_edges says with its stop.
+  stop: each jog's edges as stepramp.models.engine.segment_edges says with its stop;
+* ``limit``: a move and the limit it runs towards switched on after a random number of pulses (random FILTER, soft
+  or hard, sometimes after a bounce shorter than the filter): the edges as the model's stop committed at F + 1
+  (docs/algorithm.md, "Machine inputs"), ERROR LIMIT when it came while the move was busy; a START towards the
+  active limit refused, no pulse;
+* ``estop``: ESTOP during a move, a jog or at rest: the edges as the model's hard stop sampled at F + 1, ERROR
+  ESTOP, the fault latched and ENABLE low, a START refused; then the release, the clear and ENABLE again. An
+  EstopMonitor runs through the whole soak: no STEP edge more than 2 clocks after a filtered ESTOP edge.
 
 The same seed gives the same operations (and the same bus pauses), so a failing seed replays exactly:
 `make soak SEED=S OPS=K` stops after the failing operation K. `make soak SECONDS=N SEED=S` runs for N seconds of
@@ -45,8 +52,9 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from cocotb.triggers import ClockCycles, RisingEdge, with_timeout
+from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge, with_timeout
 
+from monitors import EstopMonitor
 from peripheral_tb import BAD_VALUES, TOPS, PeripheralTb, expect_rejected
 from stepramp.board.change import Segment, plan_change, speed_at_pulse
 from stepramp.board.driver import MODES, Outputs, StepRamp, StepRampError
@@ -56,10 +64,10 @@ from stepramp.models.engine import change_edges, edges_with_stop, segment_edges
 from stepramp.models.engine import edges as model_edges
 from stepramp.sim.profiles import design_args
 from stepramp.sim.runner import run_cocotb
-from tbutil import build_dir, cocotb, edges_differ, env_int
+from tbutil import build_dir, cocotb, edges_differ, env_int, now_cycles
 
 MOTION = STAGING  # written at any time; the engine takes them at START
-CONFIG = ("DRIVE", "STEP_WIDTH", "DIR_TIMING", "PWM_PERIOD", "STEP_SPACE")
+CONFIG = ("DRIVE", "STEP_WIDTH", "DIR_TIMING", "PWM_PERIOD", "STEP_SPACE", "INPUT_FILTER", "INPUT_CFG")
 READ_ONLY = ("ID", "CUR_DELAY", "STEP_COUNT")
 #: Operation weights.
 OPS = {
@@ -73,6 +81,8 @@ OPS = {
     "change": 3,
     "queue": 2,
     "jog_zero": 2,
+    "limit": 2,
+    "estop": 1,
 }
 #: The soak's driver: a 1 MHz plan clock on a 200 steps/rev motor (the tick is one clock at PRESCALE 1).
 FCLK, SPR = 1e6, 200.0
@@ -406,6 +416,138 @@ class Soak:
         await self.tb.configure(outputs, enable=rng.random() < 0.9)
         self.counts["configurations"] += 1
 
+    # -- the machine inputs (docs/algorithm.md, "Machine inputs") ----------------------------------------------------
+    async def inputs(self, filter_clocks: int, hard: bool) -> int:
+        """INPUT_FILTER and INPUT_CFG (limits on, soft or hard); returns N = max(FILTER, 1)."""
+        cfg = REGISTERS_BY_NAME["INPUT_CFG"]
+        await self.tb.bus.write(offset("INPUT_FILTER"), filter_clocks)
+        word = cfg.field("LIMIT_EN").mask | (cfg.field("LIMIT_HARD").mask if hard else 0)
+        await self.tb.bus.write(offset("INPUT_CFG"), word)
+        return max(filter_clocks, 1)
+
+    async def pin(self, name: str, level: int) -> int:
+        """Drive a pin after the next falling edge; the last rising edge before the change (a)."""
+        tb = self.tb
+        await FallingEdge(tb.clk)
+        getattr(tb.dut, name).value = level
+        return now_cycles()
+
+    async def bounce(self, name: str, n: int) -> None:
+        """A bounce shorter than the filter (N >= 3): on for fewer than N clocks, off again, a pause."""
+        if n >= 3 and self.rng.random() < 0.5:
+            await self.pin(name, 1)
+            await ClockCycles(self.tb.clk, self.rng.randint(1, n - 2))
+            await self.pin(name, 0)
+            await ClockCycles(self.tb.clk, self.rng.randint(1, n - 2))
+            self.counts["bounces"] += 1
+
+    async def refused_start(self, drv: StepRamp, plan: Plan, code: str) -> None:
+        """A START that the core must refuse with `code`: no pulse."""
+        tb = self.tb
+        await drv.program(plan)
+        k = len(tb.step_edges)
+        await drv.start()
+        status = await drv.status()
+        for _ in range(200):
+            if status.done:
+                break
+            await ClockCycles(tb.clk, 50)
+            status = await drv.status()
+        await ClockCycles(tb.clk, 500)
+        if not status.error or status.err_name != code or len(tb.step_edges) != k:
+            raise SoakError(f"a START during {code}: {status}, {len(tb.step_edges) - k} pulses")
+        await drv.clear_flags()
+
+    async def op_limit(self) -> None:
+        tb, rng = self.tb, self.rng
+        drv, plan = self.plan(min_steps=12)
+        pin = "limit_neg" if plan.direction else "limit_pos"
+        hard = rng.random() < 0.5
+        n = await self.inputs(rng.choice((0, 1, 3, 20, 60)), hard)
+        await drv.program(plan)
+        n0, s0 = tb.pins.mark()
+        await drv.start()
+        while len(tb.step_edges) < n0 + rng.randint(1, plan.steps - 2):
+            await RisingEdge(tb.dut.step)
+        await self.bounce(pin, n)
+        a = await self.pin(pin, 1)
+        try:
+            status = await self.wait_done(drv)
+            err = None
+        except StepRampError:
+            status = await drv.status()
+            err = status.err_name
+            await drv.clear_flags()
+        f = a + n + 2  # the filtered edge; the register file acts at f + 1, the engine samples the stop at f + 2
+        start, want = tb.start_edges[s0], model_edges(plan)
+        busy = f + 1 - start <= want[-1]
+        if busy:
+            want = edges_with_stop(plan, "hard" if hard else "soft", f + 2 - start)
+        edges = tb.edges_since(n0, s0)
+        self.check_edges(f"{pin} ({'hard' if hard else 'soft'}, FILTER N = {n})", edges, want)
+        if err != ("LIMIT" if busy else None):
+            raise SoakError(f"{pin}: error {err}, expected {'LIMIT' if busy else None}")
+        self.position += -len(edges) if plan.direction else len(edges)
+        await self.check_position(pin)
+        await self.refused_start(drv, plan, "LIMIT")
+        await self.pin(pin, 0)
+        await ClockCycles(tb.clk, n + 8)
+        events = REGISTERS_BY_NAME["STATUS"]
+        await tb.bus.write(offset("STATUS"), events.field("LIMIT_NEG_EV").mask | events.field("LIMIT_POS_EV").mask)
+        self.counts[f"limit stops ({'hard' if hard else 'soft'})" if busy else "limits after the move"] += 1
+        self.counts["moves"] += 1
+
+    async def op_estop(self) -> None:
+        tb, rng = self.tb, self.rng
+        n = await self.inputs(rng.choice((0, 1, 5, 40)), False)
+        kind = rng.choice(("move", "move", "jog", "idle"))
+        drv, plan = self.plan(min_steps=12)
+        enabled = tb.enabled
+        tb.finish()  # ENABLE drops: the winding monitors stop here (the STEP pin keeps its EstopMonitor)
+        n0, s0 = tb.pins.mark()
+        segment, forward = None, plan.direction == 0
+        if kind == "move":
+            await drv.program(plan)
+            await drv.start()
+        elif kind == "jog":
+            accel, decel, speed = self.new_values(1)
+            drv = tb.driver()
+            speed *= rng.choice((1, -1))
+            segment, forward = await drv.jog(speed, accel, decel), speed > 0
+        if kind != "idle":
+            while len(tb.step_edges) < n0 + rng.randint(1, 10 if segment is not None else plan.steps - 2):
+                await RisingEdge(tb.dut.step)
+        await self.bounce("estop", n)
+        a = await self.pin("estop", 1)
+        await ClockCycles(tb.clk, n + 10)
+        status = await drv.status()
+        for _ in range(200):
+            if status.done or kind == "idle":
+                break
+            await ClockCycles(tb.clk, 50)
+            status = await drv.status()
+        f = a + n + 2  # the engine samples the ESTOP stop at f + 1
+        if kind != "idle":
+            request = f + 1 - tb.start_edges[s0]
+            want = (
+                edges_with_stop(plan, "hard", request)
+                if segment is None
+                else segment_edges(segment, 1, stop=("hard", request))
+            )
+            edges = tb.edges_since(n0, s0)
+            self.check_edges(f"ESTOP in a {kind}", edges, want)
+            self.position += len(edges) if forward else -len(edges)
+        if not (status.error and status.err_name == "ESTOP" and status.estop_fault) or int(tb.dut.enable.value):
+            raise SoakError(f"ESTOP in a {kind}: {status}, ENABLE {tb.dut.enable.value}")
+        await drv.clear_flags()
+        await self.refused_start(drv, plan, "ESTOP")
+        await self.pin("estop", 0)
+        await ClockCycles(tb.clk, n + 8)
+        await drv.clear_estop(enable=enabled)
+        await self.check_position("after ESTOP")
+        await tb.configure(tb.outputs, enable=enabled)
+        self.counts[f"ESTOP ({kind})"] += 1
+
     async def play(self, name: str) -> None:
         """One operation, within a simulated-time limit (a hang fails here, not at the test's limit): 10 ms, five
         times the longest move the generator makes (160 steps of 600 clocks, about 1 ms) plus its bus traffic."""
@@ -426,6 +568,7 @@ async def soak(dut) -> None:
     tb = await PeripheralTb.started(dut, idle=True)
     rng = random.Random(SEED)
     soak = Soak(tb, rng)
+    estop = EstopMonitor(dut.core_inst.estop_stop, [dut.step]).start()
     await tb.configure(Outputs(mode="half", step_width=5, dir_setup=20, dir_hold=10), enable=True)
     await tb.driver().enable_irq(done=True, error=True)
     t0 = time.monotonic()
@@ -445,6 +588,8 @@ async def soak(dut) -> None:
         ops += 1
         soak.counts[f"op {name}"] += 1
     tb.finish()
+    estop.stop()
+    estop.check()
     summary = {
         "top": tb.top,
         "seed": SEED,

@@ -437,7 +437,7 @@ def test_both_drivers_home_to_the_switch_edge(so: ctypes.CDLL, start: int, delay
     assert py.zero == c.zero == -39
     assert py.core.moves == c.core.moves == (4 if start <= -40 else 3)
     assert py.writes == c.writes
-    assert len(py.writes) > 100
+    assert len(py.writes) > 300, len(py.writes)  # bytes: 320 from off the switch, 424 from on it
 
 
 def test_both_drivers_home_on_a_limit_and_fail_alike(so: ctypes.CDLL) -> None:

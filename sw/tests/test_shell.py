@@ -220,3 +220,17 @@ def test_jog_and_change_commands_on_the_model() -> None:
     pos = [int(m.group(1)) for m in map(INFO.match, out.getvalue().splitlines()) if m]
     assert pos[0] == 0 and pos[1] > 0 and pos[2] == pos[1] + 800 and pos[3] == pos[2]
     assert "error: speed 5 is out of range 12 - 6135 (either sign)" in out.getvalue()
+
+
+def test_home_command_needs_the_machine() -> None:
+    """`home [pos]`: the model has no machine (the reason, the session goes on, the position unchanged); bad values."""
+    lines, backend = session("m 50\nhome\nhome 7 8\nhome x\nhome 99999\n")
+    errors = [line for line in lines if line.startswith("error:")]
+    assert errors == [
+        "error: home needs the simulated machine (its switch and the core's latch): not with --model",
+        "error: 'home' takes at most 1 value, got 2",
+        "error: position must be an integer, got 'x'",
+        "error: position 99999 is out of range -64000 - 64000",
+    ]
+    assert [g[0] for g in infos(lines)][-1] == 50 and backend.position == 50
+    assert any(line.startswith("home [pos]") for line in lines)

@@ -375,6 +375,8 @@ class StepRamp:
         await self.access.write(offset("CTRL"), _bit("CTRL", "HARD_STOP"), strobe=0x1)
 
     async def enable_irq(self, done: bool = True, error: bool = True) -> None:
+        """CTRL.IRQ_DONE_EN and IRQ_ERROR_EN (byte 1 of CTRL, so the input interrupt enables there are cleared:
+        enable_input_irq sets them all)."""
         value = (_bit("CTRL", "IRQ_DONE_EN") if done else 0) | (_bit("CTRL", "IRQ_ERROR_EN") if error else 0)
         await self.access.write(offset("CTRL"), value, strobe=0x2)
 

@@ -15,7 +15,12 @@ The bins (docs/verification.md, "Functional coverage"):
 * ``stepramp.drive.mode_dir``: every DRIVE mode in both directions (a STEP pulse seen in that mode and direction);
 * ``stepramp.change.taken``: a take-over (CTRL.CHANGE) in each state of the running motion: ACCEL, RUN, DECEL;
 * ``stepramp.change.queue``: a queued move started in the same and in the opposite direction, and a jog through
-  zero (a queued move against the direction of an endless motion, after its stop).
+  zero (a queued move against the direction of an endless motion, after its stop);
+* ``stepramp.input.edge``: each machine input (LIMIT_NEG, LIMIT_POS, HOME, ESTOP) becoming active (its filtered
+  level) with the engine in each state: STOP, ACCEL, RUN, DECEL;
+* ``stepramp.limit.stop``: each limit stopping a motion towards it, soft and hard, in ACCEL, RUN and DECEL;
+* ``stepramp.estop.motion``: ESTOP during every kind of motion: idle, a start held for DIR setup, a move's ACCEL,
+  RUN and DECEL, and a jog (an endless segment).
 
 Monitors watch the entities' own ports and signals (engine, stepping logic, register file), wherever they sit: the
 engine bench's top, or inside stepramp_core. They wait for value changes of slow signals (state, strobes, error
@@ -62,6 +67,9 @@ ERROR_NAMES = tuple(name for name in ERROR_CODES if name != "NONE")
 REGISTER_NAMES = tuple(r.name for r in REGISTERS)
 DRIVE_MODES = tuple(MODES)
 QUEUE_KINDS = ("same direction", "opposite direction", "jog through zero")
+INPUT_NAMES = ("LIMIT_NEG", "LIMIT_POS", "HOME", "ESTOP")
+LIMIT_NAMES = INPUT_NAMES[:2]
+ESTOP_MOTIONS = ("idle", "held start", ACCEL, RUN, DECEL, "jog")
 
 _PREFIX = "stepramp"
 
@@ -119,6 +127,29 @@ def sample_change(state: str) -> None:
 @CoverPoint(f"{_PREFIX}.change.queue", vname="kind", bins=list(QUEUE_KINDS))
 def sample_queue(kind: str) -> None:
     """A queued move started."""
+
+
+@CoverPoint(
+    f"{_PREFIX}.input.edge",
+    xf=lambda name, state: (name, state),
+    bins=[(n, s) for n in INPUT_NAMES for s in STATE_NAMES],
+)
+def sample_input(name: str, state: str) -> None:
+    """A machine input's filtered level became active, with the engine in this state."""
+
+
+@CoverPoint(
+    f"{_PREFIX}.limit.stop",
+    xf=lambda name, kind, state: (name, kind, state),
+    bins=[(n, k, s) for n in LIMIT_NAMES for k in STOP_KINDS for s in (ACCEL, RUN, DECEL)],
+)
+def sample_limit(name: str, kind: str, state: str) -> None:
+    """A limit stopped the motion towards it (soft or hard) in this state."""
+
+
+@CoverPoint(f"{_PREFIX}.estop.motion", vname="motion", bins=list(ESTOP_MOTIONS))
+def sample_estop(motion: str) -> None:
+    """ESTOP's filtered level became active during this kind of motion."""
 
 
 def enabled() -> bool:
@@ -308,6 +339,36 @@ async def _watch_queue(regfile: Any, engine: Any) -> None:
             sample_queue("opposite direction")
 
 
+async def _watch_inputs(inputs: Any, regfile: Any, engine: Any, stepper: Any) -> None:
+    """The machine inputs' activation strobes (stepramp_inputs.rise_r), and the limit stops (the register file's
+    lim_hit rising): what the engine was doing."""
+    from cocotb.triggers import First, ReadOnly, RisingEdge
+
+    rise, hit = inputs.rise_r, regfile.lim_hit
+    while True:
+        await First(rise.value_change, RisingEdge(hit))
+        await ReadOnly()
+        state, busy = _int(engine.state), _int(engine.busy)
+        if state is None:
+            continue
+        name = STATE_NAMES[state]
+        strobes = _int(rise) or 0
+        for bit, input_name in enumerate(INPUT_NAMES):
+            if strobes >> bit & 1:
+                sample_input(input_name, name)
+        if strobes >> 3 & 1:
+            if busy != 1:
+                sample_estop("held start" if _int(stepper.gate_busy) == 1 else "idle")
+            elif _int(engine.p_endless) == 1:
+                sample_estop("jog")
+            elif state:
+                sample_estop(name)
+        if _int(hit) == 1 and state:
+            hard = _int(regfile.hard_stop_r) == 1  # (raised with lim_hit, at the same edge)
+            sample_limit(LIMIT_NAMES[_int(regfile.mv_dir) == 0], "hard" if hard else "soft", name)
+        await RisingEdge(inputs.clk)
+
+
 def watch_core(core: Any) -> None:
     """All monitors on a stepramp_core handle: its engine, stepping logic and register file (the error codes only
     the register file raises: STEPS, POS_BUSY, CFG_BUSY)."""
@@ -316,6 +377,7 @@ def watch_core(core: Any) -> None:
     import cocotb
 
     engine, stepper, regfile = (_find(core, n) for n in ("engine_inst", "stepper_inst", "regfile_inst"))
+    inputs = _find(core, "inputs_inst")
     if engine is not None:
         watch_engine(engine)
     if stepper is not None:
@@ -332,6 +394,16 @@ def watch_core(core: Any) -> None:
         and _has(engine, "p_endless")
     ):
         cocotb.start_soon(_watch_queue(regfile, engine))
+    if (
+        inputs is not None
+        and regfile is not None
+        and engine is not None
+        and stepper is not None
+        and _has(inputs, "rise_r", "clk")
+        and _has(regfile, "lim_hit", "mv_dir", "hard_stop_r")
+        and _has(engine, "state", "busy", "p_endless")
+    ):
+        cocotb.start_soon(_watch_inputs(inputs, regfile, engine, stepper))
 
 
 class CoveredBus:

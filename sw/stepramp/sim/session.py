@@ -10,8 +10,14 @@ the interrupt and reads POSITION back, while coroutines timestamp every STEP edg
 
 Requests: {"op": "move", "steps", "accel", "decel", "speed"} (rad/s^2, rad/s), {"op": "script", "script": {...}} (a
 command script, stepramp.board.script: the driver's planned writes and commits played at their clocks from now on;
-POSITION read back at its end), {"op": "signals", "paths": [[path, width], ...]} (which of these design signals are
-missing) and {"op": "quit"}.
+POSITION read back at its end), {"op": "home", "offset", "speed", "accel"} (stepramp.board.homing on the session's
+machine: needs "mechanics" in the configuration), {"op": "signals", "paths": [[path, width], ...]} (which of these
+design signals are missing) and {"op": "quit"}.
+
+With "mechanics" in the configuration (a dict over MECHANICS, {} for its defaults: a home switch and its bounce, the
+input filter, the homing's latch speed) the session's core drives a machine: a carriage
+(stepramp.sim.mechanics.Carriage) follows STEP/DIR from carriage step 0 (POSITION 0 after reset) and closes the HOME
+input at its switch, bouncing.
 """
 
 from __future__ import annotations
@@ -19,6 +25,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import json
+import math
 import os
 import socket
 import tempfile
@@ -27,7 +34,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from stepramp.board.driver import Outputs, StepRamp, StepRampError
+from stepramp.board.driver import Inputs, Outputs, StepRamp, StepRampError
 from stepramp.board.plan import Plan
 from stepramp.board.regmap import offset
 from stepramp.models.engine import last_edge
@@ -41,6 +48,20 @@ _POLL_CYCLES = 20_000
 
 DEFAULT_CONFIG: dict[str, Any] = {"fclk": 250e3, "spr": 400.0, "prescale": 1, "mode": "half", "dir_setup": 2}
 
+#: The shell's machine (config key "mechanics"): the HOME switch active for carriage steps <= home_at (a quarter
+#: turn below the start), bouncing up to max_bounces times at intervals below the filter (filter clocks, 200 us at
+#: 250 kHz); the homing's release at latch_speed rad/s (one step per 785 clocks; exact up to 11.3 rad/s with this
+#: filter and bounce), poll_clocks between the homing's STATUS polls, seed for the bounce.
+MECHANICS: dict[str, Any] = {
+    "home_at": -100,
+    "filter": 50,
+    "max_bounces": 3,
+    "latch_speed": 5.0,
+    "poll_clocks": 100,
+    "max_travel": 100_000,
+    "seed": 1,
+}
+
 
 @dataclass(frozen=True)
 class MoveResult:
@@ -52,6 +73,18 @@ class MoveResult:
     position: int
     start_s: float
     end_s: float
+
+
+@dataclass(frozen=True)
+class HomeResult:
+    """A homing on the session's machine: POSITION after it, the carriage's step (the machine's own coordinate), the
+    switch edge (the first carriage step off the switch), and the latched positions (the frame before the homing)."""
+
+    position: int
+    carriage: int
+    switch_edge: int
+    seek_latch: int
+    release_latch: int
 
 
 class SessionError(RuntimeError):
@@ -192,6 +225,18 @@ class RtlSession:
             raise ValueError(answer["value_error"])
         return answer["edges"], answer["position"]
 
+    def home(self, offset: int, speed: float, accel: float) -> HomeResult:
+        """Home on the session's machine (stepramp.board.homing: seek at speed rad/s and accel rad/s^2, release at the
+        machine's latch speed) so that the switch edge becomes POSITION offset. ValueError (the driver's reason, or no
+        machine in this session) if it cannot run; MoveError if the core flags an error or the switch is not found."""
+        answer = self.request({"op": "home", "offset": offset, "speed": speed, "accel": accel})
+        if "value_error" in answer:
+            raise ValueError(answer["value_error"])
+        if "core_error" in answer:
+            raise MoveError(answer["core_error"], answer["position"])
+        self.end_s = answer.pop("end_s")
+        return HomeResult(**answer)
+
     def missing_signals(self, paths: list[tuple[str, int]]) -> list[str]:
         """Which of these (dotted path below the top, width) design signals the simulator does not have."""
         missing: list[str] = self.request({"op": "signals", "paths": paths})["missing"]
@@ -250,7 +295,12 @@ if cocotb is not None:
         bus = IpifMaster(dut, dut.clk, period_ps // 1000 or 1)
         drv = StepRamp(bus, fclk=cfg["fclk"], spr=cfg["spr"], prescale=cfg["prescale"])
 
+        # the machine: MECHANICS with what the configuration's "mechanics" sets ({} for the defaults), or none
+        mech: dict[str, Any] | None = None if cfg.get("mechanics") is None else {**MECHANICS, **cfg["mechanics"]}
+        carriage: Any = None
+
         async def setup() -> StepWatch:
+            nonlocal carriage
             await apply_reset(dut.clk, dut.rst, settle=2)
             pins = StepWatch(dut.step, dut.core_inst.busy, period_ps)
             await drv.check_id()
@@ -259,10 +309,18 @@ if cocotb is not None:
             )
             await drv.set_enable(True)
             await drv.enable_irq()
+            if mech is not None:
+                from stepramp.sim.mechanics import Bounce, Carriage, Switch
+
+                await drv.configure_inputs(Inputs(filter=mech["filter"]))
+                bounce = Bounce(filter_clocks=mech["filter"], max_bounces=mech["max_bounces"])
+                switch = Switch("home", at=mech["home_at"], side=-1)
+                carriage = Carriage(dut.step, dut.dir, {"home": dut.home}, [switch], 0, bounce, mech["seed"], period_ps)
+                carriage.start()
             return pins
 
-        # Limit: the reset and the configuration writes, measured at 20 clocks, 5x over.
-        pins: StepWatch = await limited(setup(), 100, "reset and configuration")
+        # Limit: the reset and the configuration writes, measured at 20 clocks (24 with the machine), 5x over.
+        pins: StepWatch = await limited(setup(), 150, "reset and configuration")
 
         async def idle() -> None:
             if not int(dut.irq.value):  # irq may have risen during the status read
@@ -331,6 +389,60 @@ if cocotb is not None:
             result: dict[str, Any] = await limited(run(), planned.until + 2 * PREP_CLOCKS + 1000, "script")
             return result
 
+        async def do_home(req: dict[str, Any]) -> dict[str, Any]:
+            from stepramp.board.homing import Homing, home
+
+            if mech is None or carriage is None:
+                return {"value_error": "this session has no machine to home (no 'mechanics' in its configuration)"}
+            switch = carriage.switches[0]
+            cfg_h = Homing(
+                seek_speed=req["speed"],
+                seek_accel=req["accel"],
+                latch_speed=mech["latch_speed"],
+                latch_accel=req["accel"],
+                offset=req["offset"],
+                settle_clocks=carriage.bounce.settle_clocks,
+                max_travel=mech["max_travel"],
+            )
+            try:
+                cfg_h.check(drv.fclk, drv.spr, drv.prescale, drv.inputs.filter_clocks)
+            except ValueError as exc:
+                return {"value_error": str(exc)}
+            # A hang fails the homing, not the session: the seek and the way back (to the switch plus 1000 steps of
+            # stop distance) and a 1000-step release, each as cruise time plus ramps (2 v / a, or a triangle's
+            # 2 sqrt(d / a)), 4x over.
+            start = await drv.position()
+            alpha = 2 * math.pi / drv.spr
+
+            def trip(steps: int, speed: float) -> float:
+                rad = steps * alpha
+                return rad / speed + 2 * speed / req["accel"] + 2 * math.sqrt(rad / req["accel"])
+
+            seconds = 2 * trip(abs(carriage.position - switch.at) + 1000, req["speed"])
+            seconds += trip(1000, mech["latch_speed"])
+            budget = math.ceil(4 * seconds * drv.fclk) + 100_000
+
+            async def run() -> dict[str, Any]:
+                try:
+                    result = await home(drv, cfg_h, idle=lambda: ClockCycles(dut.clk, mech["poll_clocks"]))
+                except ValueError as exc:  # a jog or move the driver refuses (a speed above the engine's limit)
+                    return {"value_error": str(exc)}
+                except StepRampError as exc:
+                    await drv.clear_flags()
+                    return {"core_error": f"homing failed: {exc}", "position": await drv.position()}
+                return {
+                    "position": result.position,
+                    "carriage": carriage.position,
+                    "switch_edge": switch.first_off,
+                    "seek_latch": result.seek.position,
+                    "release_latch": result.release.position,
+                    "end_s": get_sim_time("ps") * 1e-12,
+                }
+
+            dut._log.info("home from POSITION %d, carriage step %d", start, carriage.position)
+            answer: dict[str, Any] = await limited(run(), budget, "home")
+            return answer
+
         sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
         sock.connect(os.environ["STEPRAMP_SESSION_SOCKET"])
         stream = sock.makefile("rwb")
@@ -346,6 +458,8 @@ if cocotb is not None:
                     answer = await do_move(req)
                 elif req["op"] == "script":
                     answer = await do_script(req)
+                elif req["op"] == "home":
+                    answer = await do_home(req)
                 elif req["op"] == "signals":
                     answer = {"missing": missing_in(dut, req["paths"])}
                 else:

@@ -13,7 +13,9 @@ on. `q` (or end of input) ends it.
 
 Beyond AVR446, motion on the fly (docs/algorithm.md, "The take-over, the queue and the script contract"): `j` jogs
 for a time and stops, `c` changes the speed of a move while it runs; each runs as a command script
-(stepramp.board.script) on the back end.
+(stepramp.board.script) on the back end. `home` homes the axis on the simulated machine's HOME switch
+(stepramp.board.homing, docs/homing.md): the session's core drives a carriage with a bouncing switch
+(stepramp.sim.session.MECHANICS); not with --model.
 """
 
 from __future__ import annotations
@@ -41,6 +43,9 @@ if TYPE_CHECKING:
 #: the low simulated clock keeps each move to a few seconds of simulation.
 SHELL_CONFIG: dict[str, Any] = {"fclk": 250e3, "spr": 400.0, "prescale": 1}
 
+#: The shell's session: its clock and motor, and the machine `home` works on (stepramp.sim.session.MECHANICS).
+SHELL_SESSION_CONFIG: dict[str, Any] = {**SHELL_CONFIG, "mechanics": {}}
+
 #: AVR446's ranges (the speed's upper bound is this core's limit at the shell's clock, see speed_limit).
 ACCEL_RANGE = (71, 32000)
 STEPS_RANGE = (-64000, 64000)
@@ -65,10 +70,22 @@ class Outcome:
     position: int
 
 
+@dataclass(frozen=True)
+class Homed:
+    """A homing as a back end ran it: POSITION after it, and the machine's own view: the carriage's step and the
+    switch edge (the first step off the switch), both in the machine's coordinate."""
+
+    position: int
+    carriage: int
+    switch_edge: int
+
+
 class Backend(Protocol):
     def move(self, steps: int, accel: float, decel: float, speed: float) -> Outcome: ...
 
     def script(self, script: dict[str, Any]) -> int: ...
+
+    def home(self, offset: int, speed: float, accel: float) -> Homed: ...
 
 
 class ModelBackend:
@@ -91,6 +108,10 @@ class ModelBackend:
         self.position += planned.positions[-1] if planned.positions else 0
         return self.position
 
+    def home(self, offset: int, speed: float, accel: float) -> Homed:
+        """The model has no machine (no switch, no latch): homing needs the simulated core."""
+        raise CommandError("home needs the simulated machine (its switch and the core's latch): not with --model")
+
 
 class RtlBackend:
     """Moves on the RTL, all in one simulation (a stepramp.sim.session.RtlSession, started by the caller)."""
@@ -107,6 +128,10 @@ class RtlBackend:
 
     def script(self, script: dict[str, Any]) -> int:
         return self.session.script(script)[1]
+
+    def home(self, offset: int, speed: float, accel: float) -> Homed:
+        res = self.session.home(offset, speed, accel)
+        return Homed(res.position, res.carriage, res.switch_edge)
 
 
 _INTEGER = re.compile(r"[+-]?[0-9]{1,12}")
@@ -145,6 +170,9 @@ class Shell:
                 "         - Jog at [speed] (signed) for [ms] milliseconds, then a soft stop",
                 "c [steps] [ms] [speed]",
                 "         - Move [steps]; [ms] milliseconds after its start, change the speed to [speed]",
+                "home [pos]",
+                "         - Home on the machine's HOME switch at the current speed and acceleration: its edge",
+                "           becomes position [pos] (0 if not given)",
                 "q        - Quit (or end of input)",
                 "",
                 "         acc/dec data given in 0.01*rad/sec^2 (100 = 1 rad/sec^2)",
@@ -218,6 +246,11 @@ class Shell:
                 after = self._int(ms, "time", 1, MS_MAX)
                 new = self._int(speed, "speed", SPEED_MIN, self.speed_max)
                 self._script(move, {"at": self._clocks(after), "op": "set", "speed": new / 100})
+            elif tokens[0] == "home":
+                if len(tokens) > 2:
+                    raise CommandError(f"'home' takes at most 1 value, got {len(tokens) - 1}")
+                offset = self._int(tokens[1], "position", *STEPS_RANGE) if len(tokens) == 2 else 0
+                self._home(offset)
             elif tokens[0] == "move":
                 steps, accel, decel, speed = self._args(tokens, 4)
                 self._move(
@@ -258,6 +291,24 @@ class Shell:
             return
         self.position = outcome.position
         self.say("OK")
+
+    def _home(self, offset: int) -> None:
+        """Home at the current speed and acceleration (the back end's machine); the position is POSITION after it."""
+        self.out.write("Homing... ")
+        self.out.flush()
+        try:
+            homed = self.backend.home(offset, self.speed / 100, self.accel / 100)
+        except ValueError as exc:  # the driver's reason (CommandError for the model back end)
+            self.say("")
+            raise CommandError(str(exc)) from None
+        except StepRampError as exc:
+            self.say(f"failed: {exc}")
+            position = getattr(exc, "position", None)
+            if isinstance(position, int):
+                self.position = position
+            return
+        self.position = homed.position
+        self.say(f"OK: the switch edge (machine step {homed.switch_edge}) is position {offset}")
 
     def _clocks(self, ms: int) -> int:
         return round(ms * 1e-3 * self.config["fclk"])
@@ -314,7 +365,7 @@ def main(model: bool = False, waves: Path | None = None, build: Path | None = No
     log = build_dir.resolve() / "sim.log"
     print(f"stepramp shell: starting one simulation of stepramp_plb for the session (log: {log})", file=sys.stderr)
     try:
-        with RtlSession(build_dir, config=cfg, waves=waves, log_file=log) as session:
+        with RtlSession(build_dir, config=SHELL_SESSION_CONFIG, waves=waves, log_file=log) as session:
             Shell(RtlBackend(session), sys.stdout, **cfg).run(stdin, prompt=interactive)
     except SessionError as exc:
         cause = f" ({exc.__cause__!r})" if exc.__cause__ is not None else ""
