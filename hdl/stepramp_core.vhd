@@ -191,7 +191,7 @@ begin
       eng_chg_refused => chg_refused,
       dir_fault       => dir_fault,
       ext_start       => sync_start,
-      done_flag_o     => st_done,
+      done_sticky     => st_done,
       in_filter       => in_filter,
       in_pol          => in_pol,
       latch_src       => latch_src,

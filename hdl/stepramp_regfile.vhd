@@ -86,7 +86,7 @@ entity stepramp_regfile is
     -- A START from outside the bus (the multi-axis top's SYNC_START): taken as a START written at this edge.
     ext_start : in    std_logic;
     -- STATUS.DONE, for the multi-axis top's status word.
-    done_flag_o : out   std_logic;
+    done_sticky : out   std_logic;
     -- Machine inputs (stepramp_inputs): configuration out; filtered levels (bit 0 LIMIT_NEG, 1 LIMIT_POS, 2 HOME,
     -- 3 ESTOP), activation strobes, the latch and TIME in.
     in_filter     : out   std_logic_vector(19 downto 0);
@@ -711,7 +711,7 @@ begin
   change    <= change_r;
   locked    <= change_r or eng_chg_pend or q_pend;
 
-  done_flag_o   <= done_flag;
+  done_sticky   <= done_flag;
   estop_fault   <= in_ev(3);
   latch_clr     <= latch_clr_r;
   in_filter     <= mem(word(C_REG_INPUT_FILTER))(19 downto 0);

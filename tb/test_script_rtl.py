@@ -15,7 +15,10 @@ issue 16), and no STEP edge may come more than 2 clocks after a filtered ESTOP e
   two chunks per top: 200 scripts through each top. SCRIPT_SEED (printed; random unless set) seeds them: replay a
   failure with SCRIPT_SEED=<seed> .venv/bin/pytest tb/test_script_rtl.py -k random;
 * test_cli_sim_and_model_agree: `stepramp sim --script` and `stepramp model --script` on two named scripts print the
-  same edges and positions.
+  same edges and positions;
+* test_multi_axis_scripts: scripts with "axis" on their commands on stepramp_multi_plb / _axil at 3 axes (the named
+  three_axes_limit_and_estop and MULTI_COUNT (10) random ones): every axis's edges and positions equal to the
+  model's, its final error too, and no STEP edge of any axis more than 2 clocks after the filtered ESTOP edge.
 """
 
 from __future__ import annotations
@@ -28,8 +31,10 @@ from typing import Any
 
 import pytest
 
-from stepramp.board.script import NAMED_SCRIPTS, ScriptResult, load_script, plan_script, random_script
-from stepramp.sim.script_sim import simulate_planned
+from stepramp.board.multi_script import NAMED_MULTI_SCRIPTS, MultiResult, plan_multi_script, random_multi_script
+from stepramp.board.script import NAMED_SCRIPTS, PREP_CLOCKS, ScriptResult, load_script, plan_script, random_script
+from stepramp.models.inputs import filtered_edges
+from stepramp.sim.script_sim import simulate_multi, simulate_planned
 from tbutil import build_dir, edges_differ, env_int
 
 TOPS = ("plb", "axil")
@@ -100,3 +105,66 @@ def test_cli_sim_and_model_agree(tmp_path: Path) -> None:
         for key in ("edges", "positions"):
             assert out["sim"][key] == out["model"][key], f"{name}: {key} of sim and model differ"
         assert out["model"]["edges"], f"{name}: no edges"
+    # a multi-axis script: one list of edges and positions per axis, and the same refusals and final errors
+    name = "three_axes_limit_and_estop"
+    script = tmp_path / f"{name}.json"
+    script.write_text(json.dumps(NAMED_MULTI_SCRIPTS[name]))
+    out = {}
+    for tool in ("model", "sim"):
+        target = tmp_path / f"{name}_{tool}.json"
+        extra = ["--build", str(build_dir(f"script_cli_{name}"))] if tool == "sim" else []
+        assert main([tool, "--script", str(script), "--json", str(target), *extra]) == 0, f"{tool} {name}"
+        out[tool] = json.loads(target.read_text())
+    for key in ("edges", "positions", "rejected"):
+        assert out["sim"][key] == out["model"][key], f"{name}: {key} of sim and model differ"
+    assert len(out["model"]["edges"]) == 3 and all(out["model"]["edges"])
+    assert {r["reason"] for r in out["model"]["rejected"]} == {"the core flagged ESTOP"}
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# The multi-axis top (issue 16: "axis" on any command; stepramp.board.multi_script)
+# ---------------------------------------------------------------------------------------------------------------
+
+MULTI_COUNT = 10
+
+
+def _check_multi(name: str, planned: MultiResult, rtl: dict[str, Any]) -> None:
+    """Every axis's edges and positions as the model's, STATUS's error at the end as the model's last, and no STEP
+    edge of any axis more than 2 clocks after the filtered ESTOP edge (the rule of docs/algorithm.md, from the pin's
+    changes and the filter alone) until the first fault clear is prepared."""
+    n = planned.results[0].input_filter
+    clears = sorted(a.at - PREP_CLOCKS for r in planned.results for a in r.actions if a.ctrl == 0 and a.writes)
+    for f, level in filtered_edges(planned.estop, n):
+        if level:
+            until = next((c for c in clears if c > f), planned.until)
+            late = [(axis, e) for axis, edges in enumerate(rtl["edges"]) for e in edges if f + 2 < e <= until]
+            assert not late, f"{name}: STEP edges (axis, edge) after the ESTOP edge {f}: {late[:5]}"
+    for axis, (p, edges, positions, status) in enumerate(
+        zip(planned.results, rtl["edges"], rtl["positions"], rtl["status"], strict=True)
+    ):
+        what = f"{name}, axis {axis}"
+        assert edges == p.edges, f"{what}: STEP edges: {edges_differ(edges, p.edges)}"
+        assert positions == p.positions, f"{what}: positions differ from the model"
+        want = (1, p.errors[-1][1]) if p.errors else (0, 0)
+        got = (status >> 5 & 1, status >> 8 & 0x1F if status >> 5 & 1 else 0)
+        assert got == want, f"{what}: STATUS (ERROR, ERR_CODE) {got}, the model {want}"
+
+
+@pytest.mark.parametrize("top", TOPS)
+def test_multi_axis_scripts(top: str) -> None:
+    """The named three-axis script (a limit on one axis, ESTOP on all) and MULTI_COUNT random three-axis scripts
+    (a short random script per axis, staggered; SCRIPT_SEED) on the multi-axis top of each bus."""
+    print(f"SCRIPT_SEED={SEED} (replays this test)")
+    rng = random.Random(f"{SEED}:multi:{top}")
+    scripts = dict(NAMED_MULTI_SCRIPTS)
+    while len(scripts) < len(NAMED_MULTI_SCRIPTS) + env_int("MULTI_COUNT", MULTI_COUNT):
+        s = random_multi_script(rng)
+        p = plan_multi_script(s)
+        if not p.conflicts and not p.unsure:
+            scripts[f"random {len(scripts)}: {json.dumps(s)}"] = s
+    planned = {name: plan_multi_script(s) for name, s in scripts.items()}
+    named = planned["three_axes_limit_and_estop"]
+    assert not named.conflicts and not named.unsure and all(r.edges for r in named.results)
+    results = simulate_multi(list(planned.values()), build_dir(f"script_multi_{top}"), top)
+    for (name, p), r in zip(planned.items(), results, strict=True):
+        _check_multi(f"SCRIPT_SEED={SEED} {top} {name}", p, r)

@@ -91,10 +91,30 @@ class _AxilWriter:
                 return
         raise TimeoutError(f"write {addr:#x}: no BVALID within 100 clocks")
 
+    async def read(self, addr: int) -> int:
+        dut = self.dut
+        await FallingEdge(self.clk)
+        dut.s_axil_araddr.value = addr
+        dut.s_axil_arvalid.value = 1
+        dut.s_axil_rready.value = 1
+        ar = False
+        for _ in range(100):
+            await RisingEdge(self.clk)
+            await ReadOnly()
+            ar = ar or bool(int(dut.s_axil_arready.value))
+            done = bool(int(dut.s_axil_rvalid.value))
+            data = int(dut.s_axil_rdata.value) if done else 0
+            await FallingEdge(self.clk)
+            dut.s_axil_arvalid.value = int(not ar)
+            if done:
+                dut.s_axil_rready.value = 0
+                return data
+        raise TimeoutError(f"read {addr:#x}: no RVALID within 100 clocks")
+
 
 async def _reset(dut: Any, top: str) -> Any:
     """Reset the top and return its register access."""
-    if top == "stepramp_axil":
+    if top.endswith("axil"):
         bus = _AxilWriter(dut)
         await apply_reset(dut.aclk, dut.aresetn, active=0)
         return bus
@@ -267,4 +287,131 @@ async def play_scripts(dut: Any) -> None:
     results = []
     for script in request["scripts"]:
         results.append(await _play(dut, top, script))
+    Path(os.environ["STEPRAMP_SCRIPT_RESULT"]).write_text(json.dumps({"results": results}))
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# The multi-axis top (stepramp.board.multi_script): each axis's actions in its own register window
+# ---------------------------------------------------------------------------------------------------------------
+
+
+class _MultiRecorder:
+    """Per axis, the STEP rising edges (from the step vector) and the position counted from DIR at each; the top's
+    write strobes (stepramp_multi's wr and waddr: an axis takes a write at the edge the top samples it)."""
+
+    def __init__(self, dut: Any, axes: int) -> None:
+        self.dut, self.axes = dut, axes
+        self.edges: list[list[int]] = [[] for _ in range(axes)]
+        self.positions: list[list[int]] = [[] for _ in range(axes)]
+        self.writes: list[tuple[int, int]] = []
+        self.running = True
+        self._pos = [0] * axes
+        for coro in (self._steps(), self._writes()):
+            cocotb.start_soon(coro)
+
+    async def _steps(self) -> None:
+        step, direction = self.dut.step, self.dut.dir
+        before = 0
+        while self.running:
+            await ValueChange(step)
+            value = step.value
+            now = int(value) if value.is_resolvable else 0
+            rising = now & ~before
+            before = now
+            if rising:
+                edge, dirs = now_cycles(CLK_PERIOD_PS), int(direction.value)
+                for axis in range(self.axes):
+                    if rising >> axis & 1:
+                        self._pos[axis] += -1 if dirs >> axis & 1 else 1
+                        self.edges[axis].append(edge)
+                        self.positions[axis].append(self._pos[axis])
+
+    async def _writes(self) -> None:
+        multi = self.dut.multi_inst
+        while self.running:
+            await RisingEdge(multi.wr)
+            await ReadOnly()
+            self.writes.append((math.floor(now_periods(CLK_PERIOD_PS)) + 1, int(multi.waddr.value) & ~3))
+
+
+async def _drive_multi_pins(dut: Any, origin: int, pins: list[list[Any]]) -> None:
+    """(a, pin, axis, level): axis's bit of the pin (ESTOP: the one pin) takes the level after edge origin + a."""
+    shadow = {"limit_neg": 0, "limit_pos": 0, "home": 0}
+    for a, name, axis, level in pins:
+        edge = origin + int(a)
+        now = get_sim_time("ps")
+        half = edge * CLK_PERIOD_PS + CLK_PERIOD_PS // 2
+        assert now <= half, f"the pin change after edge {a} is late"
+        if half > now:
+            await Timer(half - now, unit="ps")
+        if name == "estop":
+            dut.estop.value = int(level)
+        else:
+            bit = 1 << int(axis)
+            shadow[name] = (shadow[name] | bit) if level else (shadow[name] & ~bit)
+            getattr(dut, name).value = shadow[name]
+
+
+async def _play_multi(dut: Any, top: str, script: dict[str, Any]) -> dict[str, Any]:
+    clk = dut.aclk if top.endswith("axil") else dut.clk
+    axes = int(script["axes"])
+    quiet_inputs(dut)
+    bus = await _reset(dut, top)
+    cfg = 1 << INPUT_CFG.field("LIMIT_EN").lsb
+    cfg |= int(bool(script.get("limit_hard"))) << INPUT_CFG.field("LIMIT_HARD").lsb
+    for axis in range(axes):
+        base = 0x100 * (axis + 1)
+        await bus.write(base + offset("INPUT_FILTER"), int(script.get("input_filter", 0)))
+        await bus.write(base + offset("INPUT_CFG"), cfg)
+    rec = _MultiRecorder(dut, axes)
+    await RisingEdge(clk)
+    issued = now_cycles(CLK_PERIOD_PS)
+    await bus.write(0x100 + CTRL, 0, strobe=0x2)  # (axis 0's interrupt enables, all off: changes nothing)
+    await Timer(5 * CLK_PERIOD_NS, unit="ns")
+    latency = rec.writes[-1][0] - issued
+    origin = now_cycles(CLK_PERIOD_PS) + LEAD_CLOCKS
+    driver = cocotb.start_soon(_drive_multi_pins(dut, origin, script.get("pins", [])))
+    commits = []
+    for action in script["actions"]:
+        at = origin + int(action["at"])
+        if action["writes"]:
+            await _at_edge(clk, at - int(script["prep_clocks"]), late_ok=True)
+            for addr, value in action["writes"]:
+                await bus.write(int(addr), int(value))
+        issue = at - latency
+        assert get_sim_time("ps") < issue * CLK_PERIOD_PS, f"the writes of the commit at {action['at']} ran late"
+        await _at_edge(clk, issue)
+        seen = len(rec.writes)
+        ctrl = 0x100 * (int(action["axis"]) + 1) + CTRL
+        await bus.write(ctrl, int(action["ctrl"]), strobe=0x1)
+        await Timer(2 * CLK_PERIOD_NS, unit="ns")
+        committed = next((e for e, a in rec.writes[seen:] if a == ctrl), None)
+        assert committed == at, f"the commit meant for clock {action['at']} landed on {committed}"
+        commits.append(committed - origin)
+    await _at_edge(clk, origin + int(script["until"]) + 2)
+    rec.running = False
+    driver.cancel()
+    status = []
+    for axis in range(axes):
+        status.append(await bus.read(0x100 * (axis + 1) + offset("STATUS")))
+    until = int(script["until"])
+    return {
+        "edges": [[e - origin for e in edges if e - origin <= until] for edges in rec.edges],
+        "positions": [
+            [p for e, p in zip(edges, positions, strict=True) if e - origin <= until]
+            for edges, positions in zip(rec.edges, rec.positions, strict=True)
+        ],
+        "status": status,
+        "commits": commits,
+    }
+
+
+@cocotb.test(timeout_time=_backstop_ns(), timeout_unit="ns")
+async def play_multi_scripts(dut: Any) -> None:
+    """Play every multi-axis script of the request on stepramp_multi_plb / _axil, each from a reset."""
+    request = json.loads(Path(os.environ["STEPRAMP_SCRIPT_REQUEST"]).read_text())
+    top = dut._name
+    start_clock(dut.aclk if top.endswith("axil") else dut.clk)
+    quiet_inputs(dut)
+    results = [await _play_multi(dut, top, script) for script in request["scripts"]]
     Path(os.environ["STEPRAMP_SCRIPT_RESULT"]).write_text(json.dumps({"results": results}))

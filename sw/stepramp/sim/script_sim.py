@@ -14,6 +14,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from stepramp.board.multi_script import MultiResult, action_writes
 from stepramp.board.script import PREP_CLOCKS, ScriptResult, core_rejections, load_script, plan_script
 from stepramp.sim.runner import run_cocotb
 
@@ -48,6 +49,7 @@ def simulate_planned(
         build,
         waves=waves,
         extra_env={"STEPRAMP_SCRIPT_REQUEST": str(request), "STEPRAMP_SCRIPT_RESULT": str(result)},
+        testcase="play_scripts",
         log_file=build / "sim.log",
     )
     if not result.exists():
@@ -63,3 +65,61 @@ def simulate_script(script: dict[str, Any], build: Path, top: str = "plb", waves
     res = simulate_planned([planned], build, top, waves)[0]
     rejected = list(planned.rejected) + core_rejections(res["core_errors"])
     return {"edges": res["edges"], "positions": res["positions"], "rejected": rejected}
+
+
+#: The multi-axis tops by their short names.
+MULTI_TOPS = {"plb": "stepramp_multi_plb", "axil": "stepramp_multi_axil"}
+
+
+def simulate_multi(planned: Sequence[MultiResult], build: Path, top: str = "plb") -> list[dict[str, Any]]:
+    """Play planned multi-axis scripts (stepramp.board.multi_script) in one simulation of stepramp_multi_plb or
+    _axil at the scripts' axis count (all the same), each from a reset; per script {"edges", "positions": one list
+    per axis, "status": each axis's STATUS at the end, "commits"}."""
+    axes = {p.axes for p in planned}
+    if len(axes) != 1:
+        raise ValueError(f"the scripts of one simulation need one axis count, got {sorted(axes)}")
+    build = build.resolve()
+    build.mkdir(parents=True, exist_ok=True)
+    request, result = build / "scripts.json", build / "scripts_result.json"
+    result.unlink(missing_ok=True)
+    scripts = []
+    for p in planned:
+        actions = sorted(
+            (
+                {"at": a.at, "axis": axis, "writes": [list(w) for w in action_writes(axis, a.writes)], "ctrl": a.ctrl}
+                for axis, r in enumerate(p.results)
+                for a in r.actions
+            ),
+            key=lambda a: a["at"],
+        )
+        pins = sorted(
+            [[a, name, axis, level] for axis, r in enumerate(p.results) for a, name, level in r.pins if name != "estop"]
+            + [[a, "estop", 0, level] for a, level in p.estop],
+            key=lambda pin: pin[0],
+        )
+        first = p.results[0]
+        scripts.append(
+            {
+                "axes": p.axes,
+                "actions": actions,
+                "until": p.until,
+                "prep_clocks": PREP_CLOCKS,
+                "pins": pins,
+                "input_filter": first.input_filter,
+                "limit_hard": first.limit_hard,
+            }
+        )
+    request.write_text(json.dumps({"scripts": scripts}))
+    run_cocotb(
+        MULTI_TOPS.get(top, top),
+        "stepramp.sim.script_bench",
+        build,
+        parameters={"G_AXES": axes.pop()},
+        extra_env={"STEPRAMP_SCRIPT_REQUEST": str(request), "STEPRAMP_SCRIPT_RESULT": str(result)},
+        testcase="play_multi_scripts",
+        log_file=build / "sim.log",
+    )
+    if not result.exists():
+        raise RuntimeError(f"the simulation wrote no result; see {build / 'sim.log'}")
+    out: list[dict[str, Any]] = json.loads(result.read_text())["results"]
+    return out

@@ -88,6 +88,17 @@ SUITES: dict[str, list[str]] = {
         "tb/test_peripheral.py::test_registers[stepramp_axil]",
         "tb/test_peripheral.py::test_profiles[stepramp_axil-1]",
     ],
+    "stepramp_inputs.vhd": [
+        "tb/test_inputs_rtl.py::test_inputs[stepramp_plb-filter_and_polarity]",
+        "tb/test_inputs_rtl.py::test_inputs[stepramp_plb-position_latch]",
+        "tb/test_inputs_rtl.py::test_inputs[stepramp_plb-estop_in_every_kind_of_motion]",
+    ],
+    "stepramp_multi_pkg.vhd": ["tb/test_multi_rtl.py"],
+    "stepramp_multi.vhd": ["tb/test_multi_rtl.py"],
+    "stepramp_plb_slave.vhd": ["tb/test_multi_rtl.py::test_multi_rtl[stepramp_multi_plb]"],
+    "stepramp_axil_slave.vhd": ["tb/test_multi_rtl.py::test_multi_rtl[stepramp_multi_axil]"],
+    "stepramp_multi_plb.vhd": ["tb/test_multi_rtl.py::test_multi_rtl[stepramp_multi_plb]"],
+    "stepramp_multi_axil.vhd": ["tb/test_multi_rtl.py::test_multi_rtl[stepramp_multi_axil]"],
 }
 
 
