@@ -597,7 +597,10 @@ def test_random_scripts_against_physics() -> None:
     ops: set[str] = set()
     jog_cases = {"reversals": 0, "soft": 0, "hard": 0}
     for n in range(200):
+        # (the machine inputs' effects are judged by the named input scripts below; here, the motion commands)
         obj = random_script(rng)
+        obj = {k: v for k, v in obj.items() if k != "inputs"}
+        obj["commands"] = [c for c in obj["commands"] if c["op"] not in ("input", "clear_fault")]
         got = run(obj)
         try:
             for key, value in check_physics(obj, got).items():

@@ -69,8 +69,8 @@ class Register:
 #: The generated tables, read as package data (so an installed package finds them as well as a source tree).
 _DATA = json.loads(resources.files("stepramp.board").joinpath("regmap.json").read_text(encoding="utf-8"))
 
-#: Engine error causes, as reported in STATUS.ERR_CODE (the lowest code wins when several apply): name -> (code,
-#: description), from the .rdl's enum.
+#: Error causes, as reported in STATUS.ERR_CODE (when several meet at one edge, the order of docs/stepramp_plb.md,
+#: "Verification", decides): name -> (code, description), from the .rdl's enum.
 ERROR_CODES: dict[str, tuple[int, str]] = {e["name"]: (e["code"], e["description"]) for e in _DATA["error_codes"]}
 
 REGISTERS: tuple[Register, ...] = tuple(
