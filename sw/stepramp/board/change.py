@@ -14,7 +14,8 @@ from dataclasses import dataclass
 from stepramp.board.plan import (
     FRAC_RAMP,
     MAX_STEPS,
-    MIN_INTERVAL_CLKS,
+    RAMP_AVR446,
+    RAMP_EXACT,
     REG_WIDTHS,
     SEED_FACTOR,
     MoveInfo,
@@ -24,11 +25,14 @@ from stepramp.board.plan import (
     _stop_ratio,
     _to_fixed,
     check_motion_args,
+    check_ramp,
     check_widths,
     decel_product,
+    min_interval_clks,
     plan_move,
     steps_units,
 )
+from stepramp.models.exact import ramp_constant
 
 UP = "up"
 DOWN = "down"
@@ -60,8 +64,11 @@ class Segment:
     cruise: int
     stop_ratio: int
     run_stop: int = 0
+    ramp: int = RAMP_AVR446
+    """Not a register: the ramp arithmetic (plan.RAMP_AVR446 or RAMP_EXACT), as Plan.ramp."""
 
     def __post_init__(self) -> None:
+        check_ramp(self.ramp)
         if self.length is not None and not 0 <= self.length <= MAX_STEPS:
             raise ValueError(f"Segment.length = {self.length!r} is not in 0 .. 2^31 - 1 (or None: endless)")
         if self.head not in (UP, DOWN):
@@ -79,7 +86,7 @@ class Segment:
         """The registers: a Plan (STEPS = length + 1, or 1 for an endless segment: only its sign counts) and the
         SEGMENT .. HEAD_PROD fields, as the engine's port names."""
         steps = self.length + 1 if self.length is not None else 1
-        plan = Plan(steps=steps, direction=direction, **{name: getattr(self, name) for name in _SHARED})
+        plan = Plan(steps=steps, direction=direction, ramp=self.ramp, **{name: getattr(self, name) for name in _SHARED})
         segment = {
             "head_down": int(self.head == DOWN),
             "endless": int(self.length is None),
@@ -93,7 +100,7 @@ class Segment:
     def of_move(cls, plan: Plan) -> Segment:
         """A move from rest as a segment (head up from index 0): its intervals 1 .. N - 1, the same values."""
         shared = {name: getattr(plan, name) for name in _SHARED}
-        return cls(length=max(plan.steps - 1, 0), head=UP, head_index=0, **shared)
+        return cls(length=max(plan.steps - 1, 0), head=UP, head_index=0, ramp=plan.ramp, **shared)
 
 
 @dataclass(frozen=True)
@@ -175,10 +182,13 @@ def plan_change(
     spr: float,
     fclk: float,
     prescale: int = 1,
+    ramp: int = RAMP_AVR446,
 ) -> Change:
     """The continuation from speed u (steps/s, >= 0) at pulse P with new accel, decel (rad/s^2) and speed (rad/s):
-    to the target `remaining` steps ahead of P (>= 0), or endless (None: jog at `speed`). Raises ValueError with the
-    reason when the segment does not fit the engine."""
+    to the target `remaining` steps ahead of P (>= 0), or endless (None: jog at `speed`), for the core's ramp
+    arithmetic (plan.RAMP_AVR446 or RAMP_EXACT). Raises ValueError with the reason when the segment does not fit the
+    engine."""
+    ramp = check_ramp(ramp)
     accel, decel, speed, spr, fclk, prescale = check_motion_args(accel, decel, speed, spr, fclk, prescale)
     if isinstance(u, bool) or not isinstance(u, (int, float)) or not (math.isfinite(u) and u >= 0.0):
         raise ValueError(f"the speed at the change must be finite and >= 0, got {u!r}")
@@ -193,13 +203,13 @@ def plan_change(
     if remaining is not None and remaining < k:
         # The target is inside the stop distance (or behind the motor): to rest k steps ahead, then back from rest.
         try:
-            back = plan_move(-(k - remaining), accel, decel, speed, spr, fclk, prescale)
+            back = plan_move(-(k - remaining), accel, decel, speed, spr, fclk, prescale, ramp)
         except ValueError as err:
             raise ValueError(f"the target lies {k - remaining} steps behind the stop; the move back: {err}") from err
         stop = ((0.0, float(k), 2.0 * d * k, -2.0 * d),) if k >= 1 else ()
-        return Change(_stop_segment(k, d, f_tick, prescale, ratio), math.sqrt(2.0 * d * k), back, stop)
+        return Change(_stop_segment(k, d, f_tick, prescale, ratio, ramp), math.sqrt(2.0 * d * k), back, stop)
     if remaining == 0:
-        return Change(_stop_segment(0, d, f_tick, prescale, ratio), 0.0, None)
+        return Change(_stop_segment(0, d, f_tick, prescale, ratio, ramp), 0.0, None)
 
     positioning = remaining is not None
     end = float(remaining) if remaining is not None else math.inf
@@ -233,7 +243,7 @@ def plan_change(
     if positioning:
         profile.add(x_c, end, cap2, -2.0 * d)
     v_peak = math.sqrt(peak2)
-    _check_speed(f_tick, max(v_peak, math.sqrt(start2)), prescale)
+    _check_speed(f_tick, max(v_peak, math.sqrt(start2)), prescale, ramp)
     if v_peak == 0.0:
         raise ValueError("cruise overflows its register: the cruise speed is 0 in doubles; use a larger accel or decel")
 
@@ -247,7 +257,10 @@ def plan_change(
     sd = max(boundary(x_c), sa) if positioning else 0
     t_first = profile.interval(1)
     n = sa - 2  # the head's recurrence intervals 2 .. sa - 1
-    if head == UP:
+    if ramp == RAMP_EXACT:  # the head's ramp constant (a down head decelerates at d); no deficit to put back
+        seed = 0.0
+        head_constant = ramp_constant(f_tick * math.sqrt(2.0 / (a if head == UP else d)))
+    elif head == UP:
         c0 = f_tick * math.sqrt(2.0 / a)
         seed = SEED_FACTOR * c0 * decel_product(index)
         if n >= 1:  # A_{n0+1} .. A_{n0+n} against the ideal from virtual position n0 + 1 to n0 + n + 1
@@ -267,14 +280,17 @@ def plan_change(
             prescale=prescale,
             sa=sa,
             sd=sd,
-            accel_seed=_to_fixed("accel_seed", seed, FRAC_RAMP, REG_WIDTHS["accel_seed"]),
+            accel_seed=head_constant
+            if ramp == RAMP_EXACT
+            else _to_fixed("accel_seed", seed, FRAC_RAMP, REG_WIDTHS["accel_seed"]),
             cruise=_cruise(f_tick, v_peak),
             stop_ratio=ratio,
             head=head,
             head_index=index,
             # a soft stop in the cruise of a jog: v^2 / (2 d) rounded up, the L - sd + 1 a move would take
             run_stop=_steps("the stop from the jog speed", peak2 / (2.0 * d), up=True) if remaining is None else 0,
-            **_fields(profile, remaining, sa, sd, d, f_tick, t_first),
+            ramp=ramp,
+            **_fields(profile, remaining, sa, sd, d, f_tick, t_first, ramp, peak2),
         ),
         math.sqrt(start2),
         None,
@@ -283,22 +299,36 @@ def plan_change(
 
 
 def _fields(
-    profile: _Profile, length: int | None, sa: int, sd: int, d: float, f_tick: float, t_first: float
+    profile: _Profile,
+    length: int | None,
+    sa: int,
+    sd: int,
+    d: float,
+    f_tick: float,
+    t_first: float,
+    ramp: int = RAMP_AVR446,
+    peak2: float = 0.0,
 ) -> dict[str, int]:
-    """c_first, c_last, c_sa, c_sd and decel_seed (the final ramp's, with half its deficit put back as in a move)."""
+    """c_first, c_last, c_sa, c_sd and decel_seed (the final ramp's, with half its deficit put back as in a move; in
+    exact mode its ramp constant, which a soft stop needs even where the segment has no final ramp)."""
     w48 = REG_WIDTHS["c_first"]
     out = {"c_first": 0, "c_last": 0, "c_sa": 0, "c_sd": 0, "decel_seed": 0}
     if length is not None and length < 1:
         return out
+    cd0 = f_tick * math.sqrt(2.0 / d)
     out["c_first"] = _to_fixed("c_first", t_first, FRAC_RAMP, w48)
     out["c_sa"] = _to_fixed("c_sa", profile.interval(sa), FRAC_RAMP, w48)
+    if ramp == RAMP_EXACT:
+        out["decel_seed"] = ramp_constant(cd0)
     if length is None:  # c_last: the last step of a soft stop, the exact last step of a decel at d (cd0)
-        out["c_last"] = _to_fixed("c_last", f_tick * math.sqrt(2.0 / d), FRAC_RAMP, w48)
+        out["c_last"] = _to_fixed("c_last", cd0, FRAC_RAMP, w48)
+        if ramp == RAMP_EXACT:  # c_sd: the first interval of a stop in the cruise (cruise, then decel to rest)
+            out["c_sd"] = _to_fixed("c_sd", _run_stop_first(peak2, d, f_tick), FRAC_RAMP, w48)
         return out
     out["c_last"] = _to_fixed("c_last", profile.interval(length), FRAC_RAMP, w48)
     out["c_sd"] = _to_fixed("c_sd", profile.interval(sd), FRAC_RAMP, w48)
     m0 = length - sd - 1
-    if m0 >= 1:
+    if m0 >= 1 and ramp == RAMP_AVR446:
         cd0 = f_tick * math.sqrt(2.0 / d)
         seed_d = SEED_FACTOR * cd0 * decel_product(m0)
         unit_d = 2.0 * (m0 + 0.75) - 1.5 / decel_product(m0)
@@ -307,11 +337,22 @@ def _fields(
     return out
 
 
-def _stop_segment(k: int, d: float, f_tick: float, prescale: int, ratio: int) -> Segment:
+def _run_stop_first(peak2: float, d: float, f_tick: float) -> float:
+    """Interval 1 of an exact-mode soft stop in a jog's cruise at v = sqrt(peak2): m = ceil(v^2 / (2 d)) steps, the
+    cruise goes on for m - v^2 / (2 d) of a step, then the decel at d comes to rest at step m (ticks)."""
+    n_d = peak2 / (2.0 * d)
+    m = _steps("the stop from the jog speed", n_d, up=True)
+    profile = _Profile(f_tick)
+    profile.add(0.0, m - n_d, peak2, 0.0)
+    profile.add(m - n_d, float(m), 2.0 * d * m, -2.0 * d)  # the squared speed s0 + slope x is 0 at x = m
+    return profile.interval(1)
+
+
+def _stop_segment(k: int, d: float, f_tick: float, prescale: int, ratio: int, ramp: int = RAMP_AVR446) -> Segment:
     """A decel at d to rest k steps ahead: no head, the decel ramp of a move (sa = sd = 1)."""
     profile = _Profile(f_tick)
     profile.add(0.0, float(k), 2.0 * d * k, -2.0 * d)
-    seg = _fields(profile, k, 1, 1, d, f_tick, profile.interval(1) if k >= 1 else 0.0)
+    seg = _fields(profile, k, 1, 1, d, f_tick, profile.interval(1) if k >= 1 else 0.0, ramp)
     return Segment(
         length=k,
         prescale=prescale,
@@ -322,6 +363,7 @@ def _stop_segment(k: int, d: float, f_tick: float, prescale: int, ratio: int) ->
         stop_ratio=ratio,
         head=UP,
         head_index=0,
+        ramp=ramp,
         **seg,
     )
 
@@ -333,11 +375,13 @@ def _steps(what: str, x: float, up: bool = False) -> int:
     return math.ceil(x) if up else math.floor(x)
 
 
-def _check_speed(f_tick: float, fastest: float, prescale: int) -> None:
-    """The segment's shortest interval must leave the engine its MIN_INTERVAL_CLKS (as plan.py checks a move)."""
+def _check_speed(f_tick: float, fastest: float, prescale: int, ramp: int = RAMP_AVR446) -> None:
+    """The segment's shortest interval must leave the engine its MIN_INTERVAL_CLKS (MIN_INTERVAL_CLKS_EXACT in exact
+    mode), as plan.py checks a move."""
     shortest = f_tick / fastest if fastest > 0.0 else math.inf
-    if not shortest >= 1.0 or (math.isfinite(shortest) and math.floor(shortest) * prescale < MIN_INTERVAL_CLKS):
+    least = min_interval_clks(ramp)
+    if not shortest >= 1.0 or (math.isfinite(shortest) and math.floor(shortest) * prescale < least):
         raise ValueError(
             f"speed too high for the hardware to compute the next delay in time: shortest interval "
-            f"floor({shortest:.6g}) ticks * prescale {prescale} < {MIN_INTERVAL_CLKS} clocks"
+            f"floor({shortest:.6g}) ticks * prescale {prescale} < {least} clocks"
         )

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from typing import Protocol
 
 from stepramp.board.change import Segment, plan_change
-from stepramp.board.plan import Plan, plan_move_info
+from stepramp.board.plan import RAMP_AVR446, Plan, check_ramp, plan_move_info
 from stepramp.board.regmap import ERROR_CODES, ID_MAGIC, REGISTERS_BY_NAME, offset, split_wide
 
 STATE_NAMES = ("STOP", "ACCEL", "RUN", "DECEL")
@@ -248,11 +248,15 @@ class Outputs:
 class StepRamp:
     """Driver of one stepramp core."""
 
-    def __init__(self, access: RegisterAccess, fclk: float, spr: float, prescale: int = 1) -> None:
+    def __init__(
+        self, access: RegisterAccess, fclk: float, spr: float, prescale: int = 1, ramp: int = RAMP_AVR446
+    ) -> None:
+        """ramp: the core's ramp arithmetic (its generic G_RAMP): RAMP_AVR446 or RAMP_EXACT."""
         self.access = access
         self.fclk = fclk
         self.spr = spr
         self.prescale = prescale
+        self.ramp = check_ramp(ramp)
         self.outputs = Outputs()
         self.inputs = Inputs()  # as configure_inputs last wrote them (the reset values until then)
         # Whether SEGMENT .. HEAD_PROD_HI are known to hold what a move from rest to rest needs (all 0), so that
@@ -273,7 +277,7 @@ class StepRamp:
         Besides the plan's own limits, the STEP pulse width plus the STEP low time configured with configure_outputs
         must fit the move's shortest interval (the core stops a move with error STEP_SPACE otherwise).
         """
-        plan, info = plan_move_info(steps, accel, decel, speed, self.spr, self.fclk, self.prescale)
+        plan, info = plan_move_info(steps, accel, decel, speed, self.spr, self.fclk, self.prescale, self.ramp)
         shortest = int(info.min_interval) * self.prescale if plan.steps > 1 else None
         if shortest is not None and self.outputs.min_gap > shortest:
             raise ValueError(
@@ -319,7 +323,7 @@ class StepRamp:
         ValueError with the reason, as plan() does."""
         if isinstance(speed, bool) or not isinstance(speed, (int, float)) or not speed or not math.isfinite(speed):
             raise ValueError(f"the jog speed must be a finite non-zero number of rad/s, got {speed!r}")
-        seg = plan_change(0.0, None, accel, decel, abs(speed), self.spr, self.fclk, self.prescale).segment
+        seg = plan_change(0.0, None, accel, decel, abs(speed), self.spr, self.fclk, self.prescale, self.ramp).segment
         shortest = int(self.fclk / self.prescale / (abs(speed) * self.spr / (2 * math.pi))) * self.prescale
         if self.outputs.min_gap > shortest:
             raise ValueError(

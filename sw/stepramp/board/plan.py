@@ -13,12 +13,24 @@ import operator
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
+from stepramp.models.exact import ramp_constant
+
 FRAC_RAMP = 16
 """Fraction bits of the ramp values (Q32.16)."""
 FRAC_CRUISE = 32
 """Fraction bits of the cruise period (Q32.32)."""
 MIN_INTERVAL_CLKS = 64
 """Shortest interval, in clocks, that leaves the engine time to compute the next value."""
+MIN_INTERVAL_CLKS_EXACT = 256
+"""The same in exact mode (G_RAMP = 1): a ramp value there takes one or two square roots (docs/stepramp_engine.md,
+"Latency budget in exact mode")."""
+RAMP_AVR446 = 0
+"""Plan.ramp: the AVR446 recurrence (the core's G_RAMP = 0, the default)."""
+RAMP_EXACT = 1
+"""Plan.ramp: the exact ramp, differences of rounded square roots (G_RAMP = 1; docs/algorithm.md, "Exact step
+times")."""
+RAMPS = {"avr446": RAMP_AVR446, "exact": RAMP_EXACT}
+"""The ramp modes by name (the CLI's --ramp)."""
 SEED_FACTOR = math.gamma(0.75) / (2.0 * math.gamma(1.25))
 """Gamma(3/4) / (2 Gamma(5/4)) = 0.67597824...: recurrence value at index 0, in units of c0."""
 MAX_STEPS = 2**31 - 1
@@ -72,13 +84,28 @@ class Plan:
     decel_seed: int
     cruise: int
     stop_ratio: int
+    ramp: int = RAMP_AVR446
+    """Not a register: the ramp arithmetic the plan is for (RAMP_AVR446 or RAMP_EXACT, the core's G_RAMP)."""
 
     def __post_init__(self) -> None:
         check_widths(self, REG_WIDTHS)
+        check_ramp(self.ramp)
 
     def to_dict(self) -> dict[str, int]:
         """The registers as a plain dict (field name -> unsigned integer)."""
-        return asdict(self)
+        return {name: value for name, value in asdict(self).items() if name in REG_WIDTHS}
+
+
+def check_ramp(ramp: int) -> int:
+    """ValueError unless ramp is RAMP_AVR446 or RAMP_EXACT."""
+    if isinstance(ramp, bool) or ramp not in (RAMP_AVR446, RAMP_EXACT):
+        raise ValueError(f"ramp must be {RAMP_AVR446} (avr446) or {RAMP_EXACT} (exact), got {ramp!r}")
+    return ramp
+
+
+def min_interval_clks(ramp: int) -> int:
+    """The shortest interval in clocks the core built with G_RAMP = ramp computes the next value in time for."""
+    return MIN_INTERVAL_CLKS_EXACT if ramp == RAMP_EXACT else MIN_INTERVAL_CLKS
 
 
 @dataclass(frozen=True)
@@ -288,9 +315,17 @@ _MOTION = ("accel", "decel", "speed", "spr", "fclk")
 
 
 def plan_move_info(
-    steps: int, accel: float, decel: float, speed: float, spr: float, fclk: float, prescale: int = 1
+    steps: int,
+    accel: float,
+    decel: float,
+    speed: float,
+    spr: float,
+    fclk: float,
+    prescale: int = 1,
+    ramp: int = RAMP_AVR446,
 ) -> tuple[Plan, MoveInfo]:
     """Like plan_move, also returning the informative MoveInfo."""
+    ramp = check_ramp(ramp)
     steps = _check_int("steps", steps)
     accel, decel, speed, spr, fclk, prescale = check_motion_args(accel, decel, speed, spr, fclk, prescale)
     if abs(steps) > MAX_STEPS:
@@ -303,10 +338,10 @@ def plan_move_info(
 
     if length < 1:  # N = 0 or 1: no interval, nothing for the engine to compute
         info = MoveInfo(f_tick, max(length, 0), a, d, v, 0.0, 0.0, 0.0, True, 0.0, 0.0, 0, math.inf)
-        return Plan(n, direction, prescale, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0), info
+        return Plan(n, direction, prescale, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, ramp), info
 
-    ramp = _Ramp(length, a, d, v, f_tick)
-    min_interval = ramp.k_c
+    curve = _Ramp(length, a, d, v, f_tick)
+    min_interval = curve.k_c
     if not math.isfinite(min_interval):
         raise ValueError("peak speed underflows: the delays would overflow their registers")
     if not min_interval >= 1.0:
@@ -314,20 +349,25 @@ def plan_move_info(
             f"interval shorter than 1 tick ({min_interval:.6g} ticks at the peak speed): "
             "lower the speed or raise f_clk / lower the prescale"
         )
-    if math.floor(min_interval) * prescale < MIN_INTERVAL_CLKS:
+    if math.floor(min_interval) * prescale < min_interval_clks(ramp):
         raise ValueError(
             f"speed too high for the hardware to compute the next delay in time: shortest interval "
-            f"floor({min_interval:.6g}) ticks * prescale {prescale} < {MIN_INTERVAL_CLKS} clocks"
+            f"floor({min_interval:.6g}) ticks * prescale {prescale} < {min_interval_clks(ramp)} clocks"
         )
 
-    sa = ramp.boundary(ramp.x_a)
-    sd = ramp.boundary(ramp.x_d)
+    sa = curve.boundary(curve.x_a)
+    sd = curve.boundary(curve.x_d)
     m0 = length - sd - 1
-    c0 = ramp.k_a
-    cd0 = ramp.k_d
+    c0 = curve.k_a
+    cd0 = curve.k_d
     q16 = FRAC_RAMP
     w48 = REG_WIDTHS["c_first"]
-    raw = register_doubles(ramp, sa, sd, m0)
+    info = MoveInfo(
+        f_tick, length, a, d, v, curve.x_a, curve.x_d, curve.v_peak, curve.triangle, c0, cd0, m0, min_interval
+    )
+    if ramp == RAMP_EXACT:
+        return _exact_plan(n, direction, prescale, curve, sa, sd, accel, decel, f_tick, v), info
+    raw = register_doubles(curve, sa, sd, m0)
     plan = Plan(
         steps=n,
         direction=direction,
@@ -344,13 +384,56 @@ def plan_move_info(
         # accel / decel in Q16.16 (rounded, saturated): sizes the decel ramp of a soft stop
         stop_ratio=_stop_ratio(accel, decel),
     )
-    info = MoveInfo(f_tick, length, a, d, v, ramp.x_a, ramp.x_d, ramp.v_peak, ramp.triangle, c0, cd0, m0, min_interval)
     return plan, info
 
 
-def plan_move(steps: int, accel: float, decel: float, speed: float, spr: float, fclk: float, prescale: int = 1) -> Plan:
-    """Plan a move: signed step count, accel/decel in rad/s^2, speed in rad/s, spr steps/rev, fclk Hz.
+def _exact_plan(
+    n: int,
+    direction: int,
+    prescale: int,
+    curve: _Ramp,
+    sa: int,
+    sd: int,
+    accel: float,
+    decel: float,
+    f_tick: float,
+    v: float,
+) -> Plan:
+    """The registers of an exact-mode move (docs/algorithm.md, "Exact step times"): the exact intervals as in the
+    AVR446 mode but without the recurrence deficit, and the ramp constants C = round(c0^2 * 2^8) in the seeds."""
+    q16 = FRAC_RAMP
+    w48 = REG_WIDTHS["c_first"]
+    return Plan(
+        steps=n,
+        direction=direction,
+        prescale=prescale,
+        c_first=_to_fixed("c_first", curve.interval(1), q16, w48),
+        c_last=_to_fixed("c_last", curve.interval(curve.length), q16, w48),
+        sa=sa,
+        c_sa=_to_fixed("c_sa", curve.interval(sa), q16, w48),
+        sd=sd,
+        c_sd=_to_fixed("c_sd", curve.interval(sd), q16, w48),
+        accel_seed=ramp_constant(curve.k_a),
+        decel_seed=ramp_constant(curve.k_d),
+        cruise=_cruise(f_tick, v),
+        stop_ratio=_stop_ratio(accel, decel),
+        ramp=RAMP_EXACT,
+    )
+
+
+def plan_move(
+    steps: int,
+    accel: float,
+    decel: float,
+    speed: float,
+    spr: float,
+    fclk: float,
+    prescale: int = 1,
+    ramp: int = RAMP_AVR446,
+) -> Plan:
+    """Plan a move: signed step count, accel/decel in rad/s^2, speed in rad/s, spr steps/rev, fclk Hz, for the
+    ramp arithmetic of the core (RAMP_AVR446, or RAMP_EXACT for a core built with G_RAMP = 1).
 
     Raises ValueError with the reason when the move is not valid for the engine.
     """
-    return plan_move_info(steps, accel, decel, speed, spr, fclk, prescale)[0]
+    return plan_move_info(steps, accel, decel, speed, spr, fclk, prescale, ramp)[0]

@@ -30,9 +30,18 @@ from typing import Any, cast
 
 from stepramp.board.change import Change, Segment, plan_change, speed_at_pulse, speed_at_segment_pulse
 from stepramp.board.driver import NO_SEGMENT, Outputs, RegisterAccess, StepRamp, plan_writes, segment_writes
-from stepramp.board.plan import FRAC_CRUISE, MAX_PRESCALE, MoveInfo, Plan, plan_move_info, steps_units
+from stepramp.board.plan import (
+    FRAC_CRUISE,
+    MAX_PRESCALE,
+    RAMP_AVR446,
+    RAMPS,
+    MoveInfo,
+    Plan,
+    plan_move_info,
+    steps_units,
+)
 from stepramp.board.regmap import ERROR_CODES, REGISTERS_BY_NAME, offset
-from stepramp.models.engine import change_pulse, segment_runs, segment_stop_values
+from stepramp.models.engine import change_pulse, segment_runs, segment_stop_values, start_acc
 from stepramp.models.inputs import PINS, filter_length, filtered_edges
 from stepramp.models.stepping import START_TO_FIRST_STEP, GateTiming, gate_timing
 
@@ -105,6 +114,8 @@ class Script:
     #: "inputs": INPUT_FILTER in clocks and INPUT_CFG.LIMIT_HARD, written before the first command.
     input_filter: int = 0
     limit_hard: bool = False
+    #: "ramp": the core's ramp arithmetic, "avr446" (default) or "exact" (plan.RAMPS).
+    ramp: int = RAMP_AVR446
 
 
 @dataclass(frozen=True)
@@ -219,7 +230,7 @@ def load_script(obj: dict[str, Any]) -> Script:
     order or after `until`)."""
     if not isinstance(obj, dict):
         raise ValueError(f"a script must be an object, got {type(obj).__name__}")
-    unknown = sorted(set(obj) - {"fclk", "spr", "prescale", "commands", "until", "inputs"})
+    unknown = sorted(set(obj) - {"fclk", "spr", "prescale", "commands", "until", "inputs", "ramp"})
     if unknown:
         raise ValueError(f"unknown key(s) {', '.join(unknown)}")
     for name in ("fclk", "spr", "commands"):
@@ -252,7 +263,10 @@ def load_script(obj: dict[str, Any]) -> Script:
     limit_hard = inputs.get("limit_hard", False)
     if not isinstance(limit_hard, bool):
         raise ValueError(f"script: inputs: limit_hard must be true or false, got {limit_hard!r}")
-    return Script(fclk, spr, prescale, tuple(commands), until, obj, input_filter, limit_hard)
+    ramp = obj.get("ramp", "avr446")
+    if ramp not in RAMPS:
+        raise ValueError(f"script: ramp must be one of {', '.join(sorted(RAMPS))}, got {ramp!r}")
+    return Script(fclk, spr, prescale, tuple(commands), until, obj, input_filter, limit_hard, RAMPS[ramp])
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -264,9 +278,9 @@ class _RejectError(Exception):
     """A command the driver refuses (listed in ScriptResult.rejected; nothing changes)."""
 
 
-def _motion_args(phys: dict[str, float], s: Script) -> tuple[float, float, float, float, float, int]:
-    """(accel, decel, speed, spr, fclk, prescale): plan_change's arguments after u and the remaining steps."""
-    return phys["accel"], phys["decel"], phys["speed"], s.spr, s.fclk, s.prescale
+def _motion_args(phys: dict[str, float], s: Script) -> tuple[float, float, float, float, float, int, int]:
+    """(accel, decel, speed, spr, fclk, prescale, ramp): plan_change's arguments after u and the remaining steps."""
+    return phys["accel"], phys["decel"], phys["speed"], s.spr, s.fclk, s.prescale, s.ramp
 
 
 def _driver_call(fn: Callable[..., Any], *args: Any) -> Any:
@@ -371,7 +385,7 @@ class _Motion:
     def _generate(self) -> Iterator[int]:
         base = self.start_edge + START_TO_FIRST_STEP
         limit = None if self.hard is None else self.hard + 1  # the pulses whose engine edge is <= the hard stop's W
-        t = acc = 0
+        t, acc = 0, start_acc(self.parts[0].seg.ramp)
         edge = base
         for value in self._values():
             if limit is not None and edge > limit:
@@ -455,7 +469,7 @@ class _Run:
     def __init__(self, script: Script) -> None:
         self.script = script
         self.outputs = Outputs()
-        self.driver = StepRamp(cast(RegisterAccess, None), script.fclk, script.spr, script.prescale)
+        self.driver = StepRamp(cast(RegisterAccess, None), script.fclk, script.spr, script.prescale, script.ramp)
         self.force: dict[str, float] = {}
         self.motions: list[_Motion] = []
         self.actions: list[Action] = []
@@ -617,7 +631,7 @@ class _Run:
         s = self.script
         plan, info = cast(
             tuple[Plan, MoveInfo],
-            _driver_call(plan_move_info, steps, v["accel"], v["decel"], v["speed"], s.spr, s.fclk, s.prescale),
+            _driver_call(plan_move_info, steps, v["accel"], v["decel"], v["speed"], s.spr, s.fclk, s.prescale, s.ramp),
         )
         part = _Part(0, Segment.of_move(plan), lambda j: speed_at_pulse(info, j), None, phys=_phys(v))
         return plan, part, [*plan_writes(plan), *segment_writes(NO_SEGMENT)]
@@ -626,7 +640,7 @@ class _Run:
         """A jog from rest (signed speed): its direction, its first part and the staging writes."""
         s = self.script
         plan, segment, seg = _driver_call(self.driver.plan_jog, speed, v["accel"], v["decel"])
-        change = plan_change(0.0, None, v["accel"], v["decel"], abs(speed), s.spr, s.fclk, s.prescale)
+        change = plan_change(0.0, None, v["accel"], v["decel"], abs(speed), s.spr, s.fclk, s.prescale, s.ramp)
         assert change.segment == seg
         part = _Part(0, seg, lambda j: speed_at_segment_pulse(change, j), None, phys=_phys(v, abs(speed)))
         return plan.direction, part, [*plan_writes(plan), *segment_writes(segment)]
@@ -799,7 +813,9 @@ class _Run:
         if remaining >= 0:
             change = cast(
                 Change,
-                _driver_call(plan_change, u, remaining, v["accel"], v["decel"], v["speed"], s.spr, s.fclk, s.prescale),
+                _driver_call(
+                    plan_change, u, remaining, v["accel"], v["decel"], v["speed"], s.spr, s.fclk, s.prescale, s.ramp
+                ),
             )
             if change.back is None:
                 return self.change_proposal(m, w, p, change, target, _phys(v))
@@ -821,7 +837,9 @@ class _Run:
             else:
                 change = cast(
                     Change,
-                    _driver_call(plan_change, u, None, v["accel"], v["decel"], abs(speed), s.spr, s.fclk, s.prescale),
+                    _driver_call(
+                        plan_change, u, None, v["accel"], v["decel"], abs(speed), s.spr, s.fclk, s.prescale, s.ramp
+                    ),
                 )
                 return self.change_proposal(m, w, p, change, None, _phys(v, abs(speed)))
             _, part, writes = self.jog_part(speed, v)

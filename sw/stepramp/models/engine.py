@@ -13,7 +13,8 @@ import itertools
 from collections.abc import Iterable, Iterator
 from typing import TYPE_CHECKING
 
-from stepramp.board.plan import FRAC_CRUISE, FRAC_RAMP, Plan
+from stepramp.board.plan import FRAC_CRUISE, FRAC_RAMP, RAMP_EXACT, Plan
+from stepramp.models import exact
 
 if TYPE_CHECKING:  # numpy is imported where the lazy functions need it (the list functions do not)
     import numpy as np
@@ -30,6 +31,14 @@ DECEL = "DECEL"
 
 _SHIFT = FRAC_CRUISE - FRAC_RAMP
 _FRAC_MASK = (1 << FRAC_CRUISE) - 1
+HALF = 1 << (FRAC_CRUISE - 1)
+"""The accumulator's fraction at a START in exact mode: one half, so that every pulse lands on the tick nearest its
+exact time (docs/algorithm.md, "Exact step times")."""
+
+
+def start_acc(ramp: int) -> int:
+    """The accumulator fraction a motion from rest (START or a queued start) begins with: HALF in exact mode, else 0."""
+    return HALF if ramp == RAMP_EXACT else 0
 
 
 def interval_values(plan: Plan) -> Iterator[int]:
@@ -54,7 +63,11 @@ def segment_runs(seg: Segment) -> Iterator[tuple[int, int]]:
     """A segment's interval values run-length coded, by the rules of docs/algorithm.md ("Which value each interval
     gets", and "Changes while moving" for the head and endless segments): c_first, c_last, c_sa, c_sd, the head (up:
     A_(n0+i-1) from A_(n0) = accel_seed; down: D_(K-i) from D_(K-2) = accel_seed), the final decel D_(L-i), cruise.
-    An endless segment's cruise is one endless run of runs of 2^31 - 1."""
+    An endless segment's cruise is one endless run of runs of 2^31 - 1. In exact mode the ramps are the differences
+    of rounded square roots instead (exact_segment_runs)."""
+    if seg.ramp == RAMP_EXACT:
+        yield from exact_segment_runs(seg)
+        return
     endless = seg.length is None
     length = -1 if seg.length is None else seg.length  # -1: no interval is the last, none is past sd
     sa, sd = seg.sa, (-1 if endless else seg.sd)
@@ -103,6 +116,52 @@ def segment_runs(seg: Segment) -> Iterator[tuple[int, int]]:
         i += 1
 
 
+def exact_segment_runs(seg: Segment) -> Iterator[tuple[int, int]]:
+    """segment_runs in exact mode (docs/algorithm.md, "Exact step times"): the same registers at the same intervals;
+    the up head's interval i is the ramp value of C_head = accel_seed from virtual position n0 + i - 1 to n0 + i, the
+    down head's from K - i to K - i + 1 steps before its rest (C_head = the decel's constant), the final decel's
+    interval i from L - i to L - i + 1 steps before the end (C_dec = decel_seed); the cruise as in the AVR446 mode."""
+    endless = seg.length is None
+    length = -1 if seg.length is None else seg.length
+    sa, sd = seg.sa, (-1 if endless else seg.sd)
+    head_down = seg.head == "down"
+    i = 1
+    while endless or i <= length:
+        if i == 1:
+            value = seg.c_first
+        elif i == length:
+            value = seg.c_last
+        elif i == sa:
+            value = seg.c_sa
+        elif i == sd:
+            value = seg.c_sd
+        elif i < sa:
+            x = seg.head_index - i if head_down else seg.head_index + i - 1
+            value = exact.value(seg.accel_seed, x)
+        elif not endless and i > sd:
+            value = exact.value(seg.decel_seed, length - i)
+        else:
+            count = (1 << 31) - 1 if endless else min(sd, length) - i
+            yield seg.cruise, count
+            i += count
+            continue
+        yield value << _SHIFT, 1
+        i += 1
+
+
+def exact_stop_values(run: bool, m: int, c_sd: int, c_last: int, decel_seed: int) -> list[int]:
+    """Q32.32 values of the intervals p + 1 .. p + m of an exact-mode soft stop of m >= 1 steps decided at pulse p.
+
+    In the cruise (run) the motion's own decel from sd - 1 moves to pulse p: c_sd, then the ramp values of C_dec =
+    decel_seed from m - j to m - j + 1 steps before the rest, then c_last (c_sd alone when m = 1). Elsewhere (an
+    ACCEL phase or an up head) the decel ramp to rest m steps ahead: the ramp values for j = 1 .. m - 1, then c_last."""
+    out: list[int] = []
+    for j in range(1, m):
+        out.append((c_sd if run and j == 1 else exact.value(decel_seed, m - j)) << _SHIFT)
+    out.append((c_sd if run and m == 1 else c_last) << _SHIFT)
+    return out
+
+
 def accumulate(values: Iterable[int], acc: int = 0) -> list[int]:
     """Pulse times in ticks through the 32-bit fractional accumulator: 0 for the first pulse, then the pulse ending
     each Q32.32 interval value; acc is the fraction the accumulator starts with (0 at a START)."""
@@ -120,7 +179,7 @@ def tick_times(plan: Plan) -> list[int]:
     """Pulse times T_k in ticks, k = 0 .. N-1 (T_0 = 0), through the 32-bit fractional accumulator."""
     if plan.steps == 0:
         return []
-    return accumulate(interval_values(plan))
+    return accumulate(interval_values(plan), start_acc(plan.ramp))
 
 
 def edges(plan: Plan) -> list[int]:
@@ -185,7 +244,8 @@ def _first_pulse_from(plan: Plan, edge: int) -> int:
     need = -(-(edge - FIRST_PULSE_LATENCY) // plan.prescale)  # E_k >= edge <=> T_k >= need
     if need <= 0:
         return 0
-    k = t = acc = 0
+    k = t = 0
+    acc = start_acc(plan.ramp)
     for value, count in value_runs(plan):
         reached, frac = _advance(t, acc, value, count)
         if reached >= need:  # the j-th interval of this run: acc + j * value >= (need - t) * 2^32
@@ -198,6 +258,12 @@ def _soft_stop_runs(plan: Plan, p: int, m: int) -> Iterator[tuple[int, int]]:
     """soft_stop_values(plan, p) run-length coded, for the p and m of a soft stop that is not ignored."""
     if m == 0:
         yield from _take_runs(value_runs(plan), p)
+        return
+    if plan.ramp == RAMP_EXACT:
+        yield from _take_runs(value_runs(plan), p)
+        run = phase_of(plan, p) == RUN
+        for value in exact_stop_values(run, m, plan.c_sd, plan.c_last, plan.decel_seed):
+            yield value, 1
         return
     left, d_val = p, 0
     for value, count in value_runs(plan):  # intervals 1 .. p, and D = the Q32.16 value of interval p + 1
@@ -276,7 +342,7 @@ def tick_chunks(plan: Plan, *, chunk: int = CHUNK, stop: StopRequest | None = No
     if pulses <= 0:
         return
     buf = [0]
-    t = acc = 0
+    t, acc = 0, start_acc(plan.ramp)
     for value, count in runs:
         if count < _VECTOR_MIN:
             for _ in range(count):
@@ -324,7 +390,7 @@ def last_edge(plan: Plan, *, stop: StopRequest | None = None) -> int | None:
     pulses, runs = move_runs(plan, stop)
     if pulses <= 0:
         return None
-    t = acc = 0
+    t, acc = 0, start_acc(plan.ramp)
     for value, count in runs:
         t, acc = _advance(t, acc, value, count)
     return FIRST_PULSE_LATENCY + plan.prescale * t
@@ -379,6 +445,12 @@ def soft_stop_values(plan: Plan, p: int) -> list[int] | None:
     m = soft_stop_length(plan, p)
     if m is None:
         return None
+    if plan.ramp == RAMP_EXACT:
+        values = list(itertools.islice(interval_values(plan), p))
+        if m:
+            run = phase_of(plan, p) == RUN
+            values += exact_stop_values(run, m, plan.c_sd, plan.c_last, plan.decel_seed)
+        return values
     values = list(itertools.islice(interval_values(plan), p + 1))
     # D: Q32.16 (c_sa and A_p are Q32.16, so the shift is exact; cruise is truncated)
     d_val = values.pop() >> _SHIFT
@@ -395,7 +467,7 @@ def soft_stop_values(plan: Plan, p: int) -> list[int] | None:
 
 def _edges_of_values(plan: Plan, values: Iterable[int]) -> list[int]:
     """Edges of pulse 0 and of the pulse ending each interval value, through the fractional accumulator."""
-    return [FIRST_PULSE_LATENCY + plan.prescale * t for t in accumulate(values)]
+    return [FIRST_PULSE_LATENCY + plan.prescale * t for t in accumulate(values, start_acc(plan.ramp))]
 
 
 def soft_stop_pulse(plan: Plan, request_edge: int) -> int | None:
@@ -504,6 +576,8 @@ def segment_stop_values(seg: Segment, p: int) -> list[int] | None:
     if seg.head == "down" and p < seg.sa:
         end = p + m
         return segment_values(dataclasses.replace(seg, length=end, sa=end, sd=end), end)
+    if seg.ramp == RAMP_EXACT:
+        return segment_values(seg, p) + exact_stop_values(p >= seg.sa, m, seg.c_sd, seg.c_last, seg.decel_seed)
     values = segment_values(seg, p + 1)
     d_val = values.pop() >> _SHIFT
     rem = 0
@@ -524,7 +598,7 @@ def segment_edges(
     An endless segment needs `count` or a stop that ends it."""
 
     def to_edges(values: list[int]) -> list[int]:
-        return [FIRST_PULSE_LATENCY + prescale * t for t in accumulate(values)]
+        return [FIRST_PULSE_LATENCY + prescale * t for t in accumulate(values, start_acc(seg.ramp))]
 
     if stop is None:
         if seg.length is None and count is None:
@@ -557,7 +631,7 @@ def change_edges(running: Segment, p: int, seg: Segment, prescale: int) -> list[
         raise ValueError(f"the take-over pulse {p} is not a pulse after pulse 0 of the running motion")
     count = seg.length if seg.length is not None else seg.sa + 64
     values = segment_values(running, p) + segment_values(seg, count)
-    return [FIRST_PULSE_LATENCY + prescale * t for t in accumulate(values)]
+    return [FIRST_PULSE_LATENCY + prescale * t for t in accumulate(values, start_acc(running.ramp))]
 
 
 MAX_CHANGE_PULSE = (1 << 31) - 1

@@ -243,3 +243,19 @@ def exact_plan(
         cruise=round(cruise * 2**32) if length >= 3 else 0,
         stop_ratio=0,
     )
+
+
+EXACT_CLOCK_FACTOR = 4
+"""The profiles in exact mode run from a clock EXACT_CLOCK_FACTOR times faster with a PRESCALE as many times larger:
+the same ticks (and so the same tick-domain plan but PRESCALE), every interval EXACT_CLOCK_FACTOR times as many
+clocks, so that the fastest ones (64 clocks) keep the exact mode's MIN_INTERVAL_CLKS_EXACT = 256."""
+
+
+def exact_profile(profile: Profile) -> Profile:
+    """The profile as the exact-mode regression runs it (EXACT_CLOCK_FACTOR)."""
+    k = EXACT_CLOCK_FACTOR
+    return dataclasses.replace(profile, fclk=profile.fclk * k, prescale=profile.prescale * k)
+
+
+EXACT_PROFILES: list[Profile] = [exact_profile(p) for p in PROFILES]
+"""The 64 profiles at EXACT_CLOCK_FACTOR times the clock and PRESCALE (plan them with ramp=RAMP_EXACT)."""
