@@ -10,7 +10,9 @@ library work;
 
 entity stepramp_axil is
   generic (
-    G_MICROSTEPS : positive := 16 -- sine table steps per full step (stepramp_stepper)
+    G_MICROSTEPS : positive := 16; -- sine table steps per full step (stepramp_stepper)
+    -- The ramp arithmetic: 0 the AVR446 recurrence, 1 the exact ramp (docs/algorithm.md, "Exact step times").
+    G_RAMP : natural := 0
   );
   port (
     aclk    : in    std_logic;
@@ -106,6 +108,10 @@ architecture rtl of stepramp_axil is
 
 begin
 
+  assert G_RAMP <= 1
+    report "stepramp_axil: G_RAMP must be 0 (AVR446) or 1 (exact)"
+    severity failure;
+
   rst <= not aresetn;
 
   -- A write may go when its address and data are held and its response channel is free; a read likewise.
@@ -196,7 +202,8 @@ begin
   core_inst : entity work.stepramp_core
     generic map (
       G_MICROSTEPS => G_MICROSTEPS,
-      G_WADDR      => true
+      G_WADDR      => true,
+      G_RAMP       => G_RAMP
     )
     port map (
       clk        => aclk,

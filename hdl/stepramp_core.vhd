@@ -13,7 +13,10 @@ entity stepramp_core is
   generic (
     G_MICROSTEPS : positive := 16;
     -- stepramp_regfile's G_WADDR: the AXI4-Lite top decodes a write from waddr.
-    G_WADDR : boolean := false
+    G_WADDR : boolean := false;
+    -- The ramp arithmetic: 0 the AVR446 recurrence, 1 the exact ramp (docs/algorithm.md, "Exact step times"); ID
+    -- bit 15 reads it.
+    G_RAMP : natural := 0
   );
   port (
     clk : in    std_logic;
@@ -128,9 +131,14 @@ architecture rtl of stepramp_core is
 
 begin
 
+  assert G_RAMP <= 1
+    report "stepramp_core: G_RAMP must be 0 (AVR446) or 1 (exact)"
+    severity failure;
+
   regfile_inst : entity work.stepramp_regfile
     generic map (
-      G_WADDR => G_WADDR
+      G_WADDR => G_WADDR,
+      G_RAMP  => G_RAMP
     )
     port map (
       clk             => clk,
@@ -286,6 +294,9 @@ begin
     );
 
   engine_inst : entity work.stepramp_engine
+    generic map (
+      G_RAMP => G_RAMP
+    )
     port map (
       clk         => clk,
       rst         => rst,

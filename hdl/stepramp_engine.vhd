@@ -15,7 +15,9 @@ library work;
 entity stepramp_engine is
   generic (
     G_DIV_WIDTH      : positive := 50;
-    G_PRESCALE_WIDTH : positive := 16
+    G_PRESCALE_WIDTH : positive := 16;
+    -- The ramp arithmetic: 0 the AVR446 recurrence, 1 the exact ramp (docs/algorithm.md, "Exact step times").
+    G_RAMP : natural := 0
   );
   port (
     clk       : in    std_logic;
@@ -237,6 +239,10 @@ begin
     report "stepramp_engine: G_DIV_WIDTH must be in 50 .. 64"
     severity failure;
 
+  assert G_RAMP <= 1
+    report "stepramp_engine: G_RAMP must be 0 (AVR446) or 1 (exact)"
+    severity failure;
+
   -- The timer supports 1 .. 32 bits; the driver's register is 16 bits wide.
   assert G_PRESCALE_WIDTH >= 1 and G_PRESCALE_WIDTH <= 32
     report "stepramp_engine: G_PRESCALE_WIDTH must be in 1 .. 32"
@@ -256,7 +262,8 @@ begin
 
   precompute_inst : entity work.stepramp_precompute
     generic map (
-      G_DIV_WIDTH => G_DIV_WIDTH
+      G_DIV_WIDTH => G_DIV_WIDTH,
+      G_RAMP      => G_RAMP
     )
     port map (
       clk        => clk,

@@ -11,7 +11,9 @@ library work;
 
 entity stepramp_plb is
   generic (
-    G_MICROSTEPS : positive := 16 -- sine table steps per full step (stepramp_stepper)
+    G_MICROSTEPS : positive := 16; -- sine table steps per full step (stepramp_stepper)
+    -- The ramp arithmetic: 0 the AVR446 recurrence, 1 the exact ramp (docs/algorithm.md, "Exact step times").
+    G_RAMP : natural := 0
   );
   port (
     clk : in    std_logic;
@@ -56,6 +58,10 @@ architecture rtl of stepramp_plb is
 
 begin
 
+  assert G_RAMP <= 1
+    report "stepramp_plb: G_RAMP must be 0 (AVR446) or 1 (exact)"
+    severity failure;
+
   -- One strobe per access: CS is still high in the cycle of the ack, so the strobe cycle blocks the next one.
   wr <= bus2ip_cs and not bus2ip_rnw and not access_r;
   rd <= bus2ip_cs and bus2ip_rnw and not access_r;
@@ -83,7 +89,8 @@ begin
 
   core_inst : entity work.stepramp_core
     generic map (
-      G_MICROSTEPS => G_MICROSTEPS
+      G_MICROSTEPS => G_MICROSTEPS,
+      G_RAMP       => G_RAMP
     )
     port map (
       clk        => clk,

@@ -13,7 +13,9 @@ library work;
 
 entity stepramp_precompute is
   generic (
-    G_DIV_WIDTH : positive := 50
+    G_DIV_WIDTH : positive := 50;
+    -- The ramp arithmetic: 0 the AVR446 recurrence, 1 the exact ramp (docs/algorithm.md, "Exact step times").
+    G_RAMP : natural := 0
   );
   port (
     clk : in    std_logic;
@@ -214,6 +216,10 @@ begin
     report "stepramp_precompute: G_DIV_WIDTH must be in 50 .. 64"
     severity failure;
 
+  assert G_RAMP <= 1
+    report "stepramp_precompute: G_RAMP must be 0 (AVR446) or 1 (exact)"
+    severity failure;
+
   p_l          <= unsigned(l);
   p_sa         <= unsigned(sa);
   p_sd         <= unsigned(sd);
@@ -242,26 +248,56 @@ begin
   nd_req_num   <= std_logic_vector(resize(v_r(63 downto 16) & '0', G_DIV_WIDTH)) when req_alt_r = '1' else
                   std_logic_vector(rec_num);
 
-  next_delay_inst : entity work.stepramp_next_delay
-    generic map (
-      G_DIV_WIDTH => G_DIV_WIDTH
-    )
-    port map (
-      clk       => clk,
-      rst       => rst,
-      flush     => nd_flush,
-      req       => req_r,
-      req_seed  => req_seed_r,
-      req_decel => req_decel_r,
-      req_index => std_logic_vector(req_index_r),
-      req_value => nd_req_value,
-      req_num   => nd_req_num,
-      busy      => nd_busy,
-      ans_valid => nd_valid,
-      ans_value => nd_value,
-      ans_rem   => nd_rem,
-      ans_ovf   => nd_ovf
-    );
+  avr446_gen : if G_RAMP = 0 generate
+
+    next_delay_inst : entity work.stepramp_next_delay
+      generic map (
+        G_DIV_WIDTH => G_DIV_WIDTH
+      )
+      port map (
+        clk       => clk,
+        rst       => rst,
+        flush     => nd_flush,
+        req       => req_r,
+        req_seed  => req_seed_r,
+        req_decel => req_decel_r,
+        req_index => std_logic_vector(req_index_r),
+        req_value => nd_req_value,
+        req_num   => nd_req_num,
+        busy      => nd_busy,
+        ans_valid => nd_valid,
+        ans_value => nd_value,
+        ans_rem   => nd_rem,
+        ans_ovf   => nd_ovf
+      );
+
+  end generate avr446_gen;
+
+  -- The exact ramp answers from the index and the ramp constants alone (the seeds' registers hold them): C_ACC for
+  -- an accel request, C_DEC for every decelerating one (final decel, down head, soft stop).
+
+  exact_gen : if G_RAMP = 1 generate
+
+    next_delay_inst : entity work.stepramp_next_delay_exact
+      port map (
+        clk       => clk,
+        rst       => rst,
+        flush     => nd_flush,
+        req       => req_r,
+        req_seed  => req_seed_r,
+        req_decel => req_decel_r,
+        req_alt   => req_alt_r,
+        req_index => std_logic_vector(req_index_r),
+        c_head    => accel_seed,
+        c_dec     => decel_seed,
+        busy      => nd_busy,
+        ans_valid => nd_valid,
+        ans_value => nd_value,
+        ans_rem   => nd_rem,
+        ans_ovf   => nd_ovf
+      );
+
+  end generate exact_gen;
 
   pc_proc : process (clk) is
 
@@ -339,9 +375,8 @@ begin
     end procedure prepare_unless_last;
 
     -- The segment's first interval is prepared (at setup, or in a take-over): its ramp phase, the counters and flags
-    -- as after the DECIDE of interval 1, and the accel seed A_0 loaded through the unit (at index 0), like the decel
-    -- seed later: the unit sees the start of every value sequence, so a closed-form mode can take its constants
-    -- from the seeds.
+    -- as after the DECIDE of interval 1, and (AVR446) the accel seed A_0 loaded through the unit (at index 0), like
+    -- the decel seed later. The exact ramp's unit takes its constants from the seeds' registers directly.
 
     procedure begin_segment is
     begin
@@ -384,9 +419,13 @@ begin
       head_ctr     <= step_head(head_ctr, head_down);
       dec_started  <= '0';
       first_pend   <= '1';
-      request('1', '0', (others => '0'));
       req_alt_r    <= '0';
-      seed_wait    <= '1';
+      -- The exact ramp has no seed to load (its first value is a fresh request like any other), so interval 2 is
+      -- asked for at once.
+      if (G_RAMP = 0) then
+        request('1', '0', (others => '0'));
+        seed_wait <= '1';
+      end if;
 
     end procedure begin_segment;
 
@@ -509,8 +548,9 @@ begin
               req_seed_r  <= '0';
               req_decel_r <= '0';
               pc_state    <= C_PC_WAIT;
-            elsif (lt_sa = '1' and head_started = '0') then
+            elsif (lt_sa = '1' and head_started = '0' and G_RAMP = 0) then
               -- The down head's first value D_(K-2), interval 2: the seed itself (rec_val since setup, remainder 0).
+              -- (The exact ramp asks the unit for it, as for every other head value.)
               v_r          <= rec_val & C_Q16_PAD;
               head_started <= '1';
               pc_state     <= C_PC_ADD;
@@ -550,7 +590,12 @@ begin
           -- value just added: the plan's interval c + 1 (A_c, c_sa or cruise), Q32.16.
           v_range <= '0';
           if (alt_kind_r = C_ALT_LOAD) then
-            if (alt_one_r = '1') then
+            if (G_RAMP = 1 and state_r = C_ST_RUN) then
+              -- Exact ramp, a stop in the cruise: the motion's own decel from sd - 1 moves to pulse c, so interval
+              -- c + 1 is c_sd (also when m = 1), and the stop's ramp goes on from C_DEC.
+              v_r      <= p_c_sd & C_Q16_PAD;
+              pc_state <= C_PC_ALT_ADD;
+            elsif (alt_one_r = '1') then
               v_r      <= p_c_last & C_Q16_PAD;
               pc_state <= C_PC_ALT_ADD;
             elsif (alt_cont = '1' and eq_sa = '0') then
@@ -613,7 +658,14 @@ begin
       end if;
 
       if (setup = '1') then
-        -- Interval 1 is c_first (in nxt_d and nxt_acc since latch).
+        -- Interval 1 is c_first (in nxt_d and nxt_acc since latch). The exact ramp starts the accumulator at one
+        -- half, so that every pulse of the motion lands on the tick nearest its exact time: c_first + 1/2.
+        if (G_RAMP = 1) then
+          nxt_acc(31) <= not nxt_acc(31);
+          if (nxt_acc(31) = '1') then
+            nxt_d_r <= nxt_d_r + 1;
+          end if;
+        end if;
         nxt_range <= '0';
         nxt_zero  <= '0';
         nxt_ok_r  <= '1';

@@ -14,7 +14,9 @@ entity stepramp_regfile is
   generic (
     -- true: a write's address is waddr (the AXI4-Lite top: its held write address, so that the write decode does not
     -- wait for the read / write arbitration); false: addr serves reads and writes (waddr unused).
-    G_WADDR : boolean := false
+    G_WADDR : boolean := false;
+    -- The core's ramp arithmetic (stepramp_core's G_RAMP), read in ID bit 15.
+    G_RAMP : natural := 0
   );
   port (
     clk : in    std_logic;
@@ -292,6 +294,8 @@ architecture rtl of stepramp_regfile is
   constant C_STORAGE_WORDS : t_word_flags := word_flags(0);
   constant C_CONFIG_WORDS  : t_word_flags := word_flags(1);
   constant C_MAPPED_WORDS  : t_word_flags := word_flags(2);
+  -- ID bit 15: the ramp arithmetic the core was built with (G_RAMP), so that a driver can refuse a plan for the other.
+  constant C_ID_RAMP : std_logic_vector(31 downto 0) := std_logic_vector(to_unsigned(G_RAMP * 2 ** 15, 32));
 
   -- v when c, else 0 (the terms of an AND-OR multiplexer).
   function gate (
@@ -309,6 +313,10 @@ architecture rtl of stepramp_regfile is
   end function gate;
 
 begin
+
+  assert G_RAMP <= 1
+    report "stepramp_regfile: G_RAMP must be 0 (AVR446) or 1 (exact)"
+    severity failure;
 
   bus_proc : process (clk) is
 
@@ -470,7 +478,7 @@ begin
           time_hi_r <= time_count(63 downto 32);
         end if;
 
-        rd_v := gate(reset_value(w), C_STORAGE_WORDS(w) = '1') or gate(C_ID_VALUE, w = word(C_REG_ID)) or
+        rd_v := gate(reset_value(w), C_STORAGE_WORDS(w) = '1') or gate(C_ID_VALUE or C_ID_RAMP, w = word(C_REG_ID)) or
                 gate(ctrl_v, w = word(C_REG_CTRL)) or gate(stat_v, w = word(C_REG_STATUS)) or
                 gate(eng_position, w = word(C_REG_POSITION)) or gate(eng_cur_delay, w = word(C_REG_CUR_DELAY)) or
                 gate('0' & eng_step_count, w = word(C_REG_STEP_COUNT)) or

@@ -9,7 +9,7 @@ package stepramp_regs_pkg is
 
   -- Decoded address bits and the ID register's value.
   constant C_ADDR_BITS : natural                       := 8;
-  constant C_ID_VALUE  : std_logic_vector(31 downto 0) := x"53520006";
+  constant C_ID_VALUE  : std_logic_vector(31 downto 0) := x"53520007";
 
   -- Byte offsets.
   constant C_REG_ID            : natural := 16#00#;
@@ -227,7 +227,7 @@ package stepramp_regs_pkg is
 
   constant C_REG_RESET : t_reg_words :=
   (
-    0      => x"53520006",
+    0      => x"53520007",
     1      => x"00000000",
     2      => x"00000000",
     3      => x"00000000",

@@ -201,10 +201,11 @@ class MotionBench:
     def finish(self) -> None:
         raise NotImplementedError
 
-    def driver(self, plan_args: dict[str, Any] | None = None) -> StepRamp:
-        """The driver for a clock and motor (plan_args: fclk, spr, prescale; default 1 MHz, 200 steps/rev, 1)."""
+    def driver(self, plan_args: dict[str, Any] | None = None, ramp: int = 0) -> StepRamp:
+        """The driver for a clock and motor (plan_args: fclk, spr, prescale; default 1 MHz, 200 steps/rev, 1) and the
+        core's ramp arithmetic (G_RAMP)."""
         args = plan_args or {"fclk": 1e6, "spr": 200.0, "prescale": 1}
-        drv = StepRamp(self.bus, fclk=args["fclk"], spr=args["spr"], prescale=args["prescale"])
+        drv = StepRamp(self.bus, fclk=args["fclk"], spr=args["spr"], prescale=args["prescale"], ramp=ramp)
         drv.outputs = self.outputs
         return drv
 

@@ -73,22 +73,33 @@ static void command(const stepramp_t *dev, uint32_t mask)
 
 int stepramp_init(stepramp_t *dev, uintptr_t base, double fclk, double spr, uint32_t prescale)
 {
+    return stepramp_init_ramp(dev, base, fclk, spr, prescale, STEPRAMP_RAMP_AVR446);
+}
+
+int stepramp_init_ramp(stepramp_t *dev, uintptr_t base, double fclk, double spr, uint32_t prescale, uint32_t ramp)
+{
     uint32_t id;
 
     if (dev == NULL) {
         return STEPRAMP_ENULL;
     }
+    if (ramp != STEPRAMP_RAMP_AVR446 && ramp != STEPRAMP_RAMP_EXACT) {
+        return STEPRAMP_ERAMP; /* StepRamp's check_ramp: nothing set up */
+    }
     dev->base = base;
     dev->fclk = fclk;
     dev->spr = spr;
     dev->prescale = prescale;
+    dev->ramp = ramp;
     dev->segment_dirty = 1u; /* SEGMENT .. HEAD_PROD_HI unknown: the first program writes them */
     dev->min_gap = STEPRAMP_MIN_GAP_RESET;
     dev->input_filter = 0u; /* the reset values */
     dev->input_cfg = STEPRAMP_INPUT_CFG_RESET;
     id = read_reg(dev, STEPRAMP_REG_ID);
-    dev->version = id & 0xFFFFu;
-    return (id >> 16) == STEPRAMP_ID_MAGIC ? STEPRAMP_OK : STEPRAMP_EID;
+    dev->version = id & 0x7FFFu;
+    /* StepRamp.check_id: a stepramp core, built for the ramp this driver plans for (ID bit 15 is its G_RAMP) */
+    return ((id >> 16) == STEPRAMP_ID_MAGIC && ((id >> STEPRAMP_ID_RAMP_BIT) & 1u) == ramp) ? STEPRAMP_OK
+                                                                                             : STEPRAMP_EID;
 }
 
 int stepramp_plan(const stepramp_t *dev, stepramp_plan_t *plan, int64_t steps, double accel, double decel, double speed)
@@ -100,7 +111,8 @@ int stepramp_plan(const stepramp_t *dev, stepramp_plan_t *plan, int64_t steps, d
     if (dev == NULL || plan == NULL) {
         return STEPRAMP_ENULL;
     }
-    rc = (int)stepramp_plan_move_info(&out, &info, steps, accel, decel, speed, dev->spr, dev->fclk, dev->prescale);
+    rc = (int)stepramp_plan_move_info_ramp(&out, &info, steps, accel, decel, speed, dev->spr, dev->fclk, dev->prescale,
+                                           dev->ramp);
     if (rc != STEPRAMP_OK) {
         return rc;
     }
@@ -182,8 +194,8 @@ int stepramp_plan_jog(const stepramp_t *dev, stepramp_plan_t *plan, stepramp_seg
     if (!(isfinite(speed) && speed != 0.0)) {
         return STEPRAMP_EJOG_SPEED;
     }
-    rc = stepramp_plan_change(&ch, 0.0, STEPRAMP_ENDLESS, accel, decel, fabs(speed), dev->spr, dev->fclk,
-                              dev->prescale);
+    rc = stepramp_plan_change_ramp(&ch, 0.0, STEPRAMP_ENDLESS, accel, decel, fabs(speed), dev->spr, dev->fclk,
+                                   dev->prescale, dev->ramp);
     if (rc != STEPRAMP_OK) {
         return rc;
     }
@@ -248,7 +260,8 @@ int stepramp_change_to(stepramp_t *dev, uint32_t pulse, double u, int64_t remain
     if (pulse == 0u || pulse > STEPRAMP_MAX_PULSE) {
         return STEPRAMP_EPULSE;
     }
-    rc = stepramp_plan_change_info(&ch, &info, u, remaining, accel, decel, speed, dev->spr, dev->fclk, dev->prescale);
+    rc = stepramp_plan_change_info_ramp(&ch, &info, u, remaining, accel, decel, speed, dev->spr, dev->fclk,
+                                        dev->prescale, dev->ramp);
     if (rc != STEPRAMP_OK) {
         return rc;
     }
@@ -613,7 +626,8 @@ const char *stepramp_corename(uint32_t code)
 const char *stepramp_strresult(int result)
 {
     if (result == STEPRAMP_EID) {
-        return "the ID register does not identify a stepramp core at this address";
+        return "the ID register does not identify a stepramp core at this address, or one built for the other ramp "
+               "arithmetic (ID bit 15, G_RAMP) than the driver plans for (stepramp_init_ramp)";
     }
     if (result == STEPRAMP_ETIMEOUT) {
         return "no DONE within the allowed number of status polls";

@@ -37,6 +37,11 @@
  *   if (rc != STEPRAMP_OK) puts(stepramp_strresult(rc));
  *   rc = stepramp_jog(&motor, -20.0, 40.0, 40.0);            (signed rad/s, rad/s^2, rad/s^2): until a stop
  *
+ * A core built with G_RAMP = 1 (the exact ramp) needs plans in exact mode: set it up with
+ * stepramp_init_ramp(&motor, base, fclk, spr, prescale, STEPRAMP_RAMP_EXACT) (Python's StepRamp(..., ramp)); every
+ * move, jog and change of the driver is then planned for it (dev->ramp). stepramp_init is stepramp_init_ramp with
+ * STEPRAMP_RAMP_AVR446. Either checks the core's ramp in ID bit 15 against the driver's.
+ *
  * While a motion runs: stepramp_change_to(&motor, p, u, remaining, accel, decel, speed) takes a new plan over at
  * pulse p (u: the speed there, stepramp_speed_at_pulse), stepramp_queue_move(&motor, steps, ...) starts a move when
  * the running one ends.
@@ -60,13 +65,17 @@ extern "C" {
 
 /** ID register bits 31:16 of every stepramp core ('SR'). */
 #define STEPRAMP_ID_MAGIC 0x5352u
+/** ID register bit 15: the core's ramp arithmetic, its G_RAMP (0: STEPRAMP_RAMP_AVR446, 1: STEPRAMP_RAMP_EXACT);
+ * the version is in bits 14:0 (regmap.ID_RAMP_BIT). */
+#define STEPRAMP_ID_RAMP_BIT 15u
 
 /** STOP_RATIO value 1.0 (Q16.16): accel equal to decel. */
 #define STEPRAMP_STOP_RATIO_ONE 0x00010000u
 
 /** Driver results beyond stepramp_err_t (whose values stay below 64). */
 enum {
-    STEPRAMP_EID = 64,        /**< the ID register does not hold STEPRAMP_ID_MAGIC in bits 31:16 */
+    STEPRAMP_EID = 64,        /**< the ID register does not hold STEPRAMP_ID_MAGIC in bits 31:16, or its bit 15 (the
+                                   core's G_RAMP) is not the driver's ramp (dev->ramp) */
     STEPRAMP_ETIMEOUT = 65,   /**< stepramp_wait_done: no STATUS.DONE within max_polls reads */
     STEPRAMP_EOUTPUTS = 66,   /**< stepramp_configure_outputs: NULL, mode > 4 or ustep_log2 > 7 */
     STEPRAMP_ENOIRQ = 67,     /**< stepramp_isr: neither STATUS.DONE nor STATUS.ERROR was set (not this core) */
@@ -142,7 +151,9 @@ typedef struct {
     double fclk;            /**< engine clock frequency, Hz */
     double spr;             /**< steps per revolution (with microstepping) */
     uint32_t prescale;      /**< base timer period in clocks, 1 .. 65535 */
-    uint32_t version;       /**< ID bits 15:0 read by stepramp_init: major << 8 | minor */
+    uint32_t ramp;          /**< the core's ramp arithmetic every move, jog and change is planned for:
+                                 STEPRAMP_RAMP_AVR446 (stepramp_init) or STEPRAMP_RAMP_EXACT (stepramp_init_ramp) */
+    uint32_t version;       /**< ID bits 14:0 read by stepramp_init: major << 8 | minor */
     uint32_t segment_dirty; /**< 1: SEGMENT .. HEAD_PROD_HI may hold anything but 0, so the next program writes them
                                  (0 for a move from rest to rest): unknown after stepramp_init (an earlier program
                                  without a core reset, or another master, may have left them set), or set by a jog;
@@ -195,7 +206,8 @@ typedef struct {
 } stepramp_latch_t;
 
 /**
- * Set up the device structure and check that a stepramp core answers at base (reads ID only; writes nothing). The
+ * Set up the device structure and check that a stepramp core of the AVR446 ramp (G_RAMP = 0, ID bit 15 clear) answers
+ * at base (reads ID only; writes nothing); stepramp_init_ramp for a core of the exact ramp. The
  * driver assumes the core's stepping outputs at their reset values (dev->min_gap), but not its segment registers:
  * dev->segment_dirty is 1, so the first stepramp_program writes SEGMENT .. HEAD_PROD_HI (0 for a move from rest to
  * rest) whatever an earlier program or another master left in them.
@@ -209,7 +221,20 @@ typedef struct {
 int stepramp_init(stepramp_t *dev, uintptr_t base, double fclk, double spr, uint32_t prescale);
 
 /**
- * Plan a move with the device's fclk, spr and prescale (stepramp_plan_move; Python's StepRamp.plan).
+ * stepramp_init for a core of either ramp arithmetic (Python's StepRamp(access, fclk, spr, prescale, ramp) and its
+ * check_id): dev->ramp = ramp, which stepramp_plan, stepramp_move, stepramp_queue_move, stepramp_plan_jog,
+ * stepramp_jog and stepramp_change_to plan for (stepramp_plan_move_ramp, stepramp_plan_change_ramp). stepramp_init is
+ * this function with STEPRAMP_RAMP_AVR446.
+ *
+ * @param ramp STEPRAMP_RAMP_AVR446 for a core built with G_RAMP = 0, STEPRAMP_RAMP_EXACT for G_RAMP = 1
+ * @return STEPRAMP_OK; STEPRAMP_EID when ID bits 31:16 are not STEPRAMP_ID_MAGIC or ID bit 15 (the core's G_RAMP) is
+ *         not ramp; STEPRAMP_ERAMP (dev untouched, nothing read) when ramp is neither STEPRAMP_RAMP_AVR446 nor
+ *         STEPRAMP_RAMP_EXACT; STEPRAMP_ENULL if dev is NULL
+ */
+int stepramp_init_ramp(stepramp_t *dev, uintptr_t base, double fclk, double spr, uint32_t prescale, uint32_t ramp);
+
+/**
+ * Plan a move with the device's fclk, spr, prescale and ramp (stepramp_plan_move_ramp; Python's StepRamp.plan).
  * Touches no register.
  *
  * @param plan  output, written only on success
@@ -260,8 +285,8 @@ int stepramp_move(stepramp_t *dev, int64_t steps, double accel, double decel, do
 
 /**
  * The registers of a jog from rest (Python's StepRamp.plan_jog), touching no register: the continuation from speed
- * 0 with no target (stepramp_plan_change(u = 0, STEPRAMP_ENDLESS) at |speed| with the device's spr, fclk and
- * prescale) as its plan and segment registers (stepramp_segment_registers, direction 1 for a negative speed).
+ * 0 with no target (stepramp_plan_change_ramp(u = 0, STEPRAMP_ENDLESS) at |speed| with the device's spr, fclk,
+ * prescale and ramp) as its plan and segment registers (stepramp_segment_registers, direction 1 for a negative speed).
  *
  * @param plan  output, written only on success
  * @param regs  output, written only on success
@@ -307,8 +332,9 @@ int stepramp_jog(stepramp_t *dev, double speed, double accel, double decel);
 int stepramp_change(stepramp_t *dev, const stepramp_segment_t *seg, uint32_t direction, uint32_t pulse);
 
 /**
- * Plan a change and commit it at pulse `pulse` in the running direction: stepramp_plan_change from speed u with
- * the device's spr, fclk and prescale, then one STATUS read and stepramp_change(dev, segment, STATUS.DIR, pulse).
+ * Plan a change and commit it at pulse `pulse` in the running direction: stepramp_plan_change_ramp from speed u with
+ * the device's spr, fclk, prescale and ramp, then one STATUS read and stepramp_change(dev, segment, STATUS.DIR,
+ * pulse).
  *
  * @param pulse     the take-over pulse (1 .. STEPRAMP_MAX_PULSE), far enough ahead (see stepramp_change)
  * @param u         the running motion's speed at pulse, steps/s (stepramp_speed_at_pulse of its stepramp_info_t)

@@ -33,6 +33,7 @@
 
 /* what plan_change derives from its arguments before it plans */
 typedef struct {
+    uint32_t ramp;
     uint32_t prescale;
     double f_tick;
     double a;
@@ -114,16 +115,17 @@ static int64_t boundary(double x, double last)
     return (int64_t)py_min(b, last);
 }
 
-/* _check_speed: the shortest interval, f_tick / fastest, must leave the engine its MIN_INTERVAL_CLKS; an infinite
- * one (a zero or underflowing speed, math.floor's OverflowError in change.py) passes */
-static int check_speed(double f_tick, double fastest, uint32_t prescale)
+/* _check_speed: the shortest interval, f_tick / fastest, must leave the engine its MIN_INTERVAL_CLKS (exact mode:
+ * MIN_INTERVAL_CLKS_EXACT); an infinite one (a zero or underflowing speed, math.floor's OverflowError in change.py)
+ * passes */
+static int check_speed(double f_tick, double fastest, uint32_t prescale, uint32_t ramp)
 {
     double shortest = (fastest > 0.0) ? f_tick / fastest : (double)INFINITY;
     if (!(shortest >= 1.0)) {
         return STEPRAMP_ETOOFAST;
     }
     /* Python multiplies the exact integers; the double product rounds monotonically: the same outcome */
-    if (floor(shortest) * (double)prescale < (double)STEPRAMP_MIN_INTERVAL_CLKS) {
+    if (floor(shortest) * (double)prescale < (double)stepramp_priv_min_interval_clks(ramp)) {
         return STEPRAMP_ETOOFAST;
     }
     return STEPRAMP_OK;
@@ -142,32 +144,69 @@ static int seg_fixed(double ticks, double *raw, uint64_t *out, int *negative)
     return stepramp_priv_to_fixed(ticks, TWO_POW_16, TWO_POW_48, out);
 }
 
-/* _fields: c_first, c_last, c_sa, c_sd and decel_seed (the final ramp's, half its deficit put back as in a move);
- * length STEPRAMP_ENDLESS: c_last is cd0, the last step of a soft stop */
+/* _run_stop_first: interval 1 of an exact-mode soft stop in a jog's cruise at sqrt(peak2), in ticks: m =
+ * ceil(peak2 / 2d) steps, the cruise for m - peak2 / 2d of a step, then the decel at d to rest at step m */
+static int run_stop_first(double peak2, double d, double f_tick, double *out)
+{
+    profile_t prof = {0};
+    double n_d = peak2 / (2.0 * d);
+    double m;
+    int err = steps_31(n_d, 1, &m);
+
+    if (err != STEPRAMP_OK) {
+        return err;
+    }
+    prof.f_tick = f_tick;
+    profile_add(&prof, 0.0, m - n_d, peak2, 0.0);
+    profile_add(&prof, m - n_d, m, 2.0 * d * m, -2.0 * d); /* the squared speed s0 + slope x is 0 at x = m */
+    *out = profile_interval(&prof, 1);
+    return STEPRAMP_OK;
+}
+
+/* _fields: c_first, c_last, c_sa, c_sd and decel_seed (the final ramp's, half its deficit put back as in a move; in
+ * exact mode the ramp constant of cd0, which a soft stop needs even where the segment has no final ramp); length
+ * STEPRAMP_ENDLESS: c_last is cd0, the last step of a soft stop, and in exact mode c_sd the first interval of a soft
+ * stop in the cruise at sqrt(peak2) */
 static int seg_fields(stepramp_segment_t *seg, stepramp_change_info_t *raw, const profile_t *prof, int64_t length,
-                      int64_t sa, int64_t sd, double d, double t_first, int *negative)
+                      int64_t sa, int64_t sd, double d, double t_first, uint32_t ramp, double peak2, int *negative)
 {
     int err;
     int64_t m0 = length - sd - 1;
+    double cd0;
 
     seg->c_first = seg->c_last = seg->c_sa = seg->c_sd = seg->decel_seed = 0;
     if (length != STEPRAMP_ENDLESS && length < 1) {
         return STEPRAMP_OK;
     }
+    cd0 = prof->f_tick * sqrt(2.0 / d);
     err = seg_fixed(t_first, &raw->t_first, &seg->c_first, negative);
     if (err == STEPRAMP_OK) {
         err = seg_fixed(profile_interval(prof, sa), &raw->t_sa, &seg->c_sa, negative);
     }
-    if (err != STEPRAMP_OK || length == STEPRAMP_ENDLESS) {
-        return (err == STEPRAMP_OK) ? seg_fixed(prof->f_tick * sqrt(2.0 / d), &raw->t_last, &seg->c_last, negative)
-                                    : err;
+    if (err == STEPRAMP_OK && ramp == STEPRAMP_RAMP_EXACT) {
+        raw->t_decel_seed = cd0;
+        err = stepramp_ramp_constant(cd0, &seg->decel_seed);
+    }
+    if (err != STEPRAMP_OK) {
+        return err;
+    }
+    if (length == STEPRAMP_ENDLESS) {
+        err = seg_fixed(cd0, &raw->t_last, &seg->c_last, negative);
+        if (err == STEPRAMP_OK && ramp == STEPRAMP_RAMP_EXACT) {
+            double first = 0.0;
+            err = run_stop_first(peak2, d, prof->f_tick, &first);
+            if (err == STEPRAMP_OK) {
+                err = seg_fixed(first, &raw->t_sd, &seg->c_sd, negative);
+            }
+        }
+        return err;
     }
     err = seg_fixed(profile_interval(prof, length), &raw->t_last, &seg->c_last, negative);
     if (err == STEPRAMP_OK) {
         err = seg_fixed(profile_interval(prof, sd), &raw->t_sd, &seg->c_sd, negative);
     }
-    if (err == STEPRAMP_OK && m0 >= 1) {
-        double seed_d = stepramp_priv_decel_seed(prof->f_tick * sqrt(2.0 / d), m0);
+    if (err == STEPRAMP_OK && m0 >= 1 && ramp == STEPRAMP_RAMP_AVR446) {
+        double seed_d = stepramp_priv_decel_seed(cd0, m0);
         err = seg_fixed(seed_d, &raw->t_decel_seed, &seg->decel_seed, negative);
     }
     return err;
@@ -195,9 +234,11 @@ static int stop_segment(stepramp_segment_t *seg, stepramp_change_info_t *raw, in
 
     prof.f_tick = args->f_tick;
     profile_add(&prof, 0.0, (double)k, 2.0 * args->d * (double)k, -2.0 * args->d);
-    err = seg_fields(seg, raw, &prof, k, 1, 1, args->d, (k >= 1) ? profile_interval(&prof, 1) : 0.0, &negative);
+    err = seg_fields(seg, raw, &prof, k, 1, 1, args->d, (k >= 1) ? profile_interval(&prof, 1) : 0.0, args->ramp, 0.0,
+                     &negative);
     seg->sa = seg->sd = (k >= 1) ? 1u : 0u;
     seg->head = STEPRAMP_HEAD_UP;
+    seg->ramp = args->ramp;
     return (err == STEPRAMP_OK) ? seg_fit(seg, (double)k, 0.0, 0.0, negative) : err;
 }
 
@@ -301,7 +342,7 @@ static int plan_segment(stepramp_segment_t *seg, stepramp_change_info_t *raw, do
         profile_add(&prof, x_c, end, cap2, -2.0 * d);
     }
     v_peak = sqrt(peak2);
-    err = check_speed(args->f_tick, py_max(v_peak, sqrt(start2)), args->prescale);
+    err = check_speed(args->f_tick, py_max(v_peak, sqrt(start2)), args->prescale, args->ramp);
     if (err != STEPRAMP_OK) {
         return err;
     }
@@ -311,13 +352,21 @@ static int plan_segment(stepramp_segment_t *seg, stepramp_change_info_t *raw, do
         sd = sa;
     }
     t_first = profile_interval(&prof, 1);
-    head_seed(head, index, sa - 2, args, &seed, &t_first);
+    if (args->ramp == STEPRAMP_RAMP_AVR446) {
+        head_seed(head, index, sa - 2, args, &seed, &t_first);
+    }
     /* Segment(...): its arguments in Python's order, then __post_init__ */
     seg->endless = positioning ? 0u : 1u;
     seg->sa = (uint32_t)sa;
     seg->sd = (uint32_t)sd;
     seg->head = head;
-    err = seg_fixed(seed, &raw->t_accel_seed, &seg->accel_seed, &negative);
+    seg->ramp = args->ramp;
+    if (args->ramp == STEPRAMP_RAMP_EXACT) { /* the head's ramp constant (a down head decelerates at d), no deficit */
+        raw->t_accel_seed = args->f_tick * sqrt(2.0 / ((head == STEPRAMP_HEAD_UP) ? a : d));
+        err = stepramp_ramp_constant(raw->t_accel_seed, &seg->accel_seed);
+    } else {
+        err = seg_fixed(seed, &raw->t_accel_seed, &seg->accel_seed, &negative);
+    }
     if (err == STEPRAMP_OK) { /* plan._cruise: f_tick / v_peak (inf for a zero peak, ZeroDivisionError in Python) */
         raw->t_cruise = args->f_tick / v_peak;
         err = stepramp_priv_cruise(args->f_tick, v_peak, &seg->cruise);
@@ -326,7 +375,7 @@ static int plan_segment(stepramp_segment_t *seg, stepramp_change_info_t *raw, do
         err = steps_31(peak2 / (2.0 * d), 1, &run_stop);
     }
     if (err == STEPRAMP_OK) {
-        err = seg_fields(seg, raw, &prof, remaining, sa, sd, d, t_first, &negative);
+        err = seg_fields(seg, raw, &prof, remaining, sa, sd, d, t_first, args->ramp, peak2, &negative);
     }
     if (err == STEPRAMP_OK) {
         err = seg_fit(seg, positioning ? (double)remaining : 0.0, index, run_stop, negative);
@@ -335,8 +384,9 @@ static int plan_segment(stepramp_segment_t *seg, stepramp_change_info_t *raw, do
     return err;
 }
 
-int stepramp_plan_change_info(stepramp_change_t *out, stepramp_change_info_t *info, double u, int64_t remaining,
-                              double accel, double decel, double speed, double spr, double fclk, uint32_t prescale)
+int stepramp_plan_change_info_ramp(stepramp_change_t *out, stepramp_change_info_t *info, double u, int64_t remaining,
+                                   double accel, double decel, double speed, double spr, double fclk,
+                                   uint32_t prescale, uint32_t ramp)
 {
     stepramp_change_t ch;
     stepramp_change_info_t raw = {0};
@@ -348,6 +398,9 @@ int stepramp_plan_change_info(stepramp_change_t *out, stepramp_change_info_t *in
 
     if (out == NULL) {
         return STEPRAMP_ENULL;
+    }
+    if (ramp != STEPRAMP_RAMP_AVR446 && ramp != STEPRAMP_RAMP_EXACT) { /* check_ramp, plan_change's first */
+        return STEPRAMP_ERAMP;
     }
     /* the argument checks, in plan_change's order */
     err = stepramp_priv_check_args(accel, decel, speed, spr, fclk, prescale);
@@ -361,7 +414,7 @@ int stepramp_plan_change_info(stepramp_change_t *out, stepramp_change_info_t *in
         return err;
     }
     alpha = 2.0 * STEPRAMP_PI / spr;
-    args = (change_args_t){.prescale = prescale, .f_tick = fclk / (double)prescale, .a = accel / alpha,
+    args = (change_args_t){.ramp = ramp, .prescale = prescale, .f_tick = fclk / (double)prescale, .a = accel / alpha,
                            .d = decel / alpha, .v = speed / alpha};
     err = stepramp_priv_check_units(args.a, args.d, args.v, args.f_tick, 1);
     if (err == STEPRAMP_OK) { /* the decel ramp's index at u: rest k steps ahead (floored), "the stop distance" */
@@ -370,12 +423,14 @@ int stepramp_plan_change_info(stepramp_change_t *out, stepramp_change_info_t *in
     if (err != STEPRAMP_OK) {
         return err;
     }
-    ch = (stepramp_change_t){.segment = {.prescale = prescale, .stop_ratio = stepramp_priv_stop_ratio(accel, decel)}};
+    ch = (stepramp_change_t){
+        .segment = {.prescale = prescale, .stop_ratio = stepramp_priv_stop_ratio(accel, decel), .ramp = ramp}};
 
     if (remaining != STEPRAMP_ENDLESS && (double)remaining < k) {
         /* the target is inside the stop distance (or behind the motor): to rest k steps ahead, then back from rest;
          * the move back's error is returned as it is (change.py names it in "the target lies ... the move back") */
-        err = stepramp_plan_move(&ch.back, -((int64_t)k - remaining), accel, decel, speed, spr, fclk, prescale);
+        err = stepramp_plan_move_ramp(&ch.back, -((int64_t)k - remaining), accel, decel, speed, spr, fclk, prescale,
+                                      ramp);
         if (err == STEPRAMP_OK) {
             err = stop_segment(&ch.segment, &raw, (int64_t)k, &args);
         }
@@ -397,10 +452,24 @@ int stepramp_plan_change_info(stepramp_change_t *out, stepramp_change_info_t *in
     return err;
 }
 
+int stepramp_plan_change_info(stepramp_change_t *out, stepramp_change_info_t *info, double u, int64_t remaining,
+                              double accel, double decel, double speed, double spr, double fclk, uint32_t prescale)
+{
+    return stepramp_plan_change_info_ramp(out, info, u, remaining, accel, decel, speed, spr, fclk, prescale,
+                                          STEPRAMP_RAMP_AVR446);
+}
+
+int stepramp_plan_change_ramp(stepramp_change_t *out, double u, int64_t remaining, double accel, double decel,
+                              double speed, double spr, double fclk, uint32_t prescale, uint32_t ramp)
+{
+    return stepramp_plan_change_info_ramp(out, NULL, u, remaining, accel, decel, speed, spr, fclk, prescale, ramp);
+}
+
 int stepramp_plan_change(stepramp_change_t *out, double u, int64_t remaining, double accel, double decel,
                          double speed, double spr, double fclk, uint32_t prescale)
 {
-    return stepramp_plan_change_info(out, NULL, u, remaining, accel, decel, speed, spr, fclk, prescale);
+    return stepramp_plan_change_info_ramp(out, NULL, u, remaining, accel, decel, speed, spr, fclk, prescale,
+                                          STEPRAMP_RAMP_AVR446);
 }
 
 int stepramp_segment_of_move(stepramp_segment_t *seg, const stepramp_plan_t *plan)
@@ -412,7 +481,7 @@ int stepramp_segment_of_move(stepramp_segment_t *seg, const stepramp_plan_t *pla
                                 .c_first = plan->c_first, .c_last = plan->c_last, .sa = plan->sa, .c_sa = plan->c_sa,
                                 .sd = plan->sd, .c_sd = plan->c_sd, .accel_seed = plan->accel_seed,
                                 .decel_seed = plan->decel_seed, .cruise = plan->cruise,
-                                .stop_ratio = plan->stop_ratio, .head = STEPRAMP_HEAD_UP};
+                                .stop_ratio = plan->stop_ratio, .head = STEPRAMP_HEAD_UP, .ramp = plan->ramp};
     return STEPRAMP_OK;
 }
 
@@ -439,7 +508,7 @@ int stepramp_segment_registers(const stepramp_segment_t *seg, uint32_t direction
                               .prescale = seg->prescale, .c_first = seg->c_first, .c_last = seg->c_last,
                               .sa = seg->sa, .c_sa = seg->c_sa, .sd = seg->sd, .c_sd = seg->c_sd,
                               .accel_seed = seg->accel_seed, .decel_seed = seg->decel_seed, .cruise = seg->cruise,
-                              .stop_ratio = seg->stop_ratio};
+                              .stop_ratio = seg->stop_ratio, .ramp = seg->ramp};
     *regs = (stepramp_segment_regs_t){.head_down = (seg->head == STEPRAMP_HEAD_DOWN) ? 1u : 0u,
                                       .endless = seg->endless ? 1u : 0u, .head_index = seg->head_index,
                                       .run_stop = seg->run_stop, .head_prod = stepramp_segment_head_prod(seg)};

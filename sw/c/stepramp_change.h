@@ -12,6 +12,9 @@
  *   double u = stepramp_speed_at_pulse(&info, p);   its speed at pulse p, steps/s
  *   int rc = stepramp_plan_change(&ch, u, STEPRAMP_ENDLESS, 40.0, 40.0, 30.0, 400.0, 50e6, 50);   jog at 30 rad/s
  *   if (rc != STEPRAMP_OK) puts(stepramp_strerror((stepramp_err_t)rc));
+ *
+ * stepramp_plan_change plans for the AVR446 core (G_RAMP = 0); stepramp_plan_change_ramp for either ramp arithmetic
+ * (STEPRAMP_RAMP_EXACT: G_RAMP = 1), as Python's plan_change(..., prescale, ramp).
  */
 #ifndef STEPRAMP_CHANGE_H
 #define STEPRAMP_CHANGE_H
@@ -45,15 +48,21 @@ typedef struct {
     uint32_t prescale;   /**< base timer period in clocks (1 .. 65535) */
     uint32_t sa;         /**< first interval after the head, floor(x_h)+1 clamped to [1, L] */
     uint32_t sd;         /**< start of the final decel, floor(x_c)+1 clamped to [1, L]; 0 when endless */
-    uint64_t c_first;    /**< exact interval 1 (plus half the up head's recurrence deficit), Q32.16 */
+    uint64_t c_first;    /**< exact interval 1 (plus half the up head's recurrence deficit; exact mode: none),
+                              Q32.16 */
     uint64_t c_sa;       /**< exact interval sa, Q32.16 */
-    uint64_t c_sd;       /**< exact interval sd, Q32.16 */
+    uint64_t c_sd;       /**< exact interval sd, Q32.16; endless: 0, in exact mode the first interval of a soft stop
+                              decided in the cruise (the cruise, then the decel at d to rest run_stop steps ahead) */
     uint64_t c_last;     /**< exact interval L; endless: cd0, the last step of a soft stop; Q32.16 */
-    uint64_t accel_seed; /**< the head's recurrence seed (up: A_{n0}, down: D_{K-2}), Q32.16 */
-    uint64_t decel_seed; /**< final decel recurrence value at index L-sd-1, Q32.16; 0 when that is < 1 */
+    uint64_t accel_seed; /**< the head's recurrence seed (up: A_{n0}, down: D_{K-2}), Q32.16; exact mode: the head's
+                              ramp constant (up: of c0 = f_tick sqrt(2 / a), down: of cd0) */
+    uint64_t decel_seed; /**< final decel recurrence value at index L-sd-1, Q32.16; 0 when that is < 1; exact mode:
+                              the ramp constant of cd0 whenever the segment has an interval (a soft stop needs it) */
     uint64_t cruise;     /**< cruise period f_tick / v_peak, Q32.32 */
     uint32_t stop_ratio; /**< accel / decel, Q16.16 (rounded, saturated) */
     uint32_t run_stop;   /**< endless: the steps of a soft stop decided in the cruise, ceil(v_peak^2 / (2 d)); else 0 */
+    uint32_t ramp;       /**< not a register: the ramp arithmetic, STEPRAMP_RAMP_AVR446 or STEPRAMP_RAMP_EXACT
+                              (Python's Segment.ramp, as stepramp_plan_t.ramp) */
 } stepramp_segment_t;
 
 /**
@@ -73,12 +82,14 @@ typedef struct {
  * diagnostics and the bit-for-bit parity test with Python); 0.0 where the register is 0 without a rounding.
  */
 typedef struct {
-    double t_first;      /**< exact interval 1, plus half the up head's recurrence deficit */
+    double t_first;      /**< exact interval 1, plus half the up head's recurrence deficit (exact mode: none) */
     double t_last;       /**< exact interval L; endless: cd0 = f_tick sqrt(2 / d) */
     double t_sa;         /**< exact interval sa */
-    double t_sd;         /**< exact interval sd */
-    double t_accel_seed; /**< the head's seed, plus half its recurrence deficit spread over its values */
-    double t_decel_seed; /**< the final decel's seed, plus half its deficit */
+    double t_sd;         /**< exact interval sd; exact mode, endless: the first interval of a soft stop in the cruise */
+    double t_accel_seed; /**< the head's seed, plus half its recurrence deficit spread over its values; exact mode: the
+                              head's c0 (ticks), whose ramp constant accel_seed is */
+    double t_decel_seed; /**< the final decel's seed, plus half its deficit; exact mode: cd0, whose ramp constant
+                              decel_seed is */
     double t_cruise;     /**< f_tick / v_peak */
 } stepramp_change_info_t;
 
@@ -114,8 +125,34 @@ int stepramp_plan_change_info(stepramp_change_t *out, stepramp_change_info_t *in
                               double accel, double decel, double speed, double spr, double fclk, uint32_t prescale);
 
 /**
+ * stepramp_plan_change for a core of either ramp arithmetic, exactly like Python's plan_change(..., prescale, ramp);
+ * stepramp_plan_change is this function with STEPRAMP_RAMP_AVR446.
+ *
+ * In exact mode (STEPRAMP_RAMP_EXACT) the head's accel_seed is the ramp constant of f_tick sqrt(2 / a) (up head) or
+ * f_tick sqrt(2 / d) (down head) and c_first has no deficit; decel_seed is the ramp constant of cd0 whenever the
+ * segment has an interval (also an endless one); an endless segment's c_sd is the first interval of a soft stop in
+ * its cruise; the speed limit is STEPRAMP_MIN_INTERVAL_CLKS_EXACT clocks; the move back is planned in exact mode too.
+ *
+ * @param ramp STEPRAMP_RAMP_AVR446 or STEPRAMP_RAMP_EXACT: the core's G_RAMP; out->segment.ramp (and out->back.ramp)
+ *             hold it
+ * @return as stepramp_plan_change; STEPRAMP_ERAMP (checked first, after out's NULL check) for another ramp;
+ *         STEPRAMP_EOVERFLOW also for a ramp constant out of range (stepramp_ramp_constant)
+ */
+int stepramp_plan_change_ramp(stepramp_change_t *out, double u, int64_t remaining, double accel, double decel,
+                              double speed, double spr, double fclk, uint32_t prescale, uint32_t ramp);
+
+/**
+ * stepramp_plan_change_ramp, also filling in the unrounded register values.
+ *
+ * @param info output, may be NULL; like out, written only on success
+ */
+int stepramp_plan_change_info_ramp(stepramp_change_t *out, stepramp_change_info_t *info, double u, int64_t remaining,
+                                   double accel, double decel, double speed, double spr, double fclk,
+                                   uint32_t prescale, uint32_t ramp);
+
+/**
  * A move from rest as a segment, like Python's Segment.of_move: head up from index 0, its intervals 1 .. N - 1,
- * the same values.
+ * the same values (and the same ramp).
  *
  * @return STEPRAMP_OK, or STEPRAMP_ENULL for a NULL pointer (seg is then not written)
  */
@@ -141,7 +178,7 @@ uint64_t stepramp_segment_head_prod(const stepramp_segment_t *seg);
 
 /**
  * A segment's registers, like Segment.registers(direction): the plan (STEPS = length + 1, or 1 for an endless
- * segment: only its sign counts; the segment's own prescale .. stop_ratio) and the segment registers.
+ * segment: only its sign counts; the segment's own prescale .. stop_ratio, and its ramp) and the segment registers.
  *
  * @param direction 0: position counts up, 1: down (any nonzero value is 1; Python's Plan takes 0 or 1 only)
  * @param plan      output, written only on success

@@ -3,7 +3,8 @@
  * stepramp driver: plan a move. A line-by-line port of sw/stepramp/board/plan.py (the reference): every double
  * expression keeps Python's operand order, Python's round() (half to even) is rint() in the default
  * rounding mode, math.floor is floor(), and Python's min()/max() are mirrored including their choice of
- * operand, so the register values are identical bit for bit. Compile with -ffp-contract=off.
+ * operand, so the register values are identical bit for bit. Compile with -ffp-contract=off. The exact mode's ramp
+ * constant (sw/stepramp/models/exact.py, ramp_constant) is here too.
  */
 #include "stepramp_plan.h"
 
@@ -212,12 +213,110 @@ static double ramp_interval(const ramp_t *r, int64_t i)
     return t;
 }
 
-stepramp_err_t stepramp_plan_move_info(stepramp_plan_t *plan, stepramp_info_t *info, int64_t steps, double accel,
-                                       double decel, double speed, double spr, double fclk, uint32_t prescale)
+stepramp_err_t stepramp_ramp_constant(double c0_ticks, uint64_t *constant)
+{
+    /* exact.ramp_constant: round(c0 * c0 * 2^8) in 1 .. 2^48 - 1; a square that is not finite (Python's round()
+     * raises OverflowError) or a NaN fails the range check too */
+    double value;
+    if (constant == NULL) {
+        return STEPRAMP_ENULL;
+    }
+    value = rint(c0_ticks * c0_ticks * (double)(1 << (2 * STEPRAMP_FRAC_EXACT)));
+    if (!(value >= 1.0 && value < TWO_POW_48)) {
+        return STEPRAMP_EOVERFLOW;
+    }
+    *constant = (uint64_t)value;
+    return STEPRAMP_OK;
+}
+
+uint32_t stepramp_priv_min_interval_clks(uint32_t ramp)
+{
+    return (ramp == STEPRAMP_RAMP_EXACT) ? STEPRAMP_MIN_INTERVAL_CLKS_EXACT : STEPRAMP_MIN_INTERVAL_CLKS;
+}
+
+/* plan._exact_plan: the exact intervals without the recurrence deficit, the ramp constants of c0 and cd0 in the
+ * seeds, in the order Python evaluates Plan's fields (the first failure wins; all are EOVERFLOW) */
+static stepramp_err_t exact_fields(stepramp_plan_t *out, stepramp_info_t *inf, const ramp_t *ramp, int64_t sa,
+                                   int64_t sd)
+{
+    stepramp_err_t err;
+
+    inf->t_first = ramp_interval(ramp, 1);
+    inf->t_last = ramp_interval(ramp, ramp->length);
+    inf->t_sa = ramp_interval(ramp, sa);
+    inf->t_sd = ramp_interval(ramp, sd);
+    inf->t_accel_seed = ramp->k_a;
+    inf->t_decel_seed = ramp->k_d;
+    err = stepramp_priv_to_fixed(inf->t_first, TWO_POW_16, TWO_POW_48, &out->c_first);
+    if (err == STEPRAMP_OK) {
+        err = stepramp_priv_to_fixed(inf->t_last, TWO_POW_16, TWO_POW_48, &out->c_last);
+    }
+    if (err == STEPRAMP_OK) {
+        err = stepramp_priv_to_fixed(inf->t_sa, TWO_POW_16, TWO_POW_48, &out->c_sa);
+    }
+    if (err == STEPRAMP_OK) {
+        err = stepramp_priv_to_fixed(inf->t_sd, TWO_POW_16, TWO_POW_48, &out->c_sd);
+    }
+    if (err == STEPRAMP_OK) {
+        err = stepramp_ramp_constant(ramp->k_a, &out->accel_seed);
+    }
+    if (err == STEPRAMP_OK) {
+        err = stepramp_ramp_constant(ramp->k_d, &out->decel_seed);
+    }
+    return err;
+}
+
+/* plan.register_doubles and the Plan of an AVR446 move: exact intervals and seeds with the recurrences' time deficits
+ * put back (half into each seed, the accel ramp's other half into interval 1), the same doubles in the same order;
+ * then the fields in the order Python evaluates them (the first overflow wins; all are EOVERFLOW) */
+static stepramp_err_t avr446_fields(stepramp_plan_t *out, stepramp_info_t *inf, const ramp_t *ramp, int64_t sa,
+                                    int64_t sd, int64_t m0)
+{
+    stepramp_err_t err;
+    double seed_a = stepramp_seed_factor * ramp->k_a;
+    double seed_d = (m0 >= 1) ? stepramp_priv_decel_seed(ramp->k_d, m0) : 0.0;
+    double first_extra = 0.0;
+    int64_t n_a = sa - 2;
+
+    if (n_a >= 1) {
+        double unit_a = 2.0 * ((double)n_a + 0.75) * stepramp_decel_product(n_a) - 1.5;
+        double half_a = (ramp->k_a * (sqrt((double)n_a + 1.0) - 1.0) - seed_a * unit_a) / 2.0;
+        first_extra = half_a;
+        seed_a = seed_a + half_a / unit_a;
+    }
+    inf->t_first = ramp_interval(ramp, 1) + first_extra;
+    inf->t_last = ramp_interval(ramp, ramp->length);
+    inf->t_sa = ramp_interval(ramp, sa);
+    inf->t_sd = ramp_interval(ramp, sd);
+    inf->t_accel_seed = seed_a;
+    inf->t_decel_seed = seed_d;
+
+    err = stepramp_priv_to_fixed(inf->t_first, TWO_POW_16, TWO_POW_48, &out->c_first);
+    if (err == STEPRAMP_OK) {
+        err = stepramp_priv_to_fixed(inf->t_last, TWO_POW_16, TWO_POW_48, &out->c_last);
+    }
+    if (err == STEPRAMP_OK) {
+        err = stepramp_priv_to_fixed(inf->t_sa, TWO_POW_16, TWO_POW_48, &out->c_sa);
+    }
+    if (err == STEPRAMP_OK) {
+        err = stepramp_priv_to_fixed(inf->t_sd, TWO_POW_16, TWO_POW_48, &out->c_sd);
+    }
+    if (err == STEPRAMP_OK) {
+        err = stepramp_priv_to_fixed(inf->t_accel_seed, TWO_POW_16, TWO_POW_48, &out->accel_seed);
+    }
+    if (err == STEPRAMP_OK && m0 >= 1) {
+        err = stepramp_priv_to_fixed(inf->t_decel_seed, TWO_POW_16, TWO_POW_48, &out->decel_seed);
+    }
+    return err;
+}
+
+stepramp_err_t stepramp_plan_move_info_ramp(stepramp_plan_t *plan, stepramp_info_t *info, int64_t steps,
+                                            double accel, double decel, double speed, double spr, double fclk,
+                                            uint32_t prescale, uint32_t ramp)
 {
     stepramp_plan_t out;
     stepramp_info_t inf;
-    ramp_t ramp;
+    ramp_t curve;
     stepramp_err_t err;
     int64_t n;
     int64_t length;
@@ -233,6 +332,9 @@ stepramp_err_t stepramp_plan_move_info(stepramp_plan_t *plan, stepramp_info_t *i
 
     if (plan == NULL) {
         return STEPRAMP_ENULL;
+    }
+    if (ramp != STEPRAMP_RAMP_AVR446 && ramp != STEPRAMP_RAMP_EXACT) { /* check_ramp, plan_move_info's first */
+        return STEPRAMP_ERAMP;
     }
     err = stepramp_priv_check_args(accel, decel, speed, spr, fclk, prescale); /* in plan_move_info's order */
     if (err != STEPRAMP_OK) {
@@ -255,7 +357,8 @@ stepramp_err_t stepramp_plan_move_info(stepramp_plan_t *plan, stepramp_info_t *i
     }
 
     /* the Plan and MoveInfo of a move with no interval: every field not named here is 0 (0.0) */
-    out = (stepramp_plan_t){.steps = (uint32_t)n, .direction = (steps < 0) ? 1u : 0u, .prescale = prescale};
+    out = (stepramp_plan_t){.steps = (uint32_t)n, .direction = (steps < 0) ? 1u : 0u, .prescale = prescale,
+                            .ramp = ramp};
     inf = (stepramp_info_t){.f_tick = f_tick, .length = (length > 0) ? length : 0, .a = a, .d = d, .v = v,
                             .triangle = 1, .min_interval = (double)INFINITY};
     if (length < 1) { /* N = 0 or 1: no interval, nothing for the engine to compute */
@@ -266,8 +369,8 @@ stepramp_err_t stepramp_plan_move_info(stepramp_plan_t *plan, stepramp_info_t *i
         return STEPRAMP_OK;
     }
 
-    ramp_init(&ramp, length, a, d, v, f_tick);
-    min_interval = ramp.k_c;
+    ramp_init(&curve, length, a, d, v, f_tick);
+    min_interval = curve.k_c;
     if (!isfinite(min_interval)) {
         return STEPRAMP_EPEAK;
     }
@@ -275,62 +378,29 @@ stepramp_err_t stepramp_plan_move_info(stepramp_plan_t *plan, stepramp_info_t *i
         return STEPRAMP_ETICK;
     }
     /* Python multiplies the exact integers; the double product is exact below 2^53 and rounds monotonically
-     * above, so the comparison with 64 has the same outcome. */
-    if (floor(min_interval) * (double)prescale < (double)STEPRAMP_MIN_INTERVAL_CLKS) {
+     * above, so the comparison with 64 (exact mode: 256) has the same outcome. */
+    if (floor(min_interval) * (double)prescale < (double)stepramp_priv_min_interval_clks(ramp)) {
         return STEPRAMP_ETOOFAST;
     }
 
-    sa = ramp_boundary(&ramp, ramp.x_a);
-    sd = ramp_boundary(&ramp, ramp.x_d);
+    sa = ramp_boundary(&curve, curve.x_a);
+    sd = ramp_boundary(&curve, curve.x_d);
     m0 = length - sd - 1;
     out.sa = (uint32_t)sa;
     out.sd = (uint32_t)sd;
-    inf.x_a = ramp.x_a;
-    inf.x_d = ramp.x_d;
-    inf.v_peak = ramp.v_peak;
-    inf.triangle = ramp.triangle;
-    inf.c0 = ramp.k_a;
-    inf.cd0 = ramp.k_d;
+    inf.x_a = curve.x_a;
+    inf.x_d = curve.x_d;
+    inf.v_peak = curve.v_peak;
+    inf.triangle = curve.triangle;
+    inf.c0 = curve.k_a;
+    inf.cd0 = curve.k_d;
     inf.m0 = m0;
     inf.min_interval = min_interval;
-    /* plan.register_doubles: exact intervals and seeds with the recurrences' time deficits put back (half into
-     * each seed, the accel ramp's other half into interval 1), the same doubles in the same order */
-    {
-        double seed_a = stepramp_seed_factor * ramp.k_a;
-        double seed_d = (m0 >= 1) ? stepramp_priv_decel_seed(ramp.k_d, m0) : 0.0;
-        double first_extra = 0.0;
-        int64_t n_a = sa - 2;
-        if (n_a >= 1) {
-            double unit_a = 2.0 * ((double)n_a + 0.75) * stepramp_decel_product(n_a) - 1.5;
-            double half_a = (ramp.k_a * (sqrt((double)n_a + 1.0) - 1.0) - seed_a * unit_a) / 2.0;
-            first_extra = half_a;
-            seed_a = seed_a + half_a / unit_a;
-        }
-        inf.t_first = ramp_interval(&ramp, 1) + first_extra;
-        inf.t_last = ramp_interval(&ramp, length);
-        inf.t_sa = ramp_interval(&ramp, sa);
-        inf.t_sd = ramp_interval(&ramp, sd);
-        inf.t_accel_seed = seed_a;
-        inf.t_decel_seed = seed_d;
-    }
     inf.t_cruise = f_tick / v;
-
-    /* Plan's fields in the order Python evaluates them (the first overflow wins; all are EOVERFLOW) */
-    err = stepramp_priv_to_fixed(inf.t_first, TWO_POW_16, TWO_POW_48, &out.c_first);
-    if (err == STEPRAMP_OK) {
-        err = stepramp_priv_to_fixed(inf.t_last, TWO_POW_16, TWO_POW_48, &out.c_last);
-    }
-    if (err == STEPRAMP_OK) {
-        err = stepramp_priv_to_fixed(inf.t_sa, TWO_POW_16, TWO_POW_48, &out.c_sa);
-    }
-    if (err == STEPRAMP_OK) {
-        err = stepramp_priv_to_fixed(inf.t_sd, TWO_POW_16, TWO_POW_48, &out.c_sd);
-    }
-    if (err == STEPRAMP_OK) {
-        err = stepramp_priv_to_fixed(inf.t_accel_seed, TWO_POW_16, TWO_POW_48, &out.accel_seed);
-    }
-    if (err == STEPRAMP_OK && m0 >= 1) {
-        err = stepramp_priv_to_fixed(inf.t_decel_seed, TWO_POW_16, TWO_POW_48, &out.decel_seed);
+    if (ramp == STEPRAMP_RAMP_EXACT) {
+        err = exact_fields(&out, &inf, &curve, sa, sd);
+    } else {
+        err = avr446_fields(&out, &inf, &curve, sa, sd, m0);
     }
     if (err == STEPRAMP_OK) { /* plan._cruise: round(f_tick / v * 2^32) < 2^64 */
         err = stepramp_priv_cruise(f_tick, v, &out.cruise);
@@ -348,10 +418,24 @@ stepramp_err_t stepramp_plan_move_info(stepramp_plan_t *plan, stepramp_info_t *i
     return STEPRAMP_OK;
 }
 
+stepramp_err_t stepramp_plan_move_info(stepramp_plan_t *plan, stepramp_info_t *info, int64_t steps, double accel,
+                                       double decel, double speed, double spr, double fclk, uint32_t prescale)
+{
+    return stepramp_plan_move_info_ramp(plan, info, steps, accel, decel, speed, spr, fclk, prescale,
+                                        STEPRAMP_RAMP_AVR446);
+}
+
+stepramp_err_t stepramp_plan_move_ramp(stepramp_plan_t *plan, int64_t steps, double accel, double decel, double speed,
+                                       double spr, double fclk, uint32_t prescale, uint32_t ramp)
+{
+    return stepramp_plan_move_info_ramp(plan, NULL, steps, accel, decel, speed, spr, fclk, prescale, ramp);
+}
+
 stepramp_err_t stepramp_plan_move(stepramp_plan_t *plan, int64_t steps, double accel, double decel, double speed,
                                   double spr, double fclk, uint32_t prescale)
 {
-    return stepramp_plan_move_info(plan, NULL, steps, accel, decel, speed, spr, fclk, prescale);
+    return stepramp_plan_move_info_ramp(plan, NULL, steps, accel, decel, speed, spr, fclk, prescale,
+                                        STEPRAMP_RAMP_AVR446);
 }
 
 const char *stepramp_strerror(stepramp_err_t err)
@@ -375,12 +459,13 @@ const char *stepramp_strerror(stepramp_err_t err)
         return "|steps| must be <= 2^31 - 1";
     case STEPRAMP_EOVERFLOW:
         return "a delay overflows its register (integer part >= 2^32 ticks): delay too long; "
-               "use a larger accel/decel/speed, a lower f_clk or a larger prescale";
+               "use a larger accel/decel/speed, a lower f_clk or a larger prescale; or, in exact mode, c0 or cd0 "
+               "gives a ramp constant outside 1 .. 2^48 - 1 (c0 must be below 2^20 ticks)";
     case STEPRAMP_ETICK:
         return "interval shorter than 1 tick at the peak speed: lower the speed or raise f_clk / lower the prescale";
     case STEPRAMP_ETOOFAST:
         return "speed too high for the hardware to compute the next delay in time: "
-               "shortest interval in ticks * prescale < 64 clocks";
+               "shortest interval in ticks * prescale < 64 clocks (exact mode: 256 clocks)";
     case STEPRAMP_EACCEL_UNITS:
         return "accel in steps units is out of range; check spr and the units";
     case STEPRAMP_EDECEL_UNITS:
@@ -393,6 +478,8 @@ const char *stepramp_strerror(stepramp_err_t err)
         return "peak speed underflows: the delays would overflow their registers";
     case STEPRAMP_ENULL:
         return "plan is a NULL pointer";
+    case STEPRAMP_ERAMP:
+        return "ramp must be 0 (avr446) or 1 (exact): STEPRAMP_RAMP_AVR446 or STEPRAMP_RAMP_EXACT";
     case STEPRAMP_ECHANGE_SPEED:
         return "the speed at the change must be finite and >= 0";
     case STEPRAMP_EREMAINING:

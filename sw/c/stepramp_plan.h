@@ -6,6 +6,11 @@
  * order, the same rounding (round half to even, like Python's round()), the same checks in the same
  * order. See docs/algorithm.md for the meaning of every field.
  *
+ * Two ramp arithmetics, as the core's generic G_RAMP selects: STEPRAMP_RAMP_AVR446 (G_RAMP = 0, the default; what
+ * stepramp_plan_move plans for) and STEPRAMP_RAMP_EXACT (G_RAMP = 1: differences of rounded square roots,
+ * docs/algorithm.md "Exact step times"; stepramp_plan_move_ramp plans for either). A plan for one mode is wrong for a
+ * core built with the other.
+ *
  * Freestanding-friendly (MicroBlaze standalone): no malloc, no stdio; needs <math.h> (link with -lm).
  * Build with -ffp-contract=off (no fused multiply-add) so that every double is rounded like Python's.
  * Bit-for-bit parity also assumes the same libm results for sqrt (always correctly rounded), exp, log
@@ -26,6 +31,15 @@ extern "C" {
 #define STEPRAMP_FRAC_CRUISE 32
 /** Shortest interval, in clocks, that leaves the engine time to compute the next value. */
 #define STEPRAMP_MIN_INTERVAL_CLKS 64
+/** The same in exact mode (G_RAMP = 1): a ramp value there takes one or two square roots (plan.py's
+ * MIN_INTERVAL_CLKS_EXACT). */
+#define STEPRAMP_MIN_INTERVAL_CLKS_EXACT 256
+/** stepramp_plan_t.ramp: the AVR446 recurrence (the core's G_RAMP = 0, the default; plan.RAMP_AVR446). */
+#define STEPRAMP_RAMP_AVR446 0u
+/** stepramp_plan_t.ramp: the exact ramp, differences of rounded square roots (G_RAMP = 1; plan.RAMP_EXACT). */
+#define STEPRAMP_RAMP_EXACT 1u
+/** Fraction bits of the exact ramp's root (exact.FRAC_EXACT): a ramp constant is round(c0^2 * 2^(2 * 4)). */
+#define STEPRAMP_FRAC_EXACT 4
 /** Largest |steps| of one move (the steps register is 31 bits wide). */
 #define STEPRAMP_MAX_STEPS INT64_C(2147483647)
 /** Largest PRESCALE (the prescale register is 16 bits wide). */
@@ -39,16 +53,20 @@ typedef struct {
     uint32_t steps;      /**< N = |steps| (0 .. 2^31-1) */
     uint32_t direction;  /**< 0: position counts up, 1: down (steps < 0) */
     uint32_t prescale;   /**< base timer period in clocks (1 .. 65535) */
-    uint64_t c_first;    /**< exact interval 1 plus half the accel recurrence deficit, Q32.16 */
+    uint64_t c_first;    /**< exact interval 1 plus half the accel recurrence deficit (exact mode: none), Q32.16 */
     uint64_t c_last;     /**< exact interval L = N-1, Q32.16 */
     uint32_t sa;         /**< accel-side boundary interval index, floor(x_a)+1 clamped to [1, L] */
     uint64_t c_sa;       /**< exact interval sa, Q32.16 */
     uint32_t sd;         /**< decel-side boundary interval index, floor(x_d)+1 clamped to [1, L] */
     uint64_t c_sd;       /**< exact interval sd, Q32.16 */
-    uint64_t accel_seed; /**< accel recurrence value at index 0, Q32.16 */
-    uint64_t decel_seed; /**< decel recurrence value at index m0 = L-sd-1, Q32.16; 0 when m0 < 1 */
+    uint64_t accel_seed; /**< accel recurrence value at index 0, Q32.16; exact mode: the accel's ramp constant
+                              round(c0^2 * 2^8) (stepramp_ramp_constant) */
+    uint64_t decel_seed; /**< decel recurrence value at index m0 = L-sd-1, Q32.16; 0 when m0 < 1; exact mode: the
+                              decel's ramp constant round(cd0^2 * 2^8), also when m0 < 1 */
     uint64_t cruise;     /**< cruise period f_tick / v, Q32.32 */
     uint32_t stop_ratio; /**< accel / decel, Q16.16 (rounded, saturated): sizes a soft stop's decel ramp */
+    uint32_t ramp;       /**< not a register: the ramp arithmetic the plan is for, STEPRAMP_RAMP_AVR446 or
+                              STEPRAMP_RAMP_EXACT (Python's Plan.ramp) */
 } stepramp_plan_t;
 
 /**
@@ -71,12 +89,14 @@ typedef struct {
     int64_t m0;          /**< decel recurrence start index L - sd - 1 (0 for N <= 1) */
     double min_interval; /**< shortest interval f_tick / v_peak, ticks (inf for N <= 1) */
     /* C extras: the register values before rounding, in ticks (0 where the register is 0) */
-    double t_first;      /**< exact interval 1, plus half the accel recurrence's deficit */
+    double t_first;      /**< exact interval 1, plus half the accel recurrence's deficit (exact mode: none) */
     double t_last;       /**< exact interval L */
     double t_sa;         /**< exact interval sa */
     double t_sd;         /**< exact interval sd */
-    double t_accel_seed; /**< SEED_FACTOR * c0, plus half the accel deficit spread over A_1 .. A_(sa-2) */
-    double t_decel_seed; /**< SEED_FACTOR * cd0 * decel_product(m0) plus half the decel deficit; 0 when m0 < 1 */
+    double t_accel_seed; /**< SEED_FACTOR * c0, plus half the accel deficit spread over A_1 .. A_(sa-2); exact mode:
+                              c0, whose ramp constant the seed is */
+    double t_decel_seed; /**< SEED_FACTOR * cd0 * decel_product(m0) plus half the decel deficit; 0 when m0 < 1;
+                              exact mode: cd0, whose ramp constant the seed is */
     double t_cruise;     /**< f_tick / v */
 } stepramp_info_t;
 
@@ -93,7 +113,9 @@ typedef enum {
     STEPRAMP_EFCLK,        /**< "fclk must be finite and > 0" */
     STEPRAMP_EPRESCALE,    /**< "prescale must be an integer in 1 .. 65535" */
     STEPRAMP_ESTEPS,       /**< "|steps| must be <= 2^31 - 1" */
-    STEPRAMP_EOVERFLOW,    /**< "<field> = ... ticks overflows its register": a delay >= 2^32 ticks */
+    STEPRAMP_EOVERFLOW,    /**< "<field> = ... ticks overflows its register": a delay >= 2^32 ticks; in exact mode
+                                also "exact ramp: c0 = ... gives a ramp constant outside 1 .. 2^48 - 1" (c0 or cd0
+                                of 2^20 ticks or more, or below 1/32 tick: stepramp_ramp_constant) */
     STEPRAMP_ETICK,        /**< "interval shorter than 1 tick" at the peak speed */
     STEPRAMP_ETOOFAST,     /**< "speed too high for the hardware to compute the next delay in time" */
     STEPRAMP_EACCEL_UNITS, /**< "accel in steps units is out of range" (0 or inf after / (2 pi / spr)) */
@@ -101,7 +123,8 @@ typedef enum {
     STEPRAMP_ESPEED_UNITS, /**< "speed in steps units is out of range" */
     STEPRAMP_EFTICK,       /**< "f_tick in steps units is out of range" (fclk / prescale underflows) */
     STEPRAMP_EPEAK,        /**< "peak speed underflows: the delays would overflow their registers" */
-    STEPRAMP_ENULL         /**< plan is a NULL pointer (no Python counterpart) */
+    STEPRAMP_ENULL,        /**< plan is a NULL pointer (no Python counterpart) */
+    STEPRAMP_ERAMP         /**< "ramp must be 0 (avr446) or 1 (exact)": neither STEPRAMP_RAMP_AVR446 nor _EXACT */
 } stepramp_err_t;
 
 /**
@@ -125,7 +148,8 @@ enum {
 };
 
 /**
- * Plan a move, exactly like Python's stepramp.board.plan.plan_move.
+ * Plan a move for an AVR446 core (G_RAMP = 0), exactly like Python's stepramp.board.plan.plan_move (ramp
+ * RAMP_AVR446; plan->ramp is STEPRAMP_RAMP_AVR446). stepramp_plan_move_ramp plans for either core.
  *
  * @param plan     output; written only on success (left untouched on error)
  * @param steps    signed step count; its sign gives the direction; |steps| <= 2^31 - 1
@@ -148,6 +172,41 @@ stepramp_err_t stepramp_plan_move(stepramp_plan_t *plan, int64_t steps, double a
  */
 stepramp_err_t stepramp_plan_move_info(stepramp_plan_t *plan, stepramp_info_t *info, int64_t steps, double accel,
                                        double decel, double speed, double spr, double fclk, uint32_t prescale);
+
+/**
+ * stepramp_plan_move for a core of either ramp arithmetic, exactly like Python's plan_move(..., prescale, ramp).
+ * stepramp_plan_move is this function with STEPRAMP_RAMP_AVR446.
+ *
+ * In exact mode (STEPRAMP_RAMP_EXACT) c_first, c_last, c_sa and c_sd are the exact intervals without the recurrence
+ * deficit, accel_seed and decel_seed the ramp constants of c0 and cd0 (stepramp_ramp_constant; decel_seed also when
+ * m0 < 1), cruise and stop_ratio as in AVR446 mode, and the speed limit is STEPRAMP_MIN_INTERVAL_CLKS_EXACT clocks.
+ *
+ * @param ramp STEPRAMP_RAMP_AVR446 or STEPRAMP_RAMP_EXACT: the core's G_RAMP; plan->ramp holds it
+ * @return as stepramp_plan_move; STEPRAMP_ERAMP (checked first, after plan's NULL check) for another ramp;
+ *         STEPRAMP_EOVERFLOW also for a ramp constant out of range (exact mode)
+ */
+stepramp_err_t stepramp_plan_move_ramp(stepramp_plan_t *plan, int64_t steps, double accel, double decel, double speed,
+                                       double spr, double fclk, uint32_t prescale, uint32_t ramp);
+
+/**
+ * stepramp_plan_move_ramp, also filling in the informative values (Python's plan_move_info(..., ramp)).
+ *
+ * @param info output, may be NULL; like plan, written only on success
+ */
+stepramp_err_t stepramp_plan_move_info_ramp(stepramp_plan_t *plan, stepramp_info_t *info, int64_t steps,
+                                            double accel, double decel, double speed, double spr, double fclk,
+                                            uint32_t prescale, uint32_t ramp);
+
+/**
+ * The exact ramp's constant C = round(c0^2 * 2^(2 * STEPRAMP_FRAC_EXACT)) of a ramp whose first interval from rest is
+ * c0 ticks (Python's stepramp.models.exact.ramp_constant: the same double c0 * c0 * 256, rounded half to even).
+ *
+ * @param constant output, written only on success
+ * @return STEPRAMP_OK; STEPRAMP_EOVERFLOW when C is not in 1 .. 2^48 - 1 (c0 of 2^20 ticks or more: raise the
+ *         prescale; or below about 0.044 ticks), also for a c0 whose square is not finite (where Python's round()
+ *         raises OverflowError) or NaN; STEPRAMP_ENULL for a NULL constant
+ */
+stepramp_err_t stepramp_ramp_constant(double c0_ticks, uint64_t *constant);
 
 /**
  * The reason for an error in words, like plan.py's (and change.py's) ValueError messages without the numbers.

@@ -1,8 +1,8 @@
 /* SPDX-License-Identifier: MIT */
 /*
  * Internal to the plan library (stepramp_plan.c, stepramp_change.c): the helpers of plan.py that change.py imports
- * (_check_positive, _to_fixed, _cruise, _stop_ratio, decel_product), shared by the two C files. Not part of the API:
- * an application includes stepramp_plan.h and stepramp_change.h only.
+ * (_check_positive, _to_fixed, _cruise, _stop_ratio, decel_product, min_interval_clks), shared by the two C files. Not
+ * part of the API: an application includes stepramp_plan.h and stepramp_change.h only.
  */
 #ifndef STEPRAMP_PLAN_PRIV_H
 #define STEPRAMP_PLAN_PRIV_H
@@ -52,6 +52,9 @@ stepramp_err_t stepramp_priv_to_fixed(double ticks, double scale, double limit, 
 
 /* plan._cruise: round(f_tick / v * 2^32) below 2^64 into *out, else STEPRAMP_EOVERFLOW. */
 stepramp_err_t stepramp_priv_cruise(double f_tick, double v, uint64_t *out);
+
+/* plan.min_interval_clks: STEPRAMP_MIN_INTERVAL_CLKS_EXACT for STEPRAMP_RAMP_EXACT, else STEPRAMP_MIN_INTERVAL_CLKS. */
+uint32_t stepramp_priv_min_interval_clks(uint32_t ramp);
 
 /* plan._stop_ratio: round(accel / decel * 2^16), saturated at 2^32 - 1. */
 uint32_t stepramp_priv_stop_ratio(double accel, double decel);

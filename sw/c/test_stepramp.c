@@ -199,12 +199,28 @@ static void test_init(void)
     CHECK(dev.segment_dirty == 1u && dev.min_gap == STEPRAMP_MIN_GAP_RESET && STEPRAMP_MIN_GAP_RESET == 2u);
     CHECK_EQ(bus->writes, 0u); /* init only reads */
     CHECK_EQ(bus->reads, 1u);
+    CHECK_EQ(dev.ramp, STEPRAMP_RAMP_AVR446);
     for (i = 0; i < sizeof bad_ids / sizeof bad_ids[0]; i++) {
-        int want = (bad_ids[i] >> 16) == 0x5352u ? STEPRAMP_OK : STEPRAMP_EID;
+        /* a stepramp core, and ID bit 15 (G_RAMP) the driver's ramp: AVR446 (clear) for stepramp_init */
+        int want = ((bad_ids[i] >> 16) == 0x5352u && (bad_ids[i] & 0x8000u) == 0u) ? STEPRAMP_OK : STEPRAMP_EID;
+        int want_exact = ((bad_ids[i] >> 16) == 0x5352u && (bad_ids[i] & 0x8000u) != 0u) ? STEPRAMP_OK : STEPRAMP_EID;
         stepramp_fakebus_reset(BASE, bad_ids[i]);
         CHECK_EQ(stepramp_init(&dev, BASE, 50e6, 6400.0, 50u), want);
+        CHECK_EQ(stepramp_init_ramp(&dev, BASE, 50e6, 6400.0, 50u, STEPRAMP_RAMP_EXACT), want_exact);
         CHECK_EQ(bus->writes, 0u);
     }
+    /* a core built with G_RAMP = 1: ID bit 15 set, the version in bits 14:0 */
+    stepramp_fakebus_reset(BASE, GOOD_ID | 0x8000u);
+    CHECK_EQ(stepramp_init(&dev, BASE, 50e6, 6400.0, 50u), STEPRAMP_EID);
+    CHECK_EQ(stepramp_init_ramp(&dev, BASE, 50e6, 6400.0, 50u, STEPRAMP_RAMP_EXACT), STEPRAMP_OK);
+    CHECK(dev.ramp == STEPRAMP_RAMP_EXACT && dev.version == 0x0003u && dev.prescale == 50u);
+    CHECK_EQ(stepramp_init_ramp(&dev, BASE, 50e6, 6400.0, 50u, STEPRAMP_RAMP_AVR446), STEPRAMP_EID);
+    /* a ramp that is neither: nothing read, dev untouched */
+    memset(&dev, 0x5A, sizeof dev);
+    stepramp_fakebus_reset(BASE, GOOD_ID);
+    CHECK_EQ(stepramp_init_ramp(&dev, BASE, 50e6, 6400.0, 50u, 2u), STEPRAMP_ERAMP);
+    CHECK(bus->reads == 0u && dev.prescale == 0x5A5A5A5Au);
+    CHECK_EQ(stepramp_init_ramp(NULL, BASE, 50e6, 6400.0, 50u, STEPRAMP_RAMP_EXACT), STEPRAMP_ENULL);
     /* a core at another address: the device's base is where it reads */
     stepramp_fakebus_reset(BASE + 0x1000u, GOOD_ID);
     CHECK_EQ(stepramp_init(&dev, BASE + 0x1000u, 1e6, 200.0, 1u), STEPRAMP_OK);
@@ -488,6 +504,54 @@ static void test_jog_writes(void)
         check_start(N_MOTION);
         CHECK_EQ(bus->bus_errors, 0u);
     }
+}
+
+/* A driver set up for an exact-mode core (stepramp_init_ramp): its moves, jogs and changes are the exact-mode plans
+ * (stepramp_plan_move_ramp, stepramp_plan_change_ramp), written like the AVR446 ones. */
+static void test_exact_mode_driver(void)
+{
+    stepramp_t dev;
+    stepramp_plan_t plan;
+    stepramp_plan_t avr;
+    stepramp_change_t ch;
+    stepramp_plan_t jog_plan;
+    stepramp_segment_regs_t regs;
+
+    stepramp_fakebus_reset(BASE, GOOD_ID | 0x8000u);
+    CHECK_EQ(stepramp_init_ramp(&dev, BASE, 4e6, 400.0, 4u, STEPRAMP_RAMP_EXACT), STEPRAMP_OK);
+    stepramp_fakebus_clear_log();
+    /* a move: the exact plan (its seeds the ramp constants, not the AVR446 seeds) */
+    CHECK_EQ(stepramp_plan_move_ramp(&plan, -4000, 40.0, 30.0, 20.0, 400.0, 4e6, 4u, STEPRAMP_RAMP_EXACT), STEPRAMP_OK);
+    CHECK_EQ(stepramp_plan_move(&avr, -4000, 40.0, 30.0, 20.0, 400.0, 4e6, 4u), STEPRAMP_OK);
+    CHECK(plan.ramp == STEPRAMP_RAMP_EXACT && avr.ramp == STEPRAMP_RAMP_AVR446 && plan.accel_seed != avr.accel_seed);
+    CHECK_EQ(stepramp_move(&dev, -4000, 40.0, 30.0, 20.0), STEPRAMP_OK);
+    CHECK_EQ(bus->writes, N_MOTION + N_SEGMENT + 1u);
+    check_program_log(&plan, 0u);
+    check_segment_log(&no_segment, N_MOTION);
+    check_start(N_MOTION + N_SEGMENT);
+    /* stepramp_plan gives it too */
+    CHECK_EQ(stepramp_plan(&dev, &avr, -4000, 40.0, 30.0, 20.0), STEPRAMP_OK);
+    CHECK(same_words(&avr, &plan) && avr.ramp == STEPRAMP_RAMP_EXACT);
+    /* a jog: the exact-mode segment */
+    stepramp_fakebus_clear_log();
+    CHECK_EQ(stepramp_plan_change_ramp(&ch, 0.0, STEPRAMP_ENDLESS, 40.0, 30.0, 20.0, 400.0, 4e6, 4u,
+                                       STEPRAMP_RAMP_EXACT),
+             STEPRAMP_OK);
+    CHECK_EQ(stepramp_segment_registers(&ch.segment, 0u, &jog_plan, &regs), STEPRAMP_OK);
+    CHECK(jog_plan.ramp == STEPRAMP_RAMP_EXACT && jog_plan.c_sd != 0u && jog_plan.decel_seed == plan.decel_seed);
+    CHECK_EQ(stepramp_jog(&dev, 20.0, 40.0, 30.0), STEPRAMP_OK);
+    check_program_log(&jog_plan, 0u);
+    check_segment_log(&regs, N_MOTION);
+    /* the speed limit is 256 clocks: 20 rad/s at 400 steps/rev is 1273 steps/s, 785 ticks; at prescale 1 and 3e5 Hz
+     * 235 clocks, enough for AVR446 (64) but not for the exact mode */
+    stepramp_fakebus_reset(BASE, GOOD_ID | 0x8000u);
+    CHECK_EQ(stepramp_init_ramp(&dev, BASE, 3e5, 400.0, 1u, STEPRAMP_RAMP_EXACT), STEPRAMP_OK);
+    stepramp_fakebus_clear_log();
+    CHECK_EQ(stepramp_move(&dev, 4000, 40.0, 30.0, 20.0), STEPRAMP_ETOOFAST);
+    CHECK_EQ(stepramp_jog(&dev, 20.0, 40.0, 30.0), STEPRAMP_ETOOFAST);
+    CHECK_EQ(stepramp_queue_move(&dev, 4000, 40.0, 30.0, 20.0), STEPRAMP_ETOOFAST);
+    CHECK_EQ(bus->writes, 0u);
+    CHECK_EQ(stepramp_plan_move(&avr, 4000, 40.0, 30.0, 20.0, 400.0, 3e5, 1u), STEPRAMP_OK);
 }
 
 /* program with segment registers: all 0 leaves them clear, anything else set; NULL writes them only when set */
@@ -1311,6 +1375,7 @@ static void test_error_texts(void)
     CHECK(strcmp(stepramp_strresult(STEPRAMP_OK), "success") == 0);
     CHECK(strcmp(stepramp_strresult(STEPRAMP_EACCEL), stepramp_strerror(STEPRAMP_EACCEL)) == 0);
     CHECK(strcmp(stepramp_strresult(STEPRAMP_ENULL), stepramp_strerror(STEPRAMP_ENULL)) == 0);
+    CHECK(strcmp(stepramp_strresult(STEPRAMP_ERAMP), stepramp_strerror(STEPRAMP_ERAMP)) == 0);
     CHECK(strstr(stepramp_strresult(STEPRAMP_EID), "ID") != NULL);
     CHECK(strstr(stepramp_strresult(STEPRAMP_ETIMEOUT), "DONE") != NULL);
     CHECK(strcmp(stepramp_strresult(-1), "unknown error") == 0);
@@ -1319,7 +1384,7 @@ static void test_error_texts(void)
     CHECK(strstr(stepramp_strresult(STEPRAMP_ECORE(16)), "STEP_SPACE") != NULL);
     CHECK(strstr(stepramp_strresult(STEPRAMP_ECORE(15)), "CFG_BUSY") != NULL);
     /* the driver's results do not collide with the plan's errors */
-    CHECK((int)STEPRAMP_ENULL < STEPRAMP_EID && STEPRAMP_EID != STEPRAMP_ETIMEOUT);
+    CHECK((int)STEPRAMP_ERAMP < STEPRAMP_EID && STEPRAMP_EID != STEPRAMP_ETIMEOUT);
     CHECK(STEPRAMP_ETIMEOUT < STEPRAMP_ECORE(0));
     for (a = (uint32_t)STEPRAMP_EID; a <= (uint32_t)STEPRAMP_ESWITCH; a++) {
         CHECK(strcmp(stepramp_strresult((int)a), "unknown error") != 0);
@@ -1339,6 +1404,7 @@ int main(void)
     test_commands_keep_irq_enables();
     test_enable_and_outputs();
     test_jog_writes();
+    test_exact_mode_driver();
     test_program_segment();
     test_first_program_clears_segment();
     test_jog_errors();

@@ -1,9 +1,9 @@
 /* SPDX-License-Identifier: MIT */
 /*
  * Host unit tests of stepramp_plan, stepramp_change and stepramp_coord: expected values from the physics of the move
- * (not from the code under test), every error code, the empty moves. The bit-for-bit comparison with the Python driver
- * is done by sw/tests/test_c_plan.py, sw/tests/test_c_change.py and sw/tests/test_c_coord.py. Exit status 0 when every
- * check passes.
+ * (not from the code under test), every error code, the empty moves; the exact mode (STEPRAMP_RAMP_EXACT) too. The
+ * bit-for-bit comparison with the Python driver is done by sw/tests/test_c_plan.py, sw/tests/test_c_change.py and
+ * sw/tests/test_c_coord.py. Exit status 0 when every check passes.
  */
 #include "stepramp_plan.h"
 
@@ -369,7 +369,7 @@ static void test_strerror(void)
 {
     int e;
     int k;
-    for (e = STEPRAMP_OK; e <= STEPRAMP_ENULL; e++) {
+    for (e = STEPRAMP_OK; e <= STEPRAMP_ERAMP; e++) {
         const char *s = stepramp_strerror((stepramp_err_t)e);
         CHECK(s != NULL && s[0] != '\0' && strcmp(s, "unknown error") != 0);
         for (k = STEPRAMP_OK; k < e; k++) {
@@ -617,6 +617,215 @@ static void test_speed_at_pulse(void)
     CHECK(stepramp_speed_at_pulse(NULL, 50) == 0.0);
 }
 
+/* ---- exact mode (G_RAMP = 1): expected values from the physics and from C = c0^2 * 2^8 written out ---- */
+
+#define EXACT STEPRAMP_RAMP_EXACT
+
+/* round(c0^2 * 256), half to even: the ramp constant written out with exact integer arithmetic where it can be */
+static void test_ramp_constant(void)
+{
+    uint64_t c = 0;
+    uint64_t before;
+    double c0;
+    int ties = 0;
+
+    CHECK(stepramp_ramp_constant(1.0, &c) == STEPRAMP_OK && c == 256u);
+    CHECK(stepramp_ramp_constant(0.5, &c) == STEPRAMP_OK && c == 64u);
+    CHECK(stepramp_ramp_constant(3.0 / 32.0, &c) == STEPRAMP_OK && c == 2u); /* 2.25 */
+    CHECK(stepramp_ramp_constant(0.0625, &c) == STEPRAMP_OK && c == 1u);     /* the smallest: 1 */
+    /* (2^20 - 1)^2 * 2^8 is the largest square below 2^48; c0 = 2^20 gives 2^48, out of range */
+    CHECK(stepramp_ramp_constant(1048575.0, &c) == STEPRAMP_OK);
+    CHECK(c == (UINT64_C(1048575) * UINT64_C(1048575)) << 8);
+    before = c;
+    CHECK(stepramp_ramp_constant(1048576.0, &c) == STEPRAMP_EOVERFLOW && c == before);
+    /* below sqrt(1/512) ticks it rounds to 0: out of range too; so are inf, NaN and a square that overflows */
+    CHECK(stepramp_ramp_constant(0.044, &c) == STEPRAMP_EOVERFLOW);
+    CHECK(stepramp_ramp_constant(0.0, &c) == STEPRAMP_EOVERFLOW);
+    CHECK(stepramp_ramp_constant(1e160, &c) == STEPRAMP_EOVERFLOW);
+    CHECK(stepramp_ramp_constant((double)INFINITY, &c) == STEPRAMP_EOVERFLOW);
+    CHECK(stepramp_ramp_constant((double)NAN, &c) == STEPRAMP_EOVERFLOW);
+    CHECK(stepramp_ramp_constant(1.0, NULL) == STEPRAMP_ENULL);
+    CHECK(c == before);
+    /* ties (c0 * c0 rounds to a double whose product with 256 ends in .5) go to the even integer, like Python's */
+    for (c0 = 1048000.0; c0 < 1048575.0 && ties < 20; c0 += 0.3) {
+        double x = c0 * c0 * 256.0;
+        if (x - floor(x) == 0.5) {
+            double even = (fmod(floor(x), 2.0) == 0.0) ? floor(x) : floor(x) + 1.0;
+            CHECK(stepramp_ramp_constant(c0, &c) == STEPRAMP_OK && (double)c == even);
+            ties++;
+        }
+    }
+    CHECK(ties == 20);
+}
+
+static void test_exact_moves(void)
+{
+    /* the asymmetric trapezoid of test_asymmetric_trapezoids at prescale 50 (f_tick 1e6), and a triangle */
+    const double accel = 200.0, decel = 20.0, speed = 30.0, spr = 400.0, fclk = 5e7;
+    const uint32_t prescale = 50;
+    phys_t p = physics(-20000, accel, decel, speed, spr, fclk, prescale);
+    stepramp_plan_t plan;
+    stepramp_plan_t avr;
+    stepramp_plan_t before;
+    stepramp_info_t info;
+    stepramp_info_t avr_info;
+
+    CHECK(stepramp_plan_move_info_ramp(&plan, &info, -20000, accel, decel, speed, spr, fclk, prescale, EXACT) ==
+          STEPRAMP_OK);
+    CHECK(stepramp_plan_move_info(&avr, &avr_info, -20000, accel, decel, speed, spr, fclk, prescale) == STEPRAMP_OK);
+    CHECK(plan.ramp == STEPRAMP_RAMP_EXACT && avr.ramp == STEPRAMP_RAMP_AVR446);
+    /* the same boundaries, exact intervals c_last, c_sa, c_sd, cruise and stop ratio as the AVR446 plan */
+    CHECK(plan.steps == 20000 && plan.direction == 1 && plan.sa == avr.sa && plan.sd == avr.sd);
+    CHECK(plan.c_last == avr.c_last && plan.c_sa == avr.c_sa && plan.c_sd == avr.c_sd);
+    CHECK(plan.cruise == avr.cruise && plan.stop_ratio == avr.stop_ratio);
+    /* c_first without the deficit: interval 1 of the accel ramp is c0 (sqrt(1) - sqrt(0)) */
+    CHECK(rel_near((double)plan.c_first, p.c0 * Q16, 1e-15) && plan.c_first < avr.c_first);
+    /* the seeds are the ramp constants c0^2 * 2^8 and cd0^2 * 2^8 */
+    CHECK(rel_near((double)plan.accel_seed, p.c0 * p.c0 * 256.0, 1e-15));
+    CHECK(rel_near((double)plan.decel_seed, p.cd0 * p.cd0 * 256.0, 1e-15));
+    /* info: the same move, its t_ values unrounded (the seeds' are c0 and cd0) */
+    CHECK(info.x_a == avr_info.x_a && info.m0 == avr_info.m0 && info.min_interval == avr_info.min_interval);
+    CHECK(info.t_accel_seed == info.c0 && info.t_decel_seed == info.cd0 && info.t_sa == avr_info.t_sa);
+    CHECK((double)plan.c_first == rint(info.t_first * Q16) && info.t_first < avr_info.t_first);
+    /* stepramp_plan_move_ramp gives the same plan; AVR446 through it is stepramp_plan_move */
+    CHECK(stepramp_plan_move_ramp(&before, -20000, accel, decel, speed, spr, fclk, prescale, EXACT) == STEPRAMP_OK);
+    CHECK(memcmp(&before, &plan, sizeof plan) == 0);
+    CHECK(stepramp_plan_move_ramp(&before, -20000, accel, decel, speed, spr, fclk, prescale,
+                                  STEPRAMP_RAMP_AVR446) == STEPRAMP_OK);
+    CHECK(memcmp(&before, &avr, sizeof avr) == 0);
+
+    /* a 3-step move: m0 = -1, the AVR446 decel seed is 0, the exact one the constant of cd0 (a soft stop needs it) */
+    CHECK(stepramp_plan_move_ramp(&plan, 3, 1000.0, 250.0, 50.0, 200.0, 1e6, 1, EXACT) == STEPRAMP_OK);
+    p = physics(3, 1000.0, 250.0, 50.0, 200.0, 1e6, 1);
+    CHECK(plan.sa == plan.sd && rel_near((double)plan.decel_seed, p.cd0 * p.cd0 * 256.0, 1e-15));
+    CHECK(rel_near((double)plan.accel_seed, p.c0 * p.c0 * 256.0, 1e-15));
+    /* N = 0, 1: no interval, every ramp field 0, but the plan is for the exact mode */
+    memset(&plan, 0xA5, sizeof plan);
+    CHECK(stepramp_plan_move_ramp(&plan, -1, 1.0, 1.0, 1e12, 200.0, 1e6, 7, EXACT) == STEPRAMP_OK);
+    CHECK(plan.steps == 1 && plan.direction == 1 && plan.accel_seed == 0 && plan.decel_seed == 0 && plan.cruise == 0);
+    CHECK(plan.ramp == STEPRAMP_RAMP_EXACT);
+}
+
+static void test_exact_move_errors(void)
+{
+    stepramp_plan_t plan;
+    stepramp_plan_t before;
+    const double alpha = 2.0 * PI / 200.0;
+
+    memset(&plan, 0x5A, sizeof plan);
+    before = plan;
+    /* the ramp first (check_ramp), after the NULL plan */
+    CHECK(stepramp_plan_move_ramp(&plan, 100, 1.0, 1.0, 1.0, 200.0, 1e6, 1, 2u) == STEPRAMP_ERAMP);
+    CHECK(stepramp_plan_move_ramp(&plan, 100, 0.0, 1.0, 1.0, 200.0, 1e6, 0, UINT32_MAX) == STEPRAMP_ERAMP);
+    CHECK(stepramp_plan_move_ramp(NULL, 100, 1.0, 1.0, 1.0, 200.0, 1e6, 1, 2u) == STEPRAMP_ENULL);
+    CHECK(stepramp_plan_move_ramp(&plan, 100, 0.0, 1.0, 1.0, 200.0, 1e6, 1, EXACT) == STEPRAMP_EACCEL);
+    /* the speed limit: STEPRAMP_MIN_INTERVAL_CLKS_EXACT clocks (f_tick / v = 256.5 ticks passes, 255.5 does not,
+     * which AVR446 mode takes) */
+    CHECK(STEPRAMP_MIN_INTERVAL_CLKS_EXACT == 256);
+    CHECK(stepramp_plan_move_ramp(&plan, 1000, 1e6, 1e6, alpha * 1e6 / 256.5, 200.0, 1e6, 1, EXACT) == STEPRAMP_OK);
+    CHECK(stepramp_plan_move_ramp(&plan, 1000, 1e6, 1e6, alpha * 1e6 / 255.5, 200.0, 1e6, 1, EXACT) ==
+          STEPRAMP_ETOOFAST);
+    CHECK(stepramp_plan_move(&plan, 1000, 1e6, 1e6, alpha * 1e6 / 255.5, 200.0, 1e6, 1) == STEPRAMP_OK);
+    /* 128.5 ticks at prescale 2: 256 clocks allowed; 127.5: 254 too few */
+    CHECK(stepramp_plan_move_ramp(&plan, 1000, 1e6, 1e6, alpha * 5e5 / 128.5, 200.0, 1e6, 2, EXACT) == STEPRAMP_OK);
+    CHECK(stepramp_plan_move_ramp(&plan, 1000, 1e6, 1e6, alpha * 5e5 / 127.5, 200.0, 1e6, 2, EXACT) ==
+          STEPRAMP_ETOOFAST);
+    memcpy(&before, &plan, sizeof plan);
+    /* c0 = 1e6 sqrt(2 / (0.01 * 200 / 2 pi)) = 2.5e6 ticks: its ramp constant passes 2^48 (c0 >= 2^20 ticks), while
+     * the AVR446 plan fits */
+    CHECK(stepramp_plan_move_ramp(&plan, 1000, 0.01, 0.01, 0.3, 200.0, 1e6, 1, EXACT) == STEPRAMP_EOVERFLOW);
+    CHECK(stepramp_plan_move(&plan, 1000, 0.01, 0.01, 0.3, 200.0, 1e6, 1) == STEPRAMP_OK);
+    /* the decel's alone: cd0 = 2.5e6 ticks */
+    CHECK(stepramp_plan_move_ramp(&plan, 1000, 1.0, 0.01, 0.3, 200.0, 1e6, 1, EXACT) == STEPRAMP_EOVERFLOW);
+    /* c0 = 0.025 ticks (a = 3.2e15 steps/s^2): the constant rounds to 0 */
+    CHECK(stepramp_plan_move_ramp(&plan, 1000, 1e14, 1e14, 100.0, 200.0, 1e6, 1, EXACT) == STEPRAMP_EOVERFLOW);
+    CHECK(stepramp_plan_move(&plan, 1000, 1e14, 1e14, 100.0, 200.0, 1e6, 1) == STEPRAMP_OK);
+    memcpy(&plan, &before, sizeof plan);
+    CHECK(stepramp_plan_move_ramp(&plan, 1000, 0.01, 0.01, 0.3, 200.0, 1e6, 1, EXACT) == STEPRAMP_EOVERFLOW);
+    CHECK(memcmp(&plan, &before, sizeof plan) == 0); /* never written on error */
+    CHECK(strstr(stepramp_strerror(STEPRAMP_EOVERFLOW), "ramp constant") != NULL);
+    CHECK(strstr(stepramp_strerror(STEPRAMP_ERAMP), "ramp must be 0 (avr446) or 1 (exact)") != NULL);
+}
+
+static void test_exact_changes(void)
+{
+    phys_t p = physics(100000, CH_ACCEL, CH_DECEL, CH_SPEED, CH_SPR, CH_FCLK, 1);
+    double n_d = p.v * p.v / (2.0 * p.d); /* 159.2 steps */
+    double m = ceil(n_d);
+    stepramp_plan_t move;
+    stepramp_change_t ch;
+    stepramp_change_t avr;
+    stepramp_change_t before;
+    stepramp_change_info_t info;
+    stepramp_segment_t seg;
+    stepramp_plan_t plan;
+    stepramp_segment_regs_t regs;
+
+    /* a jog from rest: the move's accel ramp (its ramp constant), the decel's constant for a soft stop; c_sd is the
+     * first interval of a stop in the cruise: (m - n_d) of a step at v, then the decel from n_d to m - 1 steps before
+     * the rest, f_tick (sqrt(2 n_d / d) - sqrt(2 (m - 1) / d)) */
+    CHECK(stepramp_plan_move_ramp(&move, 100000, CH_ACCEL, CH_DECEL, CH_SPEED, CH_SPR, CH_FCLK, 1, EXACT) ==
+          STEPRAMP_OK);
+    CHECK(stepramp_plan_change_info_ramp(&ch, &info, 0.0, STEPRAMP_ENDLESS, CH_ACCEL, CH_DECEL, CH_SPEED, CH_SPR,
+                                         CH_FCLK, 1, EXACT) == STEPRAMP_OK);
+    CHECK(change(&avr, 0.0, STEPRAMP_ENDLESS) == STEPRAMP_OK);
+    CHECK(ch.segment.ramp == STEPRAMP_RAMP_EXACT && avr.segment.ramp == STEPRAMP_RAMP_AVR446);
+    CHECK(ch.segment.endless == 1 && ch.segment.head == STEPRAMP_HEAD_UP && ch.segment.sa == move.sa);
+    CHECK(ch.segment.accel_seed == move.accel_seed && ch.segment.decel_seed == move.decel_seed);
+    CHECK(ch.segment.c_first == move.c_first && ch.segment.c_sa == move.c_sa && ch.segment.cruise == move.cruise);
+    CHECK(ch.segment.run_stop == avr.segment.run_stop && ch.segment.run_stop == (uint32_t)m);
+    CHECK(ch.segment.c_last == avr.segment.c_last && avr.segment.c_sd == 0 && avr.segment.decel_seed == 0);
+    CHECK(rel_near((double)ch.segment.c_sd,
+                   p.f_tick * ((m - n_d) / p.v + sqrt(2.0 * n_d / p.d) - sqrt(2.0 * (m - 1.0) / p.d)) * Q16, 1e-9));
+    CHECK(info.t_accel_seed == p.c0 && info.t_decel_seed == p.cd0 && (double)ch.segment.c_sd == rint(info.t_sd * Q16));
+
+    /* slower from twice the speed: a down head, its constant the decel's (cd0) */
+    CHECK(stepramp_plan_change_ramp(&ch, 2.0 * p.v, 100000, CH_ACCEL, CH_DECEL, CH_SPEED, CH_SPR, CH_FCLK, 1,
+                                    EXACT) == STEPRAMP_OK);
+    CHECK(change(&avr, 2.0 * p.v, 100000) == STEPRAMP_OK);
+    CHECK(ch.segment.head == STEPRAMP_HEAD_DOWN && ch.segment.head_index == avr.segment.head_index);
+    CHECK(ch.segment.sa == avr.segment.sa && ch.segment.sd == avr.segment.sd && ch.segment.c_sa == avr.segment.c_sa);
+    CHECK(ch.segment.accel_seed == move.decel_seed && ch.segment.decel_seed == move.decel_seed);
+    CHECK(ch.segment.c_first != avr.segment.c_first); /* no deficit in the exact mode */
+    /* faster from v: an up head from n0, its constant the accel's (c0) */
+    CHECK(stepramp_plan_change_ramp(&ch, p.v, 100000, CH_ACCEL, CH_DECEL, 2.0 * CH_SPEED, CH_SPR, CH_FCLK, 1,
+                                    EXACT) == STEPRAMP_OK);
+    CHECK(ch.segment.head == STEPRAMP_HEAD_UP && ch.segment.head_index == (uint32_t)rint(p.v * p.v / (2.0 * p.a)));
+    CHECK(ch.segment.accel_seed == move.accel_seed && ch.segment.decel_seed == move.decel_seed);
+
+    /* the target inside the stop distance: the stop segment and the move back, both for the exact mode */
+    CHECK(stepramp_plan_change_ramp(&ch, p.v, 10, CH_ACCEL, CH_DECEL, CH_SPEED, CH_SPR, CH_FCLK, 1, EXACT) ==
+          STEPRAMP_OK);
+    CHECK(ch.has_back == 1 && ch.back.ramp == STEPRAMP_RAMP_EXACT && ch.segment.ramp == STEPRAMP_RAMP_EXACT);
+    CHECK(ch.back.steps == (uint32_t)floor(n_d) - 10u && ch.back.decel_seed == move.decel_seed);
+    CHECK(ch.segment.accel_seed == 0 && ch.segment.decel_seed == move.decel_seed && ch.segment.sa == 1);
+    /* at the target at rest: the empty segment (no interval: decel_seed 0 too) */
+    CHECK(stepramp_plan_change_ramp(&ch, 0.0, 0, CH_ACCEL, CH_DECEL, CH_SPEED, CH_SPR, CH_FCLK, 1, EXACT) ==
+          STEPRAMP_OK);
+    CHECK(ch.segment.length == 0 && ch.segment.decel_seed == 0 && ch.segment.ramp == STEPRAMP_RAMP_EXACT);
+
+    /* the ramp travels with a segment: of_move, and the registers' plan */
+    CHECK(stepramp_segment_of_move(&seg, &move) == STEPRAMP_OK && seg.ramp == STEPRAMP_RAMP_EXACT);
+    CHECK(stepramp_segment_registers(&seg, 0u, &plan, &regs) == STEPRAMP_OK && plan.ramp == STEPRAMP_RAMP_EXACT);
+    CHECK(plan.steps == move.steps && plan.c_first == move.c_first && plan.accel_seed == move.accel_seed);
+    CHECK(plan.c_sd == move.c_sd && plan.decel_seed == move.decel_seed && plan.cruise == move.cruise);
+
+    /* errors: the ramp first; the exact speed limit (256 clocks); a head constant out of range */
+    memset(&ch, 0x5A, sizeof ch);
+    before = ch;
+    CHECK(stepramp_plan_change_ramp(&ch, -1.0, -2, 0.0, 1.0, 1.0, 400.0, 1e6, 0, 5u) == STEPRAMP_ERAMP);
+    CHECK(stepramp_plan_change_ramp(NULL, 0.0, 100, 1.0, 1.0, 1.0, 400.0, 1e6, 1, 5u) == STEPRAMP_ENULL);
+    CHECK(stepramp_plan_change_ramp(&ch, 0.0, STEPRAMP_ENDLESS, 40.0, 30.0, 20.0, 400.0, 3e5, 1, EXACT) ==
+          STEPRAMP_ETOOFAST);
+    CHECK(stepramp_plan_change_ramp(&ch, 0.0, STEPRAMP_ENDLESS, 0.01, 0.01, 0.3, 200.0, 1e6, 1, EXACT) ==
+          STEPRAMP_EOVERFLOW);
+    CHECK(memcmp(&ch, &before, sizeof ch) == 0); /* never written on error */
+    CHECK(stepramp_plan_change_ramp(&ch, 0.0, STEPRAMP_ENDLESS, 40.0, 30.0, 20.0, 400.0, 3e5, 1,
+                                    STEPRAMP_RAMP_AVR446) == STEPRAMP_OK);
+    CHECK(stepramp_plan_change_ramp(&ch, 0.0, STEPRAMP_ENDLESS, 0.01, 0.01, 0.3, 200.0, 1e6, 1,
+                                    STEPRAMP_RAMP_AVR446) == STEPRAMP_OK);
+}
+
 /* The engine's tick of a plan's last pulse, by the spec's rules (docs/algorithm.md, "Which value each interval gets",
  * the recurrences and the accumulator) run interval by interval: an independent model for short moves. */
 static uint64_t engine_last_tick(const stepramp_plan_t *p)
@@ -811,5 +1020,9 @@ int main(void)
     test_segment_registers();
     test_speed_at_pulse();
     test_coordinated();
+    test_ramp_constant();
+    test_exact_moves();
+    test_exact_move_errors();
+    test_exact_changes();
     return test_report("test_stepramp_plan");
 }

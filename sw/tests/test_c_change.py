@@ -10,6 +10,10 @@ almost always); stepramp_speed_at_pulse must give speed_at_pulse's double. Rando
 
 An arithmetic exception of change.py (ZeroDivisionError, OverflowError) instead of a ValueError with its reason fails
 the comparison: every input either plans or is refused with the reason.
+
+The exact mode (stepramp_plan_change_ramp against plan_change(..., ramp=RAMP_EXACT)) likewise, on random, extreme and
+invalid changes: the ramp constants (recorded on their way into exact.ramp_constant: c0 of the head, cd0 of the decel)
+are compared as the doubles they come from.
 """
 
 from __future__ import annotations
@@ -20,6 +24,7 @@ import math
 import os
 import random
 import re
+import sys
 import traceback
 from collections import Counter
 from pathlib import Path
@@ -31,8 +36,8 @@ from test_c_plan import ERROR_KEYS, PLAN_HEADER, CInfo, load_library, py_error_n
 from c_abi import CPlan, log_uniform, struct_fields
 from stepramp.board import change as pychange
 from stepramp.board.change import DOWN, UP, Segment, plan_change, speed_at_pulse
-from stepramp.board.plan import MAX_STEPS, plan_move, plan_move_info
-from stepramp.sim.profiles import PROFILES
+from stepramp.board.plan import MAX_STEPS, RAMP_EXACT, plan_move, plan_move_info
+from stepramp.sim.profiles import EXACT_PROFILES, PROFILES
 from stepramp.tools import clib
 
 CHANGE_HEADER = clib.C_DIR / "stepramp_change.h"
@@ -106,6 +111,9 @@ def lib(build: Path) -> ctypes.CDLL:
     so.stepramp_plan_change.argtypes = [ctypes.POINTER(CChange), *args]
     so.stepramp_plan_change_info.argtypes = [ctypes.POINTER(CChange), ctypes.POINTER(CChangeInfo), *args]
     so.stepramp_plan_change.restype = so.stepramp_plan_change_info.restype = ctypes.c_int
+    so.stepramp_plan_change_ramp.argtypes = [*so.stepramp_plan_change.argtypes, ctypes.c_uint32]
+    so.stepramp_plan_change_info_ramp.argtypes = [*so.stepramp_plan_change_info.argtypes, ctypes.c_uint32]
+    so.stepramp_plan_change_ramp.restype = so.stepramp_plan_change_info_ramp.restype = ctypes.c_int
     so.stepramp_segment_of_move.argtypes = [ctypes.POINTER(CSegment), ctypes.POINTER(CPlan)]
     so.stepramp_segment_of_move.restype = ctypes.c_int
     so.stepramp_speed_at_pulse.argtypes = [ctypes.POINTER(CInfo), ctypes.c_int64]
@@ -121,10 +129,15 @@ _RAW: dict[str, float] = {}
 """The doubles the running plan_change has rounded into registers so far, by stepramp_change_info_t's names."""
 
 
+# the callers of exact.ramp_constant in change.py -> the stepramp_change_info_t field of the c0 it is given
+_RAMP_CONSTANT_OF = {"plan_change": "t_accel_seed", "_fields": "t_decel_seed"}
+
+
 @pytest.fixture(autouse=True)
 def _record_raw(monkeypatch: pytest.MonkeyPatch) -> None:
-    """change.py's _to_fixed and _cruise, recording their doubles into _RAW (plan.py's own are not touched)."""
-    to_fixed, cruise = pychange._to_fixed, pychange._cruise
+    """change.py's _to_fixed, _cruise and ramp_constant, recording their doubles into _RAW (plan.py's own are not
+    touched); ramp_constant's c0 under the seed its caller rounds it into (_RAMP_CONSTANT_OF)."""
+    to_fixed, cruise, ramp_constant = pychange._to_fixed, pychange._cruise, pychange.ramp_constant
 
     def recording_to_fixed(name: str, ticks: float, frac: int, width: int) -> int:
         _RAW["t_" + name.removeprefix("c_")] = ticks
@@ -134,8 +147,13 @@ def _record_raw(monkeypatch: pytest.MonkeyPatch) -> None:
         _RAW["t_cruise"] = f_tick / v if v != 0.0 else math.inf  # _cruise itself raises for v == 0
         return cruise(f_tick, v)
 
+    def recording_ramp_constant(c0_ticks: float) -> int:
+        _RAW[_RAMP_CONSTANT_OF[sys._getframe(1).f_code.co_name]] = c0_ticks
+        return ramp_constant(c0_ticks)
+
     monkeypatch.setattr(pychange, "_to_fixed", recording_to_fixed)
     monkeypatch.setattr(pychange, "_cruise", recording_cruise)
+    monkeypatch.setattr(pychange, "ramp_constant", recording_ramp_constant)
 
 
 def change_error_name(message: str) -> str:
@@ -161,7 +179,7 @@ def py_outcome(case: dict[str, Any]) -> Outcome:
         return f"{PY_CRASH}{type(exc).__name__} ({exc}) at {line!r}"
     seg = dataclasses.asdict(change.segment)
     seg |= {"length": seg["length"] or 0, "endless": int(seg["length"] is None), "head": (UP, DOWN).index(seg["head"])}
-    back = change.back.to_dict() if change.back is not None else dict.fromkeys(field_names(CPlan), 0)
+    back = dataclasses.asdict(change.back) if change.back is not None else dict.fromkeys(field_names(CPlan), 0)
     raw = {name: _hex(_RAW.get(name, 0.0)) for name in field_names(CChangeInfo)}
     assert set(_RAW) <= set(raw), f"change.py rounds values stepramp_change_info_t does not hold: {sorted(_RAW)}"
     extra = {"start_speed": _hex(change.start_speed), "has_back": int(change.back is not None), "back": back}
@@ -176,13 +194,18 @@ def _c_fields(out: CChange) -> Change:
 
 def c_outcome(so: ctypes.CDLL, case: dict[str, Any]) -> Outcome:
     """stepramp_plan_change_info's fields and unrounded register values, or the error's name; stepramp_plan_change
-    gives the same."""
+    gives the same. A case with a "ramp" goes to stepramp_plan_change_info_ramp and stepramp_plan_change_ramp."""
     out, plain, info = CChange(), CChange(), CChangeInfo()
     remaining = ENDLESS if case["remaining"] is None else case["remaining"]
     physical = (float(case[k]) for k in ("accel", "decel", "speed", "spr", "fclk"))
-    args = (case["u"], remaining, *physical, case["prescale"])
-    err = so.stepramp_plan_change_info(ctypes.byref(out), ctypes.byref(info), *args)
-    assert so.stepramp_plan_change(ctypes.byref(plain), *args) == err
+    args: tuple[Any, ...] = (case["u"], remaining, *physical, case["prescale"])
+    if "ramp" in case:
+        args = (*args, case["ramp"])
+        err = so.stepramp_plan_change_info_ramp(ctypes.byref(out), ctypes.byref(info), *args)
+        assert so.stepramp_plan_change_ramp(ctypes.byref(plain), *args) == err
+    else:
+        err = so.stepramp_plan_change_info(ctypes.byref(out), ctypes.byref(info), *args)
+        assert so.stepramp_plan_change(ctypes.byref(plain), *args) == err
     if err != 0:
         return RESULT_NAMES.get(err, f"unknown result {err}")
     assert _c_fields(plain) == _c_fields(out)
@@ -392,13 +415,14 @@ def test_change_results_have_their_texts(lib: ctypes.CDLL) -> None:
 
 
 def test_segment_of_move(lib: ctypes.CDLL) -> None:
-    """Segment.of_move of every profile's plan: the same segment."""
-    for profile in PROFILES:
-        plan = plan_move(**profile.args())
+    """Segment.of_move of every profile's plan: the same segment (with its ramp; EXACT_PROFILES in exact mode)."""
+    moves = [p.args() for p in PROFILES] + [p.args() | {"ramp": RAMP_EXACT} for p in EXACT_PROFILES]
+    for move in moves:
+        plan = plan_move(**move)
         seg = CSegment()
-        assert lib.stepramp_segment_of_move(ctypes.byref(seg), ctypes.byref(CPlan(**plan.to_dict()))) == 0
+        assert lib.stepramp_segment_of_move(ctypes.byref(seg), ctypes.byref(CPlan(**dataclasses.asdict(plan)))) == 0
         py = dataclasses.asdict(Segment.of_move(plan)) | {"endless": 0, "head": 0}
-        assert {name: getattr(seg, name) for name in field_names(CSegment)} == py, profile.name
+        assert {name: getattr(seg, name) for name in field_names(CSegment)} == py, move
     assert RESULT_NAMES[lib.stepramp_segment_of_move(None, ctypes.byref(CPlan()))] == "STEPRAMP_ENULL"
 
 
@@ -424,3 +448,100 @@ def test_speed_at_pulse_bit_for_bit(lib: ctypes.CDLL) -> None:
             checked += py > 0.0
     assert checked >= 16 * 15
     assert lib.stepramp_speed_at_pulse(None, 5) == 0.0
+
+
+# --------------------------------------------------------------------------------------------------------------------
+# the exact mode (RAMP_EXACT)
+# --------------------------------------------------------------------------------------------------------------------
+
+EXACT_COUNT = 3000
+
+
+def _random_exact_change(rng: random.Random) -> dict[str, Any]:
+    """_random_change in exact mode, at 4 times the clock (4, 8 or 40 MHz, as EXACT_PROFILES take the profiles) so that
+    its speeds keep the exact mode's 256-clock limit about as often as the AVR446 ones keep 64."""
+    case = _random_change(rng) | {"ramp": RAMP_EXACT}
+    case["fclk"] *= 4.0
+    return case
+
+
+def test_random_exact_changes_bit_for_bit(lib: ctypes.CDLL) -> None:
+    """stepramp_plan_change_info_ramp in exact mode against plan_change(..., ramp=RAMP_EXACT): every field, every double
+    behind a register (the c0 of each ramp constant), or the same error."""
+    rng = random.Random(SEED + 2)
+    print(f"seed {SEED + 2} (STEPRAMP_SEED={SEED} replays it)")
+    kinds = _compare(lib, [_random_exact_change(rng) for _ in range(EXACT_COUNT)])
+    print(f"{EXACT_COUNT} exact-mode changes: {sorted(kinds.items())}")
+    # EOVERFLOW: a ramp constant out of range (c0 of 2^20 ticks or more at the slowest accels and the fastest clock)
+    expected = {"up", "down", "stop", "at target", "up-jog", "down-jog", "STEPRAMP_ETOOFAST", "STEPRAMP_EOVERFLOW"}
+    assert set(kinds) == expected, kinds
+    assert min(n for kind, n in kinds.items() if kind != "STEPRAMP_EOVERFLOW") >= 30, kinds
+
+
+def test_extreme_exact_changes_same_outcome(lib: ctypes.CDLL) -> None:
+    """Random exact-mode cases with one to three extreme values (or a ramp that is neither mode): the same fields, or
+    the same error, the ramp constants out of range among them."""
+    rng = random.Random(SEED + 3)
+    print(f"seed {SEED + 3} (STEPRAMP_SEED={SEED} replays it)")
+    cases = []
+    for _ in range(3000):
+        case = _random_exact_change(rng)
+        for _ in range(rng.choice((1, 2, 3))):
+            name = rng.choice(list(_EXTREME))
+            case[name] = rng.choice(_EXTREME[name])
+        if rng.random() < 0.02:
+            case["ramp"] = rng.choice((2, 7, 2**32 - 1))
+        cases.append(case)
+    kinds = _compare(lib, cases)
+    print(f"{len(cases)} extreme exact-mode changes: {sorted(kinds.items())}")
+    units = {"STEPRAMP_EACCEL_UNITS", "STEPRAMP_EDECEL_UNITS", "STEPRAMP_ESPEED_UNITS", "STEPRAMP_EFTICK"}
+    assert units | {"STEPRAMP_ESEGMENT", "STEPRAMP_EOVERFLOW", "STEPRAMP_ETOOFAST", "STEPRAMP_ERAMP"} <= set(kinds), (
+        kinds
+    )
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "expected"),
+    [
+        ({"ramp": 2}, "STEPRAMP_ERAMP"),
+        ({"ramp": 2, "u": -1.0, "prescale": 0}, "STEPRAMP_ERAMP"),  # the ramp first
+        ({"u": -1.0}, "STEPRAMP_ECHANGE_SPEED"),
+        # 10 rad/s at 400 steps/rev is 636.6 steps/s: 300 ticks at 1.91e5 Hz (enough), 250 at 1.59e5 (too few)
+        ({"speed": 10.0, "fclk": 1.91e5, "u": 0.0, "remaining": None}, None),
+        ({"speed": 10.0, "fclk": 1.59e5, "u": 0.0, "remaining": None}, "STEPRAMP_ETOOFAST"),
+        ({"speed": 10.0, "fclk": 1.59e5, "u": 0.0, "remaining": 100000}, "STEPRAMP_ETOOFAST"),
+        # the head's constant: c0 = 1e6 sqrt(2 / (0.01 * 400 / 2 pi)) = 1.8e6 ticks > 2^20: out of range
+        ({"u": 0.0, "accel": 0.01, "speed": 1.0, "remaining": None}, "STEPRAMP_EOVERFLOW"),
+        # ... the decel's (cd0), of a jog whose soft stop needs it
+        ({"u": 0.0, "decel": 0.01, "speed": 1.0, "remaining": None}, "STEPRAMP_EOVERFLOW"),
+        # ... c0 of 0.03 ticks: the constant rounds to 0
+        ({"u": 0.0, "accel": 1e14, "remaining": None}, "STEPRAMP_EOVERFLOW"),
+        # a down head from 3000 steps/s (333 ticks): the decel's constant; from 4000 (250 ticks) too fast
+        ({"u": 3000.0, "remaining": 100000}, None),
+        ({"u": 4000.0, "remaining": 100000}, "STEPRAMP_ETOOFAST"),
+        # the target inside the stop distance: the move back in exact mode, its own error (the exact speed limit)
+        ({"u": 4000.0, "fclk": 7e4}, "STEPRAMP_ETOOFAST"),
+        ({"u": 4000.0}, None),
+        ({"u": 0.0, "remaining": 0}, None),
+    ],
+)
+def test_invalid_exact_changes_same_error(lib: ctypes.CDLL, kwargs: dict[str, Any], expected: str | None) -> None:
+    case = _BASE | {"ramp": RAMP_EXACT} | kwargs
+    py = py_outcome(case)
+    assert (py if isinstance(py, str) else None) == expected, py
+    assert c_outcome(lib, case) == py
+
+
+# c0 = f_tick sqrt(2 / a) of about 1.8e224 ticks: its square is not finite
+_INFINITE_SQUARE = {"u": 0.0, "remaining": None, "accel": 1e-150, "decel": 1.0, "speed": 1.0, "spr": 400.0}
+_INFINITE_SQUARE |= {"fclk": 1e150, "prescale": 1, "ramp": RAMP_EXACT}
+
+
+def test_exact_head_constant_of_an_infinite_square_in_c(lib: ctypes.CDLL) -> None:
+    """A head constant whose c0 * c0 overflows a double: out of range (STEPRAMP_EOVERFLOW), as a ValueError would be."""
+    assert c_outcome(lib, _INFINITE_SQUARE) == "STEPRAMP_EOVERFLOW"
+
+
+def test_exact_head_constant_of_an_infinite_square_in_python(lib: ctypes.CDLL) -> None:
+    """change.py reaches ramp_constant with that c0 before anything refuses it (a move's c_first would)."""
+    assert py_outcome(_INFINITE_SQUARE) == c_outcome(lib, _INFINITE_SQUARE)

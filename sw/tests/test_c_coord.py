@@ -11,6 +11,7 @@ time_before_last and ideal_end. Random cases print their seed (STEPRAMP_SEED rep
 from __future__ import annotations
 
 import ctypes
+import dataclasses
 import math
 import os
 import random
@@ -113,7 +114,7 @@ def py_outcome(case: Case) -> Outcome:
         line = traceback.extract_tb(exc.__traceback__)[-1].line or ""
         return f"{PY_CRASH}{type(exc).__name__} ({exc}) at {line!r}", None
     return {
-        "plans": [plan.to_dict() for plan in plans],
+        "plans": [dataclasses.asdict(plan) for plan in plans],  # Plan.ramp too (0: AVR446), as stepramp_plan_t
         "lead": info.lead,
         "t_end": _hex(info.t_end),
         "end_tick": _hex(float(info.end_tick)),
@@ -311,7 +312,7 @@ def test_null_pointers(lib: ctypes.CDLL) -> None:
 
 
 def _c_plan(plan: Plan) -> CPlan:
-    return CPlan(**plan.to_dict())
+    return CPlan(**dataclasses.asdict(plan))
 
 
 def _hand_made_plans(rng: random.Random, count: int) -> list[Plan]:

@@ -32,8 +32,17 @@ from test_driver import run as run_async
 
 from c_abi import CPlan, log_uniform, run, struct_fields
 from stepramp.board.driver import MODES, NO_SEGMENT, Outputs, StepRamp, plan_writes, segment_writes
-from stepramp.board.plan import MAX_PRESCALE, MAX_STEPS, REG_WIDTHS, Plan, plan_move
-from stepramp.board.regmap import ERROR_CODES, ID_VALUE, offset
+from stepramp.board.plan import (
+    MAX_PRESCALE,
+    MAX_STEPS,
+    MIN_INTERVAL_CLKS_EXACT,
+    RAMP_AVR446,
+    RAMP_EXACT,
+    REG_WIDTHS,
+    Plan,
+    plan_move,
+)
+from stepramp.board.regmap import ERROR_CODES, ID_RAMP_BIT, ID_VALUE, offset
 from stepramp.sim.profiles import INVALID_INPUTS, PROFILES, design_args
 from stepramp.tools import clib
 
@@ -136,6 +145,14 @@ def lib(build: Path) -> ctypes.CDLL:
     dev = ctypes.POINTER(CDev)
     for name, args in {
         "stepramp_init": [dev, ctypes.c_size_t, ctypes.c_double, ctypes.c_double, ctypes.c_uint32],
+        "stepramp_init_ramp": [
+            dev,
+            ctypes.c_size_t,
+            ctypes.c_double,
+            ctypes.c_double,
+            ctypes.c_uint32,
+            ctypes.c_uint32,
+        ],
         "stepramp_jog": [dev, *(ctypes.c_double,) * 3],
         "stepramp_move": [dev, ctypes.c_int64, *(ctypes.c_double,) * 3],
         "stepramp_configure_outputs": [dev, ctypes.POINTER(COutputs)],
@@ -193,10 +210,16 @@ def _random_field(rng: random.Random, width: int) -> int:
 
 
 def random_plans(seed: int, count: int) -> list[Plan]:
-    """Plans with random register values over each field's full width (LO/HI splits, sign of STEPS)."""
+    """Plans with random register values over each field's full width (LO/HI splits, sign of STEPS), for either ramp
+    (not a register: it changes no write)."""
     rng = random.Random(seed)
-    names = [f.name for f in dataclasses.fields(Plan)]
-    return [Plan(**{name: _random_field(rng, REG_WIDTHS[name]) for name in names}) for _ in range(count)]
+    names = [f.name for f in dataclasses.fields(Plan) if f.name in REG_WIDTHS]
+    return [
+        Plan(
+            **{name: _random_field(rng, REG_WIDTHS[name]) for name in names}, ramp=rng.choice((RAMP_AVR446, RAMP_EXACT))
+        )
+        for _ in range(count)
+    ]
 
 
 def random_valid_moves(seed: int, count: int) -> list[dict[str, Any]]:
@@ -299,17 +322,25 @@ def test_invalid_move_writes_nothing(lib: ctypes.CDLL) -> None:
 
 class Pair:
     """The C driver on the fake bank and the Python driver on test_driver's FakeBank, set up alike (init, stepping
-    outputs), their logs cleared before each call; a call gives each side's result and writes."""
+    outputs; with a ramp, stepramp_init_ramp on a core whose ID says that ramp, and StepRamp(..., ramp)), their logs
+    cleared before each call; a call gives each side's result and writes."""
 
-    def __init__(self, so: ctypes.CDLL, fclk: float, spr: float, prescale: int, outputs: Outputs) -> None:
+    def __init__(
+        self, so: ctypes.CDLL, fclk: float, spr: float, prescale: int, outputs: Outputs, ramp: int | None = None
+    ) -> None:
         self.so = so
         self.dev = CDev()
-        so.stepramp_fakebus_reset(FAKEBUS_BASE, ID_VALUE)
-        assert so.stepramp_init(ctypes.byref(self.dev), FAKEBUS_BASE, fclk, spr, prescale) == 0
+        if ramp is None:
+            so.stepramp_fakebus_reset(FAKEBUS_BASE, ID_VALUE)
+            assert so.stepramp_init(ctypes.byref(self.dev), FAKEBUS_BASE, fclk, spr, prescale) == 0
+        else:
+            so.stepramp_fakebus_reset(FAKEBUS_BASE, ID_VALUE | ramp << ID_RAMP_BIT)
+            assert so.stepramp_init_ramp(ctypes.byref(self.dev), FAKEBUS_BASE, fclk, spr, prescale, ramp) == 0
+            assert self.dev.ramp == ramp
         fields = dataclasses.asdict(outputs) | {"mode": MODES[outputs.mode]}
         assert so.stepramp_configure_outputs(ctypes.byref(self.dev), ctypes.byref(COutputs(**fields))) == 0
         self.bank = FakeBank()
-        self.drv = StepRamp(self.bank, fclk, spr, prescale)
+        self.drv = StepRamp(self.bank, fclk, spr, prescale, RAMP_AVR446 if ramp is None else ramp)
         run_async(self.drv.configure_outputs(outputs))
 
     def call(self, name: str, *args: Any) -> tuple[tuple[str, list[Write]], tuple[str, list[Write]]]:
@@ -344,17 +375,17 @@ def test_first_moves_like_the_python_driver(lib: ctypes.CDLL) -> None:
     assert not mismatches, f"{len(mismatches)} moves differ:\n" + "\n".join(mismatches[:5])
 
 
-def random_jogs(seed: int, count: int) -> list[dict[str, Any]]:
+def random_jogs(seed: int, count: int, min_clks: int = 64) -> list[dict[str, Any]]:
     """Jogs designed in the tick domain over wide ranges (some too fast, some with a STEP width + space that does
     not fit, some with no valid speed), each with a STEP width and space, and the accel, decel and speed of a move
-    whose shortest interval holds them."""
+    whose shortest interval holds them; min_clks: the speed limit they are designed around (the exact mode's 256)."""
     rng = random.Random(seed)
     jogs = []
     for _ in range(count):
         prescale = rng.choice((1, 1, 2, 7, 50, 1000, MAX_PRESCALE, rng.randint(1, MAX_PRESCALE)))
         spr = rng.choice((200.0, 400.0, 1600.0, 3200.0, 51200.0)) * rng.choice((1.0, 1.37))
         fclk = log_uniform(rng, 1e5, 2e8)
-        period = max(64.0 / prescale, 1.0) * log_uniform(rng, 0.5, 1e4)  # the jog's interval, ticks
+        period = max(min_clks / prescale, 1.0) * log_uniform(rng, 0.5, 1e4)  # the jog's interval, ticks
         n_a, n_d = log_uniform(rng, 0.1, 1e6), log_uniform(rng, 0.1, 1e6)
         gap = min(round(period * prescale * log_uniform(rng, 0.01, 2.0)), 2 * 65535) if rng.random() < 0.3 else 2
         width = rng.randint(max(gap - 65535, 0), min(gap, 65535))
@@ -362,7 +393,7 @@ def random_jogs(seed: int, count: int) -> list[dict[str, Any]]:
         speed = args["speed"] * rng.choice((1.0, -1.0))
         if rng.random() < 0.03:
             speed = rng.choice((0.0, -0.0, math.nan, math.inf))
-        move = design_args(0, max(period, (gap + 64) / prescale + 1.0), n_a, n_d, spr, fclk, prescale)
+        move = design_args(0, max(period, (gap + min_clks) / prescale + 1.0), n_a, n_d, spr, fclk, prescale)
         jogs.append(
             {
                 "init": (fclk, spr, prescale, Outputs(step_width=width, step_space=gap - width, dir_setup=gap % 7)),
@@ -393,6 +424,45 @@ def test_jog_like_the_python_driver(lib: ctypes.CDLL) -> None:
     assert not mismatches, f"{len(mismatches)} calls differ:\n" + "\n".join(mismatches[:5])
     assert {"jog OK", "jog EGAP", "jog ETOOFAST", "jog EJOG_SPEED"} <= set(results), results
     assert results["jog OK"] >= RANDOM_COUNT // 2 and results["move OK"] >= RANDOM_COUNT
+
+
+def test_exact_jog_like_the_python_driver(lib: ctypes.CDLL) -> None:
+    """A driver set up for an exact-mode core (stepramp_init_ramp, StepRamp(..., ramp=RAMP_EXACT)): its jogs and the
+    moves after them write what the Python driver's write, both planned in exact mode, or both fail alike, writing
+    nothing (the jogs designed around the exact mode's 256-clock speed limit)."""
+    seed = 2026_0514
+    print(f"seed {seed}")
+    jogs = random_jogs(seed, RANDOM_COUNT, MIN_INTERVAL_CLKS_EXACT)
+    mismatches: list[str] = []
+    results: Counter[str] = Counter()
+    for jog in jogs:
+        pair = Pair(lib, *jog["init"], ramp=RAMP_EXACT)
+        for name, *args in [("jog", *jog["jog"]), ("move", -1000, *jog["move"]), ("move", 3, *jog["move"])]:
+            (py, py_writes), (c, c_writes) = pair.call(name, *args)
+            if (py, py_writes) != (c, c_writes):
+                mismatches.append(f"{jog} {name}{tuple(args)}: python {py} {py_writes}, C {c} {c_writes}")
+            results[f"{name} {py.removeprefix('STEPRAMP_')}"] += 1
+    print(sorted(results.items()))
+    assert not mismatches, f"{len(mismatches)} calls differ:\n" + "\n".join(mismatches[:5])
+    assert {"jog OK", "jog EGAP", "jog ETOOFAST", "jog EJOG_SPEED", "move OK"} <= set(results), results
+    assert results["jog OK"] >= RANDOM_COUNT // 3 and results["move OK"] >= RANDOM_COUNT // 2, results
+
+
+def test_exact_driver_checks_the_core_ramp(lib: ctypes.CDLL) -> None:
+    """stepramp_init_ramp, like StepRamp.check_id, refuses a core whose ID bit 15 (G_RAMP) is not the driver's ramp
+    (STEPRAMP_EID), and a ramp that is neither mode (STEPRAMP_ERAMP, as StepRamp's ValueError)."""
+    dev = CDev()
+    for core in (RAMP_AVR446, RAMP_EXACT):
+        lib.stepramp_fakebus_reset(FAKEBUS_BASE, ID_VALUE | core << ID_RAMP_BIT)
+        for ramp in (RAMP_AVR446, RAMP_EXACT):
+            rc = lib.stepramp_init_ramp(ctypes.byref(dev), FAKEBUS_BASE, 1e6, 200.0, 1, ramp)
+            assert DRIVER_RESULTS[rc] == ("STEPRAMP_OK" if ramp == core else "STEPRAMP_EID")
+            assert dev.version == ID_VALUE & 0x7FFF
+        want = "STEPRAMP_OK" if core == RAMP_AVR446 else "STEPRAMP_EID"
+        assert DRIVER_RESULTS[lib.stepramp_init(ctypes.byref(dev), FAKEBUS_BASE, 1e6, 200.0, 1)] == want
+    with pytest.raises(ValueError, match="ramp must be"):
+        StepRamp(FakeBank(), 1e6, 200.0, 1, 2)
+    assert DRIVER_RESULTS[lib.stepramp_init_ramp(ctypes.byref(dev), FAKEBUS_BASE, 1e6, 200.0, 1, 2)] == "STEPRAMP_ERAMP"
 
 
 def test_a_move_too_fast_for_the_step_gap(lib: ctypes.CDLL) -> None:

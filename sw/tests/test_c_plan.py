@@ -4,6 +4,11 @@
 The library is built with ``make -C sw/c`` (a missing gcc or make is a failure, not a skip), loaded with
 ctypes, and compared with the Python driver field by field on many random moves, on every named profile
 and on the invalid inputs of stepramp.sim.profiles: the same registers, or the same first error.
+
+The exact mode (ramp = RAMP_EXACT: stepramp_plan_move_ramp against plan_move(..., ramp=1)) likewise, on random moves
+designed around its limits (the ramp constants from 0 to past 2^48, the 256-clock speed limit) with a spoiled argument
+or ramp now and then, on EXACT_PROFILES, and exact.ramp_constant against stepramp_ramp_constant. Its random draws print
+their seed; STEPRAMP_SEED=<seed> replays them.
 """
 
 from __future__ import annotations
@@ -12,6 +17,7 @@ import ctypes
 import dataclasses
 import functools
 import math
+import os
 import random
 import re
 from collections import Counter
@@ -22,8 +28,19 @@ import pytest
 
 from c_abi import PLAN_HEADER, CPlan, log_uniform, run
 from stepramp.board import plan as pyplan
-from stepramp.board.plan import MAX_PRESCALE, MAX_STEPS, MoveInfo, decel_product, plan_move, plan_move_info
-from stepramp.sim.profiles import INVALID_INPUTS, PROFILES, design_args
+from stepramp.board.plan import (
+    MAX_PRESCALE,
+    MAX_STEPS,
+    MIN_INTERVAL_CLKS_EXACT,
+    RAMP_AVR446,
+    RAMP_EXACT,
+    MoveInfo,
+    decel_product,
+    plan_move,
+    plan_move_info,
+)
+from stepramp.models import exact
+from stepramp.sim.profiles import EXACT_PROFILES, INVALID_INPUTS, PROFILES, design_args
 
 # A substring of each ValueError message of plan.py -> the stepramp_err_t the C library returns for it.
 # Exactly one key matches any message; the C message (stepramp_strerror) contains the key as well.
@@ -43,7 +60,12 @@ ERROR_KEYS: dict[str, str] = {
     "speed in steps units is out of range": "STEPRAMP_ESPEED_UNITS",
     "f_tick in steps units is out of range": "STEPRAMP_EFTICK",
     "peak speed underflows": "STEPRAMP_EPEAK",
+    # the exact mode's: check_ramp (a code of its own) and exact.ramp_constant (a register overflow, as a delay's)
+    "ramp must be 0 (avr446) or 1 (exact)": "STEPRAMP_ERAMP",
+    "gives a ramp constant outside": "STEPRAMP_EOVERFLOW",
 }
+RAMP_ONLY = {"STEPRAMP_ERAMP"}
+"""The errors only a ramp argument gives (the AVR446 tests do not draw it)."""
 
 ARG_NAMES = ("steps", "accel", "decel", "speed", "spr", "fclk", "prescale")
 Move = dict[str, Any]
@@ -93,6 +115,11 @@ def load_library(build_dir: Path) -> ctypes.CDLL:
         ctypes.c_uint32,
     ]
     so.stepramp_plan_move_info.restype = ctypes.c_int
+    so.stepramp_plan_move_ramp.argtypes = [*so.stepramp_plan_move.argtypes, ctypes.c_uint32]
+    so.stepramp_plan_move_info_ramp.argtypes = [*so.stepramp_plan_move_info.argtypes, ctypes.c_uint32]
+    so.stepramp_plan_move_ramp.restype = so.stepramp_plan_move_info_ramp.restype = ctypes.c_int
+    so.stepramp_ramp_constant.argtypes = [ctypes.c_double, ctypes.POINTER(ctypes.c_uint64)]
+    so.stepramp_ramp_constant.restype = ctypes.c_int
     so.stepramp_strerror.argtypes = [ctypes.c_int]
     so.stepramp_strerror.restype = ctypes.c_char_p
     so.stepramp_decel_product.argtypes = [ctypes.c_int64]
@@ -111,17 +138,20 @@ def _bits(x: float) -> int | str:
     return x if isinstance(x, int) else float(x).hex()
 
 
+def _c_args(move: Move) -> tuple[Any, ...]:
+    """The arguments after the plan (and info) of stepramp_plan_move(_info), with the ramp of stepramp_plan_move_ramp
+    when the move names one."""
+    args = (move["steps"], *(float(move[k]) for k in ("accel", "decel", "speed", "spr", "fclk")), move["prescale"])
+    return (*args, move["ramp"]) if "ramp" in move else args
+
+
 def c_outcome_info(so: ctypes.CDLL, move: Move) -> tuple[Outcome, dict[str, int | str]]:
-    """The C library's plan (registers) or error name for a move, and its info (empty on error)."""
+    """The C library's plan (registers and ramp) or error name for a move, and its info (empty on error); a move with
+    a "ramp" goes to stepramp_plan_move_info_ramp."""
     out = CPlan()
     info = CInfo()
-    err = so.stepramp_plan_move_info(
-        ctypes.byref(out),
-        ctypes.byref(info),
-        move["steps"],
-        *(float(move[k]) for k in ("accel", "decel", "speed", "spr", "fclk")),
-        move["prescale"],
-    )
+    function = so.stepramp_plan_move_info_ramp if "ramp" in move else so.stepramp_plan_move_info
+    err = function(ctypes.byref(out), ctypes.byref(info), *_c_args(move))
     if err != 0:
         names = _error_names()
         return (names[err] if err < len(names) else f"unknown error code {err}"), {}
@@ -131,14 +161,11 @@ def c_outcome_info(so: ctypes.CDLL, move: Move) -> tuple[Outcome, dict[str, int 
 
 
 def c_outcome(so: ctypes.CDLL, move: Move) -> Outcome:
-    """The C library's plan (registers) or error name for a move (through stepramp_plan_move)."""
+    """The C library's plan (registers and ramp) or error name for a move (through stepramp_plan_move, or
+    stepramp_plan_move_ramp for a move with a "ramp")."""
     out = CPlan()
-    err = so.stepramp_plan_move(
-        ctypes.byref(out),
-        move["steps"],
-        *(float(move[k]) for k in ("accel", "decel", "speed", "spr", "fclk")),
-        move["prescale"],
-    )
+    function = so.stepramp_plan_move_ramp if "ramp" in move else so.stepramp_plan_move
+    err = function(ctypes.byref(out), *_c_args(move))
     if err != 0:
         names = _error_names()
         return names[err] if err < len(names) else f"unknown error code {err}"
@@ -153,9 +180,9 @@ def py_error_name(message: str) -> str:
 
 
 def py_outcome(move: Move) -> Outcome:
-    """The Python driver's plan (registers) or error name for a move."""
+    """The Python driver's plan (registers and ramp) or error name for a move."""
     try:
-        return plan_move(**move).to_dict()
+        return dataclasses.asdict(plan_move(**move))
     except ValueError as exc:
         return py_error_name(str(exc))
 
@@ -170,10 +197,20 @@ def py_outcome_info(move: Move) -> tuple[Outcome, dict[str, int | str]]:
     values["triangle"] = int(info.triangle)
     raw = dict.fromkeys(RAW_FIELDS, 0.0)
     if info.length >= 1:
-        ramp = pyplan._Ramp(info.length, info.a, info.d, info.v, info.f_tick)
-        raw |= pyplan.register_doubles(ramp, plan.sa, plan.sd, info.m0)
+        curve = pyplan._Ramp(info.length, info.a, info.d, info.v, info.f_tick)
+        if plan.ramp == RAMP_EXACT:  # _exact_plan's doubles: the exact intervals, and c0, cd0 of the ramp constants
+            raw |= {
+                "t_first": curve.interval(1),
+                "t_last": curve.interval(curve.length),
+                "t_sa": curve.interval(plan.sa),
+                "t_sd": curve.interval(plan.sd),
+                "t_accel_seed": curve.k_a,
+                "t_decel_seed": curve.k_d,
+            }
+        else:
+            raw |= pyplan.register_doubles(curve, plan.sa, plan.sd, info.m0)
         raw["t_cruise"] = info.f_tick / info.v
-    return plan.to_dict(), {name: _bits(value) for name, value in (values | raw).items()}
+    return dataclasses.asdict(plan), {name: _bits(value) for name, value in (values | raw).items()}
 
 
 # --------------------------------------------------------------------------------------------------------
@@ -203,13 +240,17 @@ def _random_prescale(rng: random.Random) -> int:
     return round(log_uniform(rng, 1.0, MAX_PRESCALE))
 
 
-def _designed_move(rng: random.Random) -> Move:
-    """A move designed in the tick domain like test_model's, over wider ranges (valid most of the time)."""
-    prescale = _random_prescale(rng)
+def _random_spr_fclk(rng: random.Random) -> tuple[float, float]:
     spr = rng.choice((24.0, 200.0, 400.0, 1000.0, 1600.0, 3200.0, 25600.0, 51200.0)) * rng.choice((1, 1.37))
     if rng.random() < 0.2:
         spr = log_uniform(rng, 24.0, 51200.0)
-    fclk = log_uniform(rng, 1e5, 2e8)
+    return spr, log_uniform(rng, 1e5, 2e8)
+
+
+def _designed_move(rng: random.Random) -> Move:
+    """A move designed in the tick domain like test_model's, over wider ranges (valid most of the time)."""
+    prescale = _random_prescale(rng)
+    spr, fclk = _random_spr_fclk(rng)
     # cruise period in ticks: mostly above the MIN_INTERVAL_CLKS limit, sometimes at or below it
     period = math.ceil(64 / prescale) * log_uniform(rng, 0.5, 1.0) + log_uniform(rng, 1e-3, 1e6)
     n_a = log_uniform(rng, 1e-3, 1e9)
@@ -353,8 +394,8 @@ def test_random_moves_bit_for_bit(lib: ctypes.CDLL) -> None:
             shapes["prescale 65535"] += py["prescale"] == MAX_PRESCALE
             shapes["|steps| 2^31-1"] += n == MAX_STEPS
     assert not mismatches, f"{len(mismatches)} of {len(moves)} moves differ:\n" + "\n".join(mismatches[:20])
-    # the random set covers every outcome and shape
-    assert set(outcomes) == {"STEPRAMP_OK", *ERROR_KEYS.values()}, outcomes
+    # the random set covers every outcome and shape (but the ramp's: no ramp argument here)
+    assert set(outcomes) == {"STEPRAMP_OK", *ERROR_KEYS.values()} - RAMP_ONLY, outcomes
     assert outcomes["STEPRAMP_OK"] >= len(moves) // 2, outcomes
     assert min(shapes.values()) >= 20, shapes
 
@@ -399,3 +440,151 @@ def test_huge_delays_overflow_in_both(lib: ctypes.CDLL) -> None:
     }
     assert c_outcome(lib, move) == "STEPRAMP_EOVERFLOW"
     assert py_outcome(move) == "STEPRAMP_EOVERFLOW"
+
+
+# --------------------------------------------------------------------------------------------------------
+# the exact mode (RAMP_EXACT)
+# --------------------------------------------------------------------------------------------------------
+
+EXACT_SEED = int(os.environ.get("STEPRAMP_SEED", "20261126"))
+EXACT_COUNT = 12_000
+_BAD_RAMPS = (2, 3, 255, 2**32 - 1)
+
+
+def _exact_designed_move(rng: random.Random) -> Move:
+    """A move designed for the exact mode: a cruise period from around its 256-clock limit up, and a first interval
+    c0 = 2 period sqrt(n_a) from below 0.044 ticks (a ramp constant of 0) to past 2^20 ticks (past 2^48), the decel
+    up to 1e4 times the accel either way."""
+    prescale = _random_prescale(rng)
+    spr, fclk = _random_spr_fclk(rng)
+    period = math.ceil(MIN_INTERVAL_CLKS_EXACT / prescale) * log_uniform(rng, 0.5, 1.0) + log_uniform(rng, 1e-3, 1e5)
+    c0 = log_uniform(rng, 0.02, 2.0**21)
+    n_a = (c0 / (2.0 * period)) ** 2
+    n_d = n_a * log_uniform(rng, 1e-4, 1e4)
+    return design_args(_random_steps(rng), period, n_a, n_d, spr, fclk, prescale)
+
+
+def random_exact_moves(seed: int, count: int) -> list[Move]:
+    """count moves with ramp RAMP_EXACT: designed for the exact mode (most), as random_moves draws them, spoiled, or
+    with a ramp that is neither mode."""
+    rng = random.Random(seed)
+    moves: list[Move] = []
+    while len(moves) < count:
+        r = rng.random()
+        if r < 0.55:
+            move = _exact_designed_move(rng)
+        elif r < 0.7:
+            move = _designed_move(rng)
+        elif r < 0.85:
+            move = _raw_move(rng)
+        else:
+            move = _spoil(rng, _exact_designed_move(rng) if rng.random() < 0.5 else _raw_move(rng))
+        move["ramp"] = rng.choice(_BAD_RAMPS) if rng.random() < 0.01 else RAMP_EXACT
+        moves.append(move)
+    return moves
+
+
+def _ramp_constant_cause(move: Move) -> bool:
+    """Whether plan_move refuses the move for its ramp constant (exact.ramp_constant's message)."""
+    try:
+        plan_move(**move)
+    except ValueError as exc:
+        return "gives a ramp constant outside" in str(exc)
+    return False
+
+
+def test_random_exact_moves_bit_for_bit(lib: ctypes.CDLL) -> None:
+    """stepramp_plan_move_info_ramp in exact mode against plan_move_info(..., ramp=RAMP_EXACT): every register, the
+    ramp, every double of the info, or the same first error; stepramp_plan_move_ramp gives the same."""
+    print(f"seed {EXACT_SEED} (STEPRAMP_SEED={EXACT_SEED} replays it)")
+    moves = random_exact_moves(EXACT_SEED, EXACT_COUNT)
+    outcomes: Counter[str] = Counter()
+    mismatches: list[str] = []
+    for move in moves:
+        py, py_info = py_outcome_info(move)
+        c, c_info = c_outcome_info(lib, move)
+        if py != c:
+            mismatches.append(_mismatch(move, py, c))
+        elif py_info != c_info:
+            diff = {k: (py_info[k], c_info[k]) for k in py_info if py_info[k] != c_info[k]}
+            mismatches.append(f"{move}: info differs (python, C): {diff}")
+        elif c_outcome(lib, move) != c:
+            mismatches.append(f"{move}: stepramp_plan_move_ramp differs from stepramp_plan_move_info_ramp")
+        if isinstance(py, dict):
+            outcomes["STEPRAMP_OK"] += 1
+            outcomes["OK, m0 < 1 (decel_seed still set)"] += py["steps"] >= 2 and py["steps"] - py["sd"] - 2 < 1
+            outcomes["OK, N <= 1"] += py["steps"] <= 1
+        else:
+            outcomes[py] += 1
+            outcomes["EOVERFLOW of a ramp constant"] += py == "STEPRAMP_EOVERFLOW" and _ramp_constant_cause(move)
+    print(f"{len(moves)} exact-mode moves: {sorted(outcomes.items())}")
+    assert not mismatches, f"{len(mismatches)} of {len(moves)} moves differ:\n" + "\n".join(mismatches[:20])
+    assert set(ERROR_KEYS.values()) | {"STEPRAMP_OK"} <= set(outcomes), outcomes
+    assert outcomes["STEPRAMP_OK"] >= 0.4 * len(moves), outcomes
+    assert min(outcomes[k] for k in ("EOVERFLOW of a ramp constant", "OK, m0 < 1 (decel_seed still set)")) >= 20
+
+
+def test_exact_profiles_bit_for_bit(lib: ctypes.CDLL) -> None:
+    """EXACT_PROFILES (the 64 profiles at 4 times the clock and PRESCALE) in exact mode: the same plan and info."""
+    for profile in EXACT_PROFILES:
+        move = profile.args() | {"ramp": RAMP_EXACT}
+        py, py_info = py_outcome_info(move)
+        assert isinstance(py, dict) and py["ramp"] == RAMP_EXACT, profile.name
+        assert c_outcome_info(lib, move) == (py, py_info), profile.name
+
+
+def test_ramp_constant_bit_for_bit(lib: ctypes.CDLL) -> None:
+    """stepramp_ramp_constant against exact.ramp_constant: c0 from 0 to past 2^20 ticks, around both ends of the
+    range, and ties (c0 * c0 * 256 ending in .5 after the double rounding: half to even in both)."""
+    rng = random.Random(EXACT_SEED)
+    print(f"seed {EXACT_SEED} (STEPRAMP_SEED={EXACT_SEED} replays it)")
+    values = [log_uniform(rng, 1e-3, 2.0**22) for _ in range(20_000)]
+    values += [math.sqrt(k / 256.0) * (1.0 + rng.uniform(-1e-15, 1e-15)) for k in (0.5, 1.0, 1.5, 2.0**48 - 1.0)]
+    values += [0.0, 0.0625, 2.0**20 - 1.0, 2.0**20, math.nextafter(2.0**20, 0.0)]
+    draws = (rng.uniform(2.0**19, 2.0**20 - 1.0) for _ in range(20_000))
+    ties = [c0 for c0 in draws if (c0 * c0 * 256.0) % 1.0 == 0.5]
+    assert len(ties) >= 100
+    mismatches = []
+    for c0 in values + ties:
+        try:
+            py: int | str = exact.ramp_constant(c0)
+        except ValueError:
+            py = "STEPRAMP_EOVERFLOW"
+        out = ctypes.c_uint64(0)
+        err = lib.stepramp_ramp_constant(c0, ctypes.byref(out))
+        c = out.value if err == 0 else _error_names()[err]
+        if py != c:
+            mismatches.append((c0.hex(), py, c))
+    assert not mismatches, mismatches[:10]
+    assert all(exact.ramp_constant(c0) % 2 == 0 for c0 in ties)  # half to even
+
+
+def test_exact_mode_constants_match_python() -> None:
+    """STEPRAMP_MIN_INTERVAL_CLKS_EXACT, STEPRAMP_RAMP_AVR446 / _EXACT and STEPRAMP_FRAC_EXACT are plan.py's and
+    exact.py's."""
+    text = PLAN_HEADER.read_text()
+
+    def define(name: str) -> int:
+        match = re.search(rf"#define {name} (\d+)u?\b", text)
+        assert match, name
+        return int(match.group(1))
+
+    assert define("STEPRAMP_MIN_INTERVAL_CLKS_EXACT") == MIN_INTERVAL_CLKS_EXACT
+    assert define("STEPRAMP_RAMP_AVR446") == RAMP_AVR446
+    assert define("STEPRAMP_RAMP_EXACT") == RAMP_EXACT
+    assert define("STEPRAMP_FRAC_EXACT") == exact.FRAC_EXACT
+
+
+def test_exact_mode_checks_the_ramp_first(lib: ctypes.CDLL) -> None:
+    """A ramp that is neither mode is refused before any other argument, in both; a plan for the exact mode with no
+    interval (N <= 1) still carries its ramp."""
+    move: Move = {"steps": 2**40, "accel": -1.0, "decel": 1.0, "speed": 1.0, "spr": 200.0, "fclk": 1e6, "prescale": 0}
+    for ramp in _BAD_RAMPS:
+        assert py_outcome(move | {"ramp": ramp}) == c_outcome(lib, move | {"ramp": ramp}) == "STEPRAMP_ERAMP"
+    assert py_outcome(move | {"ramp": RAMP_EXACT}) == c_outcome(lib, move | {"ramp": RAMP_EXACT}) == "STEPRAMP_EACCEL"
+    empty = move | {"steps": -1, "accel": 1.0, "prescale": 3, "ramp": RAMP_EXACT}
+    assert (
+        c_outcome(lib, empty)
+        == py_outcome(empty)
+        == {**dict.fromkeys(py_outcome(empty), 0), "steps": 1, "direction": 1, "prescale": 3, "ramp": RAMP_EXACT}
+    )

@@ -30,7 +30,7 @@ architecture sim of stepramp_plb_tb is
   constant C_STEP_COUNT : natural := 16#60#;
   constant C_UNMAPPED   : natural := 16#AC#;
 
-  constant C_ID_VALUE : std_logic_vector(31 downto 0) := x"5352_0006";
+  constant C_ID_VALUE : std_logic_vector(31 downto 0) := x"5352_0007";
 
   type t_reg_write is record
     offset : natural;

@@ -21,8 +21,8 @@ from dataclasses import dataclass
 from typing import Protocol
 
 from stepramp.board.change import Segment, plan_change
-from stepramp.board.plan import RAMP_AVR446, Plan, check_ramp, plan_move_info
-from stepramp.board.regmap import ERROR_CODES, ID_MAGIC, REGISTERS_BY_NAME, offset, split_wide
+from stepramp.board.plan import RAMP_AVR446, RAMP_EXACT, Plan, check_ramp, plan_move_info
+from stepramp.board.regmap import ERROR_CODES, ID_MAGIC, ID_RAMP_BIT, REGISTERS_BY_NAME, offset, split_wide
 
 STATE_NAMES = ("STOP", "ACCEL", "RUN", "DECEL")
 ERROR_NAMES = {code: name for name, (code, _) in ERROR_CODES.items()}
@@ -265,11 +265,19 @@ class StepRamp:
         self._segment_clear = False
 
     async def check_id(self) -> int:
-        """Read ID; raise StepRampError if this is not a stepramp core. Returns the version (major << 8 | minor)."""
+        """Read ID; raise StepRampError if this is not a stepramp core, or if it was built for the other ramp
+        arithmetic than this driver plans for (ID bit 15, G_RAMP). Returns the version (major << 8 | minor)."""
         raw = await self.access.read(offset("ID"))
         if raw >> 16 != ID_MAGIC:
             raise StepRampError(f"ID register reads {raw:#010x}: not a stepramp core at this address")
-        return raw & 0xFFFF
+        core_ramp = raw >> ID_RAMP_BIT & 1
+        if core_ramp != self.ramp:
+            names = {RAMP_AVR446: "AVR446 (G_RAMP = 0)", RAMP_EXACT: "exact (G_RAMP = 1)"}
+            raise StepRampError(
+                f"ID register reads {raw:#010x}: the core's ramp is {names[core_ramp]}, "
+                f"but this driver plans for {names[self.ramp]}"
+            )
+        return raw & 0x7FFF
 
     def plan(self, steps: int, accel: float, decel: float, speed: float) -> Plan:
         """Register values of a move in physical units (rad/s^2, rad/s); ValueError with the reason if invalid.

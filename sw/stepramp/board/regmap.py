@@ -80,10 +80,12 @@ REGISTERS: tuple[Register, ...] = tuple(
 
 REGISTERS_BY_NAME: dict[str, Register] = {r.name: r for r in REGISTERS}
 
-#: The ID register's reset value: 0x5352 ("SR") in bits 31:16, the version major.minor in 15:8 and 7:0.
+#: The ID register's reset value: 0x5352 ("SR") in bits 31:16, the version major.minor in 14:8 and 7:0, and in bit
+#: 15 the core's ramp arithmetic (G_RAMP; 0 in the reset value: a core built with G_RAMP = 1 reads ID_RAMP_BIT set).
 ID_VALUE = REGISTERS_BY_NAME["ID"].reset
 ID_MAGIC = ID_VALUE >> 16
-VERSION_MAJOR = (ID_VALUE >> 8) & 0xFF
+ID_RAMP_BIT = 15
+VERSION_MAJOR = (ID_VALUE >> 8) & 0x7F
 VERSION_MINOR = ID_VALUE & 0xFF
 
 #: Address bits the core decodes: the register window rounded up to a power of two (256 bytes).

@@ -118,9 +118,9 @@ def segment_runs(seg: Segment) -> Iterator[tuple[int, int]]:
 
 def exact_segment_runs(seg: Segment) -> Iterator[tuple[int, int]]:
     """segment_runs in exact mode (docs/algorithm.md, "Exact step times"): the same registers at the same intervals;
-    the up head's interval i is the ramp value of C_head = accel_seed from virtual position n0 + i - 1 to n0 + i, the
-    down head's from K - i to K - i + 1 steps before its rest (C_head = the decel's constant), the final decel's
-    interval i from L - i to L - i + 1 steps before the end (C_dec = decel_seed); the cruise as in the AVR446 mode."""
+    the up head's interval i is the ramp value of C_acc = accel_seed from virtual position n0 + i - 1 to n0 + i; every
+    decelerating ramp uses C_dec = decel_seed: the down head's interval i from K - i to K - i + 1 steps before its
+    rest, the final decel's from L - i to L - i + 1 steps before the end; the cruise as in the AVR446 mode."""
     endless = seg.length is None
     length = -1 if seg.length is None else seg.length
     sa, sd = seg.sa, (-1 if endless else seg.sd)
@@ -135,9 +135,10 @@ def exact_segment_runs(seg: Segment) -> Iterator[tuple[int, int]]:
             value = seg.c_sa
         elif i == sd:
             value = seg.c_sd
+        elif i < sa and head_down:
+            value = exact.value(seg.decel_seed, seg.head_index - i)
         elif i < sa:
-            x = seg.head_index - i if head_down else seg.head_index + i - 1
-            value = exact.value(seg.accel_seed, x)
+            value = exact.value(seg.accel_seed, seg.head_index + i - 1)
         elif not endless and i > sd:
             value = exact.value(seg.decel_seed, length - i)
         else:

@@ -40,11 +40,13 @@ def root(radicand: int) -> int:
 def ramp_constant(c0_ticks: float) -> int:
     """C = round(c0^2 * 2^(2F)) for a ramp whose first interval from rest is c0 ticks; ValueError when it does not
     fit C_WIDTH bits (the exact mode then needs a larger PRESCALE)."""
-    value = round(c0_ticks * c0_ticks * (1 << (2 * FRAC_EXACT)))
+    scaled = c0_ticks * c0_ticks * (1 << (2 * FRAC_EXACT))
+    value = round(scaled) if math.isfinite(scaled) else 1 << C_WIDTH
     if not 0 < value < 1 << C_WIDTH:
+        fix = "raise the prescale or the accel/decel" if value else "lower the prescale or the accel/decel"
         raise ValueError(
             f"exact ramp: c0 = {c0_ticks:.6g} ticks gives a ramp constant outside 1 .. 2^{C_WIDTH} - 1 "
-            f"(c0 must be below 2^{(C_WIDTH - 2 * FRAC_EXACT) // 2} ticks): raise the prescale or the accel/decel"
+            f"(c0 must be in 0.044 .. 2^{(C_WIDTH - 2 * FRAC_EXACT) // 2} ticks): {fix}"
         )
     return value
 

@@ -91,6 +91,10 @@ class CDriver:
         so, dev, st, plan = self.so, ctypes.POINTER(self.dev_t), ctypes.POINTER(self.status_t), self.plan_t
         sigs: dict[str, tuple[list[Any], Any]] = {
             "stepramp_init": ([dev, ctypes.c_size_t, ctypes.c_double, ctypes.c_double, ctypes.c_uint32], ctypes.c_int),
+            "stepramp_init_ramp": (
+                [dev, ctypes.c_size_t, ctypes.c_double, ctypes.c_double, ctypes.c_uint32, ctypes.c_uint32],
+                ctypes.c_int,
+            ),
             "stepramp_plan": ([dev, ctypes.POINTER(plan), ctypes.c_int64, *(ctypes.c_double,) * 3], ctypes.c_int),
             "stepramp_program": ([dev, ctypes.POINTER(plan)], ctypes.c_int),
             "stepramp_start": ([dev], None),

@@ -50,13 +50,13 @@ import cocotb
 from cocotb.triggers import ClockCycles, FallingEdge, First, ReadOnly, RisingEdge, SimTimeoutError, Timer, with_timeout
 from cocotb.utils import get_sim_time
 
-from stepramp.board.plan import Plan
+from stepramp.board.plan import REG_WIDTHS, Plan
 from stepramp.sim import coverage
 from stepramp.sim.clocking import CLK_PERIOD_NS, now_cycles, start_clock_and_reset
 from stepramp.sim.waves import LAYOUTS, missing_in, signal_paths
 
 #: Engine inputs driven from a move's register values: the Plan's fields are the engine's port names.
-INPUTS = tuple(field.name for field in dataclasses.fields(Plan))
+INPUTS = tuple(field.name for field in dataclasses.fields(Plan) if field.name in REG_WIDTHS)
 #: The segment's inputs (stepramp.board.change.Segment.registers), from a move's "segment" (0 when it has none).
 SEGMENT_INPUTS = ("head_down", "endless", "head_index", "run_stop", "head_prod")
 

@@ -113,10 +113,15 @@ def simulate(
             move.update(extras[i])
         moves.append(move)
     request.write_text(json.dumps({"moves": moves}))
+    ramps = {plan.ramp for plan in plans}
+    if len(ramps) > 1:
+        raise ValueError("the moves of one simulation must all be for the same ramp arithmetic (G_RAMP)")
+    ramp = ramps.pop() if ramps else 0
     run_cocotb(
         "stepramp_engine",
         "stepramp.sim.engine_bench",
         build_dir,
+        parameters={"G_RAMP": ramp} if ramp else None,
         waves=waves,
         extra_env={"STEPRAMP_SIM_REQUEST": str(request), "STEPRAMP_SIM_RESULT": str(result_file)},
         log_file=log_file,

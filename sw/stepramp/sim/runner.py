@@ -18,6 +18,8 @@ HDL_FILES: tuple[str, ...] = (
     "stepramp_divider.vhd",
     "stepramp_timer.vhd",
     "stepramp_next_delay.vhd",
+    "stepramp_isqrt.vhd",
+    "stepramp_next_delay_exact.vhd",
     "stepramp_precompute.vhd",
     "stepramp_engine.vhd",
     "stepramp_stepper.vhd",
@@ -38,6 +40,8 @@ HDL_FILES: tuple[str, ...] = (
 SYNTH_TOPS: dict[str, dict[str, int]] = {
     "stepramp_prio_enc": {"G_WIDTH": 32},
     "stepramp_divider": {"G_WIDTH": 32},
+    "stepramp_isqrt": {"G_WIDTH": 80},
+    "stepramp_next_delay_exact": {},
     "stepramp_timer": {"G_WIDTH": 16},
     "stepramp_precompute": {},
     "stepramp_engine": {},

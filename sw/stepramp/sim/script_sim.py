@@ -23,10 +23,10 @@ TOPS = {"plb": "stepramp_plb", "axil": "stepramp_axil"}
 
 
 def simulate_planned(
-    planned: Sequence[ScriptResult], build: Path, top: str = "plb", waves: Path | None = None
+    planned: Sequence[ScriptResult], build: Path, top: str = "plb", waves: Path | None = None, ramp: int = 0
 ) -> list[dict[str, Any]]:
-    """Play the planned scripts in one simulation (each from a reset); per script the RTL's {"edges", "positions",
-    "core_errors", "commits"}."""
+    """Play the planned scripts in one simulation (each from a reset) on a top built with G_RAMP = ramp (the scripts'
+    "ramp"); per script the RTL's {"edges", "positions", "core_errors", "commits"}."""
     build = build.resolve()
     build.mkdir(parents=True, exist_ok=True)
     request, result = build / "scripts.json", build / "scripts_result.json"
@@ -47,6 +47,7 @@ def simulate_planned(
         TOPS.get(top, top),
         "stepramp.sim.script_bench",
         build,
+        parameters={"G_RAMP": ramp} if ramp else None,
         waves=waves,
         extra_env={"STEPRAMP_SCRIPT_REQUEST": str(request), "STEPRAMP_SCRIPT_RESULT": str(result)},
         testcase="play_scripts",
@@ -61,8 +62,9 @@ def simulate_planned(
 def simulate_script(script: dict[str, Any], build: Path, top: str = "plb", waves: Path | None = None) -> dict[str, Any]:
     """One script on the RTL: {"edges", "positions", "rejected"}: the driver's refusals, then each error the core
     flagged as {"at", "op": "core", "reason"}."""
-    planned = plan_script(load_script(script))
-    res = simulate_planned([planned], build, top, waves)[0]
+    loaded = load_script(script)
+    planned = plan_script(loaded)
+    res = simulate_planned([planned], build, top, waves, loaded.ramp)[0]
     rejected = list(planned.rejected) + core_rejections(res["core_errors"])
     return {"edges": res["edges"], "positions": res["positions"], "rejected": rejected}
 

@@ -158,10 +158,12 @@ class RtlSession:
 
     def _run(self, env: dict[str, str]) -> None:
         try:
+            ramp = self.config.get("ramp", 0)
             results = run_cocotb(
                 "stepramp_plb",
                 "stepramp.sim.session",
                 self.build_dir,
+                parameters={"G_RAMP": ramp} if ramp else None,
                 waves=self.waves,
                 extra_env=env,
                 log_file=self.log_file,
@@ -293,7 +295,7 @@ if cocotb is not None:
                 raise SessionError(f"{what}: no end within its limit of {clocks} clocks of simulated time") from None
 
         bus = IpifMaster(dut, dut.clk, period_ps // 1000 or 1)
-        drv = StepRamp(bus, fclk=cfg["fclk"], spr=cfg["spr"], prescale=cfg["prescale"])
+        drv = StepRamp(bus, fclk=cfg["fclk"], spr=cfg["spr"], prescale=cfg["prescale"], ramp=cfg.get("ramp", 0))
 
         # the machine: MECHANICS with what the configuration's "mechanics" sets ({} for the defaults), or none
         mech: dict[str, Any] | None = None if cfg.get("mechanics") is None else {**MECHANICS, **cfg["mechanics"]}

@@ -28,7 +28,6 @@ POSITION after each, "rejected": the refused commands, "error"}: `model` from st
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import itertools
 import json
 import os
@@ -38,7 +37,7 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any, TextIO
 
-from stepramp.board.plan import plan_move
+from stepramp.board.plan import RAMPS, plan_move
 from stepramp.models.engine import edge_chunks
 from stepramp.models.engine import edges as model_edges
 from stepramp.tools.summary import summarise_edges, summarise_model
@@ -75,6 +74,11 @@ def _move_args(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--script", type=Path, help="run a command script (JSON) instead of one move; the move options are not taken"
     )
+    parser.add_argument(
+        "--ramp",
+        choices=sorted(RAMPS),
+        help="the ramp arithmetic (the core's G_RAMP): avr446 (default) or exact; sets a script's \"ramp\" too",
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -99,6 +103,7 @@ def build_parser() -> argparse.ArgumentParser:
     shell.add_argument("--model", action="store_true", help="run the bit-exact model instead of the RTL")
     shell.add_argument("--waves", type=Path, help="write the session's waveform (.ghw, or .fst)")
     shell.add_argument("--build", type=Path, help="simulation build directory (default: a temporary one)")
+    shell.add_argument("--ramp", choices=sorted(RAMPS), default="avr446", help="the core's ramp arithmetic (G_RAMP)")
     return parser
 
 
@@ -120,7 +125,8 @@ def plot_file(path: Path, png: Path | None) -> int:
     if pulses > PLOT_MAX_PULSES:
         return _plot_refusal(f"the move has {pulses} pulses, more than the {PLOT_MAX_PULSES} a plot draws")
     png = png or path.with_suffix(".png")
-    plot_move(move, png, model_edges=model_edges(plan_move(**move["inputs"])))
+    plan = plan_move(**move["inputs"], ramp=RAMPS[move.get("ramp", "avr446")])
+    plot_move(move, png, model_edges=model_edges(plan))
     print(png)
     return 0
 
@@ -139,20 +145,22 @@ def run_move(tool: str, args: argparse.Namespace) -> tuple[dict[str, Any], int, 
     """
     inputs = {k: getattr(args, k) for k in ("steps", "accel", "decel", "speed", "spr", "fclk", "prescale")}
     summary = bool(getattr(args, "summary", False))
+    ramp = args.ramp or "avr446"
     out: dict[str, Any] = {
         "tool": tool,
         "inputs": inputs,
+        **({"ramp": ramp} if ramp != "avr446" else {}),  # the default's JSON is the one it always was
         "registers": None,
         "summary" if summary else "edges": None if summary else [],
         "final_position": 0,
         "error": None,
     }
     try:
-        plan = plan_move(**inputs)
+        plan = plan_move(**inputs, ramp=RAMPS[ramp])
     except ValueError as exc:
         out["error"] = str(exc)
         return out, 2, []
-    out["registers"] = dataclasses.asdict(plan)
+    out["registers"] = plan.to_dict()
     if tool == "model":
         out["final_position"] = args.steps
         if summary:
@@ -214,6 +222,11 @@ def run_script(tool: str, args: argparse.Namespace) -> tuple[dict[str, Any], int
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         out["error"] = f"cannot read the script {args.script}: {exc}"
         return out, 2
+    if args.ramp is not None and isinstance(obj, dict):
+        if obj.get("ramp", args.ramp) != args.ramp:
+            out["error"] = f'--ramp {args.ramp} but the script says "ramp": {obj["ramp"]!r}'
+            return out, 2
+        obj["ramp"] = args.ramp
     out["script"] = obj
     from stepramp.board.multi_script import is_multi
 
@@ -323,7 +336,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "shell":
         from stepramp.tools.shell import main as shell_main
 
-        return shell_main(model=args.model, waves=args.waves, build=args.build)
+        return shell_main(model=args.model, waves=args.waves, build=args.build, ramp=RAMPS[args.ramp])
     if args.command in ("sim", "model"):
         refused = _check_options(args)
         if refused is not None:

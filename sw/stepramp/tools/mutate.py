@@ -78,6 +78,8 @@ SUITES: dict[str, list[str]] = {
     "stepramp_divider.vhd": ["tb/test_divider.py", "tb/test_next_delay.py", *_ENGINE[:3]],
     "stepramp_timer.vhd": ["tb/test_timer.py", *_ENGINE[:3]],
     "stepramp_next_delay.vhd": ["tb/test_next_delay.py", *_ENGINE[:6]],
+    "stepramp_isqrt.vhd": ["tb/test_isqrt.py", "tb/test_next_delay_exact.py"],
+    "stepramp_next_delay_exact.vhd": ["tb/test_next_delay_exact.py"],
     "stepramp_precompute.vhd": ["tb/test_precompute.py", *_ENGINE],
     "stepramp_engine.vhd": [*_ENGINE, *_PLB[:1]],
     "stepramp_stepper.vhd": ["tb/test_stepper.py", *_PLB],

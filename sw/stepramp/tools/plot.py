@@ -19,8 +19,15 @@ def _rates(times_s: list[float]) -> tuple[list[float], list[float]]:
     return mids, rates
 
 
-def plot_move(move: dict[str, Any], png: Path, model_edges: list[int] | None = None) -> None:
-    """Draw a `stepramp sim`/`model` JSON object's move to a PNG (needs matplotlib)."""
+def plot_move(
+    move: dict[str, Any],
+    png: Path,
+    model_edges: list[int] | None = None,
+    compare: dict[str, list[int]] | None = None,
+) -> None:
+    """Draw a `stepramp sim`/`model` JSON object's move to a PNG (needs matplotlib). compare: more models of the same
+    move by label, as pulse ticks (stepramp.models.engine.tick_times), drawn in the deviation panel (the other ramp
+    arithmetic, say)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -52,7 +59,20 @@ def plot_move(move: dict[str, Any], png: Path, model_edges: list[int] | None = N
         f"speed {inputs['speed']} rad/s, {inputs['spr']:g} steps/rev, f_tick {f_tick:g} Hz"
     )
     deviation = [(e - FIRST_PULSE_LATENCY) / prescale - ti for e, ti in zip(move["edges"], ideal_ticks, strict=False)]
-    ax_dev.plot(to_s, deviation, ".-", color="tab:blue", ms=2, lw=0.6)
+    ramp = move.get("ramp", "avr446")
+    ax_dev.plot(to_s, deviation, ".-", color="tab:blue", ms=2, lw=0.6, label=f"{move['tool']} ({ramp})")
+    for (label, ticks), color in zip((compare or {}).items(), ("tab:green", "tab:red", "tab:purple"), strict=False):
+        ax_dev.plot(
+            [t / f_tick for t in ticks],
+            [t - ti for t, ti in zip(ticks, ideal_ticks, strict=False)],
+            ".-",
+            color=color,
+            ms=2,
+            lw=0.6,
+            label=label,
+        )
+    if compare:
+        ax_dev.legend(loc="lower right", fontsize=8)
     ax_dev.axhline(0, color="0.6", lw=0.8)
     ax_dev.set_ylabel("pulse time - ideal (ticks)")
     ax_dev.set_xlabel("time (s)")

@@ -32,7 +32,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol, TextIO
 
 from stepramp.board.driver import StepRampError
-from stepramp.board.plan import MIN_INTERVAL_CLKS, Plan, plan_move
+from stepramp.board.plan import RAMP_AVR446, RAMP_EXACT, Plan, min_interval_clks, plan_move
 from stepramp.models.engine import edges as model_edges
 
 if TYPE_CHECKING:
@@ -45,6 +45,9 @@ SHELL_CONFIG: dict[str, Any] = {"fclk": 250e3, "spr": 400.0, "prescale": 1}
 
 #: The shell's session: its clock and motor, and the machine `home` works on (stepramp.sim.session.MECHANICS).
 SHELL_SESSION_CONFIG: dict[str, Any] = {**SHELL_CONFIG, "mechanics": {}}
+#: --ramp exact: the same 250 kHz tick from a 1 MHz clock (PRESCALE 4), so that the demo's 20 rad/s keeps the exact
+#: mode's MIN_INTERVAL_CLKS_EXACT (256 clocks per step).
+SHELL_EXACT_CONFIG: dict[str, Any] = {"fclk": 1e6, "spr": 400.0, "prescale": 4}
 
 #: AVR446's ranges (the speed's upper bound is this core's limit at the shell's clock, see speed_limit).
 ACCEL_RANGE = (71, 32000)
@@ -54,10 +57,11 @@ SPEED_MIN = 12
 MS_MAX = 60_000
 
 
-def speed_limit(fclk: float, spr: float, prescale: int) -> int:
-    """The highest speed (0.01 rad/s) the engine sustains: one step per MIN_INTERVAL_CLKS clocks."""
+def speed_limit(fclk: float, spr: float, prescale: int, ramp: int = RAMP_AVR446) -> int:
+    """The highest speed (0.01 rad/s) the engine sustains: one step per MIN_INTERVAL_CLKS clocks (_EXACT in exact
+    mode)."""
     alpha = 2 * math.pi / spr
-    shortest_ticks = math.ceil(MIN_INTERVAL_CLKS / prescale)
+    shortest_ticks = math.ceil(min_interval_clks(ramp) / prescale)
     return math.floor(100 * alpha * fclk / prescale / shortest_ticks)
 
 
@@ -91,12 +95,12 @@ class Backend(Protocol):
 class ModelBackend:
     """The bit-exact model in place of the RTL (no simulator)."""
 
-    def __init__(self, fclk: float, spr: float, prescale: int = 1) -> None:
-        self.fclk, self.spr, self.prescale = fclk, spr, prescale
+    def __init__(self, fclk: float, spr: float, prescale: int = 1, ramp: int = RAMP_AVR446) -> None:
+        self.fclk, self.spr, self.prescale, self.ramp = fclk, spr, prescale, ramp
         self.position = 0
 
     def move(self, steps: int, accel: float, decel: float, speed: float) -> Outcome:
-        plan = plan_move(steps, accel, decel, speed, self.spr, self.fclk, self.prescale)
+        plan = plan_move(steps, accel, decel, speed, self.spr, self.fclk, self.prescale, self.ramp)
         self.position += steps
         return Outcome(plan, model_edges(plan), self.position)
 
@@ -144,13 +148,16 @@ class CommandError(ValueError):
 class Shell:
     """The AVR446 demo's menu and command interface over a back end; output goes to `out`."""
 
-    def __init__(self, backend: Backend, out: TextIO, fclk: float, spr: float, prescale: int = 1) -> None:
+    def __init__(
+        self, backend: Backend, out: TextIO, fclk: float, spr: float, prescale: int = 1, ramp: int = RAMP_AVR446
+    ) -> None:
         self.backend = backend
         self.out = out
         self.accel, self.decel, self.speed, self.steps = 4000, 4000, 2000, 400
         self.position = 0
         self.config = {"spr": spr, "fclk": fclk, "prescale": prescale}
-        self.speed_max = speed_limit(fclk, spr, prescale)
+        self.ramp = ramp
+        self.speed_max = speed_limit(fclk, spr, prescale, ramp)
 
     def help_text(self) -> str:
         return "\n".join(
@@ -273,7 +280,7 @@ class Shell:
         args = (steps, accel / 100, decel / 100, speed / 100)
         if steps != 0:
             try:
-                plan_move(*args, **self.config)  # the driver's checks, before anything changes
+                plan_move(*args, **self.config, ramp=self.ramp)  # the driver's checks, before anything changes
             except ValueError as exc:
                 raise CommandError(str(exc)) from None
         self.steps, self.accel, self.decel, self.speed = steps, accel, decel, speed
@@ -317,7 +324,7 @@ class Shell:
         """Run commands as a script on the back end (the driver's refusals are reported, the session goes on)."""
         from stepramp.board.script import load_script, plan_script
 
-        script = {**self.config, "commands": list(commands)}
+        script = {**self.config, "ramp": "exact" if self.ramp == RAMP_EXACT else "avr446", "commands": list(commands)}
         try:
             planned = plan_script(load_script(script))
         except ValueError as exc:
@@ -347,14 +354,20 @@ class Shell:
                 self.out.flush()
 
 
-def main(model: bool = False, waves: Path | None = None, build: Path | None = None, stdin: TextIO | None = None) -> int:
+def main(
+    model: bool = False,
+    waves: Path | None = None,
+    build: Path | None = None,
+    stdin: TextIO | None = None,
+    ramp: int = RAMP_AVR446,
+) -> int:
     """`stepramp shell`: one simulation (or the model) for the whole session, commands from stdin."""
     if stdin is None:
         stdin = sys.stdin
         if isinstance(stdin, io.TextIOWrapper):
             stdin.reconfigure(errors="replace")  # bytes that are not text become a bad command, not a crash
     interactive = stdin.isatty()
-    cfg = SHELL_CONFIG
+    cfg = {**(SHELL_EXACT_CONFIG if ramp == RAMP_EXACT else SHELL_CONFIG), "ramp": ramp}
     if model:
         Shell(ModelBackend(**cfg), sys.stdout, **cfg).run(stdin, prompt=interactive)
         return 0
@@ -365,7 +378,8 @@ def main(model: bool = False, waves: Path | None = None, build: Path | None = No
     log = build_dir.resolve() / "sim.log"
     print(f"stepramp shell: starting one simulation of stepramp_plb for the session (log: {log})", file=sys.stderr)
     try:
-        with RtlSession(build_dir, config=SHELL_SESSION_CONFIG, waves=waves, log_file=log) as session:
+        session_cfg = {**SHELL_SESSION_CONFIG, **cfg}
+        with RtlSession(build_dir, config=session_cfg, waves=waves, log_file=log) as session:
             Shell(RtlBackend(session), sys.stdout, **cfg).run(stdin, prompt=interactive)
     except SessionError as exc:
         cause = f" ({exc.__cause__!r})" if exc.__cause__ is not None else ""

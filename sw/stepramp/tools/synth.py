@@ -14,6 +14,7 @@ and build/synth/report.md.
 
     python -m stepramp.tools.synth [--out DIR] [--no-pnr] [--record] [--docs] [TOP ...]
 
+Both single-axis tops are reported in the exact ramp mode too (`stepramp_plb@exact`, `stepramp_axil@exact`: G_RAMP = 1).
 The multi-axis top is reported at 1, 2 and 4 axes: `stepramp_multi_plb@N` is stepramp_multi_plb with G_AXES = N
 (VARIANTS; each in a folder of its own under --out, no per-entity fmax), and the markdown ends with the cost of one
 more axis, read off between the smallest and the largest count.
@@ -47,12 +48,15 @@ BASELINE = Path(__file__).resolve().parents[3] / "scripts" / "synth_baseline.jso
 #: The multi-axis top at these axis counts, so that the cost of one more axis reads off the report.
 MULTI_AXES = (1, 2, 4)
 
-#: Report names of a top at other generics than SYNTH_TOPS's: name -> (entity, generics).
+#: Report names of a top at other generics than SYNTH_TOPS's: name -> (entity, generics). `@exact`: the exact ramp
+#: (G_RAMP = 1, docs/algorithm.md "Exact step times") beside the default AVR446 recurrence.
 VARIANTS: dict[str, tuple[str, dict[str, int]]] = {
-    f"stepramp_multi_plb@{n}": ("stepramp_multi_plb", {"G_AXES": n}) for n in MULTI_AXES
+    "stepramp_plb@exact": ("stepramp_plb", {"G_RAMP": 1}),
+    "stepramp_axil@exact": ("stepramp_axil", {"G_RAMP": 1}),
+    **{f"stepramp_multi_plb@{n}": ("stepramp_multi_plb", {"G_AXES": n}) for n in MULTI_AXES},
 }
 
-#: The tops of the report (the peripheral as users instantiate it), then the multi-axis variants.
+#: The tops of the report (the peripheral as users instantiate it, in both ramp modes), then the multi-axis variants.
 REPORT_TOPS = ("stepramp_plb", "stepramp_axil", *VARIANTS)
 
 #: The clock nextpnr is asked for: the goal (issue 12). nextpnr stops improving timing once a design meets its

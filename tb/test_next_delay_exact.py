@@ -1,0 +1,345 @@
+# SPDX-License-Identifier: MIT
+"""stepramp_next_delay_exact alone: every answer's value and latency against the model
+(stepramp.models.exact_unit.NextDelayExact: values from stepramp.models.exact, latencies from the documented
+formulas, fresh msb(x) + L(C x) + L(C (x + 1)) + 3 or continued L(radicand) + 2, and the continuation rule), with
+busy, ans_valid and the held answer checked in every clock of every request.
+
+* random_requests: random requests (accel and decel, plain, seed and alternative; x of every bit length with 0 and
+  2^31 - 1, C of every bit length with 0 and 2^48 - 1; about half of them the next index of the kept run, so that
+  runs continue and break), back to back (req held high into the answer cycle) or after a pause, the inputs random
+  while busy (ignored). The seed is printed and replays the run: NEXT_DELAY_EXACT_SEED=<seed> pytest
+  tb/test_next_delay_exact.py.
+* long_runs: runs of 200 consecutive indices up (accel) and down (decel), with alternatives interleaved that must
+  not break them (each run's answers after the first are all continued: one square root each, seen in the
+  latency); up to 2^31 - 1 and down to 0, then the index on the other side of the range, which must be fresh.
+* flush_drops_the_request: a flush (or a reset) at the sampling edge, during the multiply or a root, at the edge
+  before the answer and at the answer's own edge: no answer, busy '0' after it, the previous answer held, and the
+  next request, the next index of the run the flush forgot, is fresh (its latency) and right.
+"""
+
+from __future__ import annotations
+
+import os
+import random
+from dataclasses import dataclass, replace
+from typing import Any
+
+from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge
+
+from stepramp.models.exact_unit import FRESH_WORST, ExactRequest, NextDelayExact, fresh_latency
+from stepramp.sim.runner import run_cocotb
+from tbutil import build_dir, cocotb, env_int, start_clock_and_reset
+
+SEED_ENV = "NEXT_DELAY_EXACT_SEED"
+X_BITS = 31
+C_BITS = 48
+X_MAX = (1 << X_BITS) - 1
+C_MAX = (1 << C_BITS) - 1
+#: Random requests of random_requests.
+N_REQUESTS = env_int("N_REQUESTS", 1500)
+#: Edges an answer may take before the bench gives up on it: more than the longest (FRESH_WORST).
+ANSWER_LIMIT = FRESH_WORST + 8
+#: Simulated time of a request at the longest latency with the longest pause (10 ns clock), in us.
+US_PER_REQUEST = (ANSWER_LIMIT + 6) * 10 / 1000
+
+
+@dataclass(frozen=True)
+class Step:
+    """A request and the idle cycles before it (0: req stays '1' from the previous answer's cycle on)."""
+
+    req: ExactRequest
+    gap: int = 1
+
+
+def random_c(rng: random.Random) -> int:
+    return rng.choice((0, C_MAX, rng.getrandbits(rng.randint(0, C_BITS))))
+
+
+def random_x(rng: random.Random) -> int:
+    return rng.choice((0, X_MAX, rng.getrandbits(rng.randint(0, X_BITS)), rng.getrandbits(rng.randint(0, X_BITS))))
+
+
+def drive(dut: Any, req: ExactRequest) -> None:
+    dut.req_seed.value = int(req.seed)
+    dut.req_decel.value = int(req.decel)
+    dut.req_alt.value = int(req.alt)
+    dut.req_index.value = req.x
+    dut.c_head.value = req.c_head
+    dut.c_dec.value = req.c_dec
+
+
+def drive_garbage(dut: Any, rng: random.Random) -> None:
+    """Random inputs while the unit is busy: it must ignore them."""
+    bits = rng.getrandbits(3)
+    garbage = ExactRequest(
+        bool(bits & 1),
+        rng.getrandbits(X_BITS),
+        rng.getrandbits(C_BITS),
+        rng.getrandbits(C_BITS),
+        bool(bits & 2),
+        bool(bits & 4),
+    )
+    drive(dut, garbage)
+
+
+def answer_now(dut: Any) -> tuple[int, int, int]:
+    return int(dut.ans_value.value), int(dut.ans_rem.value), int(dut.ans_ovf.value)
+
+
+def flags(dut: Any) -> tuple[int, int]:
+    return int(dut.busy.value), int(dut.ans_valid.value)
+
+
+class Bench:
+    """The unit, its model, and the answer it holds."""
+
+    def __init__(self, dut: Any, rng: random.Random) -> None:
+        self.dut = dut
+        self.rng = rng
+        self.model = NextDelayExact()
+        self.held = 0  # ans_value after reset: 0
+        self.failures: list[str] = []
+        self.counts = {"answers": 0, "continued": 0, "held_req": 0, "max_latency": 0}
+
+    def fail(self, text: str) -> None:
+        self.failures.append(text)
+
+    async def reset(self) -> None:
+        self.dut.req.value = 0
+        self.dut.flush.value = 0
+        drive(self.dut, ExactRequest(False, 0, 0, 0))
+        await start_clock_and_reset(self.dut.clk, self.dut.rst)
+        await FallingEdge(self.dut.clk)
+
+    async def idle(self, cycles: int) -> None:
+        """req '0' for this many cycles (from a falling edge to a falling edge): nothing moves."""
+        self.dut.req.value = 0
+        for _ in range(cycles):
+            drive_garbage(self.dut, self.rng)
+            await FallingEdge(self.dut.clk)
+            if flags(self.dut) != (0, 0) or answer_now(self.dut) != (self.held, 0, 0):
+                self.fail(f"idle: busy, ans_valid {flags(self.dut)}, answer {answer_now(self.dut)} (held {self.held})")
+
+    async def play(self, steps: list[Step]) -> list[bool]:
+        """Play the requests from a falling edge with the unit idle; returns the model's verdict on each (continued
+        or fresh: what the request tests; the RTL's path shows in its latency, which must be the model's).
+
+        Request i is driven at a falling edge and sampled by the next rising edge e. In the cycle after edge e + k,
+        busy must be '1', ans_valid '0' and the previous answer held for k < latency; at k = latency ans_valid is
+        '1' (one cycle), busy '0', and the answer the model's. A request with gap 0 is driven in that cycle (req
+        held high), so the next edge samples it.
+        """
+        dut = self.dut
+        continued: list[bool] = []
+        for i, step in enumerate(steps):
+            if step.gap:
+                await self.idle(step.gap)
+            else:
+                self.counts["held_req"] += 1
+            if flags(dut) != (0, int(step.gap == 0 and i > 0)):  # gap 0: the previous answer's cycle
+                self.fail(f"before {step.req}: busy, ans_valid {flags(dut)}")
+            drive(dut, step.req)
+            dut.req.value = 1
+            expect = self.model.request(step.req)
+            await RisingEdge(dut.clk)  # the sampling edge e
+            latency = None
+            for k in range(ANSWER_LIMIT):
+                await FallingEdge(dut.clk)  # the cycle after edge e + k
+                busy, valid = flags(dut)
+                if valid:
+                    latency = k
+                    break
+                if not busy or answer_now(dut) != (self.held, 0, 0):
+                    self.fail(f"{step.req}, cycle after e + {k}: busy {busy}, answer {answer_now(dut)} not held")
+                drive_garbage(dut, self.rng)
+                dut.req.value = self.rng.getrandbits(1)
+            if latency is None:
+                self.fail(f"{step.req}: no answer within {ANSWER_LIMIT} edges (model: {expect})")
+                break
+            got = answer_now(dut)
+            if flags(dut) != (0, 1) or got != (expect.value, 0, 0) or latency != expect.latency:
+                self.fail(
+                    f"{step.req}: busy {flags(dut)[0]}, value {got[0]:#x} rem {got[1]} ovf {got[2]}, latency "
+                    f"{latency}; model: value {expect.value:#x}, latency {expect.latency} "
+                    f"({'continued' if expect.continued else 'fresh'})"
+                )
+            self.held = expect.value
+            continued.append(expect.continued)
+            self.counts["answers"] += 1
+            self.counts["continued"] += expect.continued
+            self.counts["max_latency"] = max(self.counts["max_latency"], latency)
+            dut.req.value = 0
+            if len(self.failures) > 20:
+                break
+        await self.idle(1)
+        return continued
+
+
+def random_step(model: NextDelayExact, rng: random.Random) -> Step:
+    """A random request; about half of them the next index of the kept run (with the run's constant)."""
+    decel = rng.random() < 0.5
+    req = ExactRequest(decel, random_x(rng), random_c(rng), random_c(rng), rng.random() < 0.1, rng.random() < 0.15)
+    if model.valid and rng.random() < 0.5:
+        x = model.x_lo + (-1 if model.decel else 1)
+        if 0 <= x <= X_MAX:
+            req = replace(req, decel=model.decel, x=x, seed=rng.random() < 0.05, alt=rng.random() < 0.1)
+    if model.continues(req):  # the run's constant goes on (the contract: it changes only with a flush)
+        req = replace(req, c_dec=model.constant) if req.decel else replace(req, c_head=model.constant)
+    return Step(req, rng.choice((0, 0, 1, 2, 5)))
+
+
+@cocotb.test(timeout_time=round(N_REQUESTS * US_PER_REQUEST) + 50, timeout_unit="us")
+async def random_requests(dut) -> None:
+    """Random requests, back to back or after a pause: value, rem, ovf, latency and the port timing of each."""
+    seed = int(os.environ[SEED_ENV])
+    dut._log.info("%s=%d", SEED_ENV, seed)
+    rng = random.Random(seed)
+    bench = Bench(dut, rng)
+    await bench.reset()
+    planner = NextDelayExact()  # the model ahead of the bench's, to draw requests that continue
+    steps = []
+    for _ in range(N_REQUESTS):
+        steps.append(random_step(planner, rng))
+        planner.request(steps[-1].req)
+    cont = await bench.play(steps)
+    dut._log.info("%s", bench.counts)
+    assert not bench.failures, f"{SEED_ENV}={seed}:\n" + "\n".join(bench.failures)
+    assert bench.counts["answers"] == len(steps)
+    assert bench.counts["max_latency"] == FRESH_WORST, bench.counts  # x = 2^31 - 1 and C = 2^48 - 1, fresh
+    # the draw covers what it claims: fresh and continued of both kinds, seeds and alternatives, the range ends
+    reqs = [s.req for s in steps]
+    for what, n in {
+        "accel continued": sum(c and not r.decel for c, r in zip(cont, reqs, strict=True)),
+        "decel continued": sum(c and r.decel for c, r in zip(cont, reqs, strict=True)),
+        "fresh": cont.count(False),
+        "seed": sum(r.seed for r in reqs),
+        "alt": sum(r.alt for r in reqs),
+        "x = 0": sum(r.x == 0 for r in reqs),
+        "x = 2^31 - 1": sum(r.x == X_MAX for r in reqs),
+        "C = 0": sum(r.constant == 0 for r in reqs),
+        "C = 2^48 - 1": sum(r.constant == C_MAX for r in reqs),
+        "held": bench.counts["held_req"],
+    }.items():
+        assert n > 0, f"no request of the kind '{what}'"
+
+
+def run(c_head: int, c_dec: int, decel: bool, xs: list[int], rng: random.Random, alt_every: int) -> list[Step]:
+    """Requests for the indices xs of one kind, an alternative (random kind, index and constants) after every
+    alt_every-th of them, back to back or after a short pause; the first one a seed."""
+    steps: list[Step] = []
+    for i, x in enumerate(xs):
+        steps.append(Step(ExactRequest(decel, x, c_head, c_dec, seed=i == 0), rng.choice((0, 1, 2))))
+        if i % alt_every == alt_every - 1:
+            alt = ExactRequest(rng.random() < 0.5, random_x(rng), random_c(rng), random_c(rng), alt=True)
+            steps.append(Step(alt, rng.choice((0, 1))))
+    return steps
+
+
+@cocotb.test(timeout_time=3000, timeout_unit="us")
+async def long_runs(dut) -> None:
+    """Runs of 200 indices up and down, alternatives interleaved: every answer after a run's first is continued."""
+    seed = int(os.environ[SEED_ENV])
+    rng = random.Random(seed + 1)
+    bench = Bench(dut, rng)
+    await bench.reset()
+    # (C of the run, the first index, kind): a ramp from rest, a run up to the top of the index range, a run down to
+    # 0, one down from the top, one up from a random index; C small, random and the largest
+    plans = [
+        (rng.getrandbits(20) | 1, 0, False),
+        (C_MAX, X_MAX - 199, False),
+        (rng.getrandbits(48), 199, True),
+        (C_MAX, X_MAX, True),
+        (rng.getrandbits(36), rng.getrandbits(24) + 200, False),
+    ]
+    for c, first, decel in plans:
+        xs = [first - i for i in range(200)] if decel else [first + i for i in range(200)]
+        steps = run(c, c ^ 0x5A5A, decel, xs, rng, rng.choice((3, 5, 7)))
+        cont = await bench.play(steps)
+        # play() holds each answer to the model's latency; the model's verdicts say what the run tests: the run's
+        # own requests (not the alternatives) the seed fresh, every later one continued
+        own = [k for k, s in zip(cont, steps, strict=True) if not s.req.alt]
+        assert own == [False] + [True] * 199, f"the run from {first} does not continue as it should in the model"
+        # past the end of the index range (no wrap), or a gap of one index: fresh
+        beyond = {(False, X_MAX): 0, (True, 0): X_MAX}.get((decel, xs[-1]), xs[-1] + (-2 if decel else 2))
+        assert await bench.play([Step(ExactRequest(decel, beyond, c, c ^ 0x5A5A), 1)]) == [False]
+        dut.flush.value = 1  # the segment ends: the engine flushes
+        await FallingEdge(dut.clk)
+        dut.flush.value = 0
+        bench.model.flush()
+    assert not bench.failures, f"{SEED_ENV}={seed}:\n" + "\n".join(bench.failures)
+    assert bench.counts["continued"] == 5 * 199, bench.counts
+
+
+@cocotb.test(timeout_time=2000, timeout_unit="us")
+async def flush_drops_the_request(dut) -> None:
+    """A flush (or a reset) at the sampling edge or while the answer is being computed: no answer, busy '0' after it,
+    the previous answer held, and the run forgotten: the next index of the run, asked right after the flush or after
+    a pause, is answered fresh."""
+    seed = int(os.environ[SEED_ENV])
+    rng = random.Random(seed + 2)
+    bench = Bench(dut, rng)
+    await bench.reset()
+    cases = 0
+    for trial in range(40):
+        port = "rst" if trial % 8 == 7 else "flush"
+        decel = bool(trial % 2)
+        c = rng.getrandbits(rng.randint(1, C_BITS)) | 1
+        x0 = rng.getrandbits(rng.randint(2, X_BITS - 1)) + 3  # x0 +/- 3 is an index
+        step = -1 if decel else 1
+        # a run of two sets the kept state up; the request to drop continues it or is fresh
+        await bench.play([Step(ExactRequest(decel, x0, c, c, seed=True)), Step(ExactRequest(decel, x0 + step, c, c))])
+        if trial % 3:
+            req = ExactRequest(decel, x0 + 2 * step, c, c)
+            nxt = ExactRequest(decel, x0 + 3 * step, c, c)
+        else:
+            req = ExactRequest(bool(rng.getrandbits(1)), random_x(rng), random_c(rng), random_c(rng))
+            nxt = ExactRequest(decel, x0 + 2 * step, c, c)
+        latency = _latency(bench.model, req)
+        # the flush edge, counted from the sampling edge e: e itself, e + 1, inside, the edge before the answer, the
+        # answer's own edge
+        at = (0, 1, rng.randint(1, latency - 1), latency - 1, latency)[trial % 5]
+        drive(dut, req)
+        dut.req.value = 1
+        if at == 0:
+            getattr(dut, port).value = 1
+        await RisingEdge(dut.clk)
+        await FallingEdge(dut.clk)
+        dut.req.value = 0
+        if at:
+            await ClockCycles(dut.clk, at - 1, rising=False)
+            getattr(dut, port).value = 1
+            await FallingEdge(dut.clk)
+        getattr(dut, port).value = 0
+        bench.model.flush()
+        if port == "rst":
+            bench.held = 0  # a reset clears the answer
+        what = f"{port} at e + {at} of {req} (answer due at e + {latency})"
+        if flags(dut) != (0, 0) or answer_now(dut) != (bench.held, 0, 0):
+            bench.fail(f"{what}: busy, ans_valid {flags(dut)}, answer {answer_now(dut)} after it")
+        # nothing comes later either (idle checks every cycle), then the next index of the forgotten run: fresh
+        pause = rng.choice((0, latency + 2))
+        if pause:
+            await bench.idle(pause)
+        # play() holds the answer to the model's latency, fresh here (a continued answer would come earlier)
+        assert _latency(bench.model, nxt) == fresh_latency(nxt.constant, nxt.x)
+        await bench.play([Step(nxt, 1 if pause else 0)])
+        cases += 1
+    assert not bench.failures, f"{SEED_ENV}={seed}:\n" + "\n".join(bench.failures)
+    assert cases == 40
+
+
+def _latency(model: NextDelayExact, req: ExactRequest) -> int:
+    """The latency the request would have, without changing the model."""
+    return replace(model).request(req).latency
+
+
+def test_next_delay_exact() -> None:
+    """The three cocotb tests above in one simulation; the seed is random unless NEXT_DELAY_EXACT_SEED is set."""
+    seed = int(os.environ.get(SEED_ENV, random.SystemRandom().randrange(1 << 32)))
+    print(f"stepramp_next_delay_exact: {SEED_ENV}={seed}")
+    run_cocotb(
+        "stepramp_next_delay_exact",
+        "test_next_delay_exact",
+        build_dir("next_delay_exact"),
+        extra_env={SEED_ENV: str(seed), "N_REQUESTS": str(N_REQUESTS)},
+    )
