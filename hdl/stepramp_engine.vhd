@@ -104,8 +104,9 @@ architecture rtl of stepramp_engine is
   signal p_c_sa        : unsigned(47 downto 0);
   signal p_sd          : unsigned(30 downto 0);
   signal p_c_sd        : unsigned(47 downto 0);
-  signal p_accel_seed0 : std_logic;             -- integer part of accel_seed = 0 (the seed is latched by the precompute)
+  signal p_accel_seed0 : std_logic;             -- seed_zero(accel_seed) (the seed is latched by the precompute)
   signal p_decel_seed  : unsigned(47 downto 0);
+  signal p_decel_seed0 : std_logic;             -- seed_zero(decel_seed)
   signal p_cruise      : unsigned(63 downto 0);
   signal p_stop_ratio  : unsigned(31 downto 0); -- accel / decel, Q16.16
   signal p_head_down   : std_logic;
@@ -230,6 +231,24 @@ architecture rtl of stepramp_engine is
 
   end function int_zero;
 
+  -- A seed that cannot give a ramp value: its integer part is 0 (AVR446: a Q32.16 value below one tick), or it is 0
+  -- (the exact ramp: a ramp constant c0^2 * 2^8 is below 2^16 for any c0 under 16 ticks).
+  function seed_zero (
+    v : std_logic_vector(47 downto 0)
+  ) return std_logic is
+  begin
+
+    if (G_RAMP = 1) then
+      if (unsigned(v) = 0) then
+        return '1';
+      end if;
+      return '0';
+    end if;
+
+    return int_zero(v);
+
+  end function seed_zero;
+
 begin
 
   state_name <= t_state_name'val(to_integer(unsigned(state_r)));
@@ -352,7 +371,7 @@ begin
           v_chk := C_ERR_CRUISE;
         elsif ((p_sa(30 downto 2) /= 0 or p_sa(1 downto 0) = "11") and p_accel_seed0 = '1') then
           v_chk := C_ERR_ACCEL_SEED;
-        elsif (v_fin and p_l_sd(30 downto 1) /= 0 and p_decel_seed(47 downto 16) = 0) then
+        elsif (v_fin and p_l_sd(30 downto 1) /= 0 and p_decel_seed0 = '1') then
           v_chk := C_ERR_DECEL_SEED;
         elsif ((p_head_down = '1' and p_k_sa(31) = '1') or (p_head_down = '0' and p_n0_sa(31) = '1')) then
           v_chk := C_ERR_SEGMENT;
@@ -516,8 +535,9 @@ begin
       p_c_sa        <= unsigned(c_sa);
       p_sd          <= unsigned(sd);
       p_c_sd        <= unsigned(c_sd);
-      p_accel_seed0 <= int_zero(accel_seed);
+      p_accel_seed0 <= seed_zero(accel_seed);
       p_decel_seed  <= unsigned(decel_seed);
+      p_decel_seed0 <= seed_zero(decel_seed);
       p_cruise      <= unsigned(cruise);
       p_stop_ratio  <= unsigned(stop_ratio);
       -- The segment (head_index and head_prod go to the precompute only), and its check's two sums.

@@ -10,7 +10,8 @@
   sustains at PRESCALE 1.
 * test_exact_engine_segments: segments from START in exact mode (an up head from n0 > 0, a down head, an endless
   jog) with soft stops in the head and in the cruise (the run stop's c_sd), and a move whose soft stop comes at the
-  ACCEL / RUN junction: every edge as segment_edges / edges_with_stop say.
+  ACCEL / RUN junction: every edge as segment_edges / edges_with_stop say. The parameter check: ramp constants below
+  2^16 (c0 under 16 ticks) run, a ramp constant of 0 is refused with ACCEL_SEED / DECEL_SEED (no pulse).
 """
 
 from __future__ import annotations
@@ -193,15 +194,24 @@ def test_exact_engine_segments() -> None:
                 edges_with_stop(move, "soft", edges[pulse]),
             )
         )
+    # the parameter check in exact mode: a ramp constant below 2^16 (c0 under 16 ticks) is valid, 0 is not
+    small = plan_move(**next(p for p in EXACT_PROFILES if p.name == "trap_prescale_1000_neg").args(), ramp=RAMP_EXACT)
+    assert 0 < small.accel_seed < Q16 and 0 < small.decel_seed < Q16
+    runs.append(("move with ramp constants below 2^16", small, {}, None, model_edges(small)))
+    codes = [0] * len(runs)
+    for name in ("accel_seed", "decel_seed"):
+        bad = Plan(**{**move.to_dict(), name: 0, "ramp": RAMP_EXACT})
+        runs.append((f"move with {name} 0", bad, {}, None, []))
+        codes.append(ERR[name.upper()])
     results = simulate(
         [r[1] for r in runs],
         build_dir("engine_exact_segments"),
         stops=[r[3] for r in runs],
         extras=[{"segment": r[2]} for r in runs],
-        budgets=[r[4][-1] + 3000 for r in runs],  # a segment's budget from its own edges (not the plan's STEPS)
+        budgets=[(r[4][-1] if r[4] else 0) + 3000 for r in runs],  # a segment's budget from its own edges
     )
     assert len(results) == len(runs)
     problems: list[str] = []
-    for (label, *_, want), res in zip(runs, results, strict=True):
-        problems += [f"{label}: {p}" for p in move_problems(res, want)]
+    for (label, *_, want), code, res in zip(runs, codes, results, strict=True):
+        problems += [f"{label}: {p}" for p in move_problems(res, want, code=code)]
     assert not problems, "\n".join(problems)

@@ -5,7 +5,7 @@ The judge is stepramp.models.ideal (square roots in doubles: IdealMove for moves
 the continuation of a soft stop), never the model's own arithmetic. The model (stepramp.models.engine with plans
 whose ramp is RAMP_EXACT) gives the tick of each pulse; the ideal gives its exact time.
 
-* the 64 profiles (EXACT_PROFILES: the same ticks, at 4 times the clock and PRESCALE) and 1,000 random moves;
+* the 64 profiles (EXACT_PROFILES: the same ticks, at 1 to 4 times the clock and PRESCALE) and 1,000 random moves;
 * soft stops decided at pulses of every phase of the profiles and of random moves;
 * random changes (up and down heads, positioning and endless segments, from any carried fraction) and the soft stops
   decided in them.

@@ -246,16 +246,34 @@ def exact_plan(
 
 
 EXACT_CLOCK_FACTOR = 4
-"""The profiles in exact mode run from a clock EXACT_CLOCK_FACTOR times faster with a PRESCALE as many times larger:
-the same ticks (and so the same tick-domain plan but PRESCALE), every interval EXACT_CLOCK_FACTOR times as many
-clocks, so that the fastest ones (64 clocks) keep the exact mode's MIN_INTERVAL_CLKS_EXACT = 256."""
+"""The largest factor exact_profile needs: the fastest profiles' 64-clock intervals times 4 keep the exact mode's
+MIN_INTERVAL_CLKS_EXACT = 256."""
 
 
-def exact_profile(profile: Profile) -> Profile:
-    """The profile as the exact-mode regression runs it (EXACT_CLOCK_FACTOR)."""
-    k = EXACT_CLOCK_FACTOR
+def exact_factor(profile: Profile) -> int:
+    """The smallest k in 1 .. EXACT_CLOCK_FACTOR for which the exact mode takes the profile at k times its clock and
+    PRESCALE (the same ticks, every interval k times as many clocks); ValueError when none does."""
+    from stepramp.board.plan import RAMP_EXACT, plan_move
+
+    for k in range(1, EXACT_CLOCK_FACTOR + 1):
+        try:
+            plan_move(**_scaled(profile, k).args(), ramp=RAMP_EXACT)
+        except ValueError:
+            continue
+        return k
+    raise ValueError(f"{profile.name}: not an exact-mode move at up to {EXACT_CLOCK_FACTOR} times its clock")
+
+
+def _scaled(profile: Profile, k: int) -> Profile:
     return dataclasses.replace(profile, fclk=profile.fclk * k, prescale=profile.prescale * k)
 
 
+def exact_profile(profile: Profile) -> Profile:
+    """The profile as the exact mode runs it: at exact_factor times its clock and PRESCALE (the same ticks and the
+    same plan but PRESCALE), so that its shortest interval keeps MIN_INTERVAL_CLKS_EXACT, and no slower than that
+    (simulation time)."""
+    return _scaled(profile, exact_factor(profile))
+
+
 EXACT_PROFILES: list[Profile] = [exact_profile(p) for p in PROFILES]
-"""The 64 profiles at EXACT_CLOCK_FACTOR times the clock and PRESCALE (plan them with ramp=RAMP_EXACT)."""
+"""The 64 profiles in exact mode (exact_profile; plan them with ramp=RAMP_EXACT)."""
