@@ -21,6 +21,8 @@ driver's own view:
 - c_driver_change_and_queue: stepramp_change_to in RUN at pulse STEP_COUNT + 4 (faster, to a new target), then
   stepramp_queue_move back while it runs: edges as stepramp.models.engine.change_edges, then the queued move's as the
   model's from its own start, which the start gate gives at the first motion's last pulse; STATUS.PENDING; POSITION.
+- c_driver_exact (test_c_driver_exact_mode, stepramp_plb with G_RAMP = 1): stepramp_init refuses the exact core,
+  stepramp_init_ramp takes it; two exact moves and a jog stopped in RUN, every edge as the model's exact plans.
 """
 
 from __future__ import annotations
@@ -36,13 +38,13 @@ from cocotb.triggers import ClockCycles, First, RisingEdge
 
 from peripheral_tb import TOPS, PeripheralTb, profiles_limit_us
 from stepramp.board.change import Segment, plan_change, speed_at_pulse
-from stepramp.board.plan import Plan, plan_move, plan_move_info
+from stepramp.board.plan import RAMP_EXACT, Plan, plan_move, plan_move_info
 from stepramp.board.regmap import ERROR_CODES, ID_VALUE, REGISTERS_BY_NAME, offset
 from stepramp.models.engine import change_edges, edges_with_stop, phase_of, segment_edges
 from stepramp.models.engine import edges as model_edges
 from stepramp.models.stepping import gate_timing
 from stepramp.sim.cdriver import CDriver
-from stepramp.sim.profiles import PROFILES_BY_NAME, Profile
+from stepramp.sim.profiles import EXACT_PROFILES, PROFILES_BY_NAME, Profile
 from stepramp.sim.runner import run_cocotb
 from stepramp.tools import clib
 from tbutil import REPO, build_dir, cocotb, edges_differ
@@ -54,6 +56,8 @@ POLLED = ("trap_basic", "triangle_negative", "run_start", "trap_prescale_4")
 
 #: The driver's results (stepramp.h): STEPRAMP_OK, STEPRAMP_ENOIRQ, STEPRAMP_ECORE(code) = 128 + code.
 OK, ENOIRQ, ECORE_BASE = 0, 67, 128
+EID = 64
+EXACT_BY_NAME = {p.name: p for p in EXACT_PROFILES}
 ERR = {name: code for name, (code, _) in ERROR_CODES.items()}
 STATE_CODES = {"STOP": 0, "ACCEL": 1, "RUN": 2, "DECEL": 3}
 
@@ -360,6 +364,53 @@ async def c_driver_change_and_queue(dut) -> None:
     tb.finish()
 
 
+@cocotb.test(timeout_time=60, timeout_unit="ms")
+async def c_driver_exact(dut) -> None:
+    """A core built with G_RAMP = 1: stepramp_init refuses it (ID bit 15, STEPRAMP_EID), stepramp_init_ramp with
+    STEPRAMP_RAMP_EXACT takes it; then stepramp_move of two exact profiles and a stepramp_jog ended by
+    stepramp_soft_stop in RUN: every edge as the model says of the Python driver's exact plans (the C plans are
+    bit-identical), POSITION the pulses seen."""
+    tb = await PeripheralTb.started(dut)
+    cdrv = CDriver(Path(os.environ["STEPRAMP_C_CB_LIB"]), tb.bus, idle=lambda: ClockCycles(tb.clk, 200))
+    prof = EXACT_BY_NAME["trap_basic"]
+    rc = await cdrv.dev_call("stepramp_init", cdrv.base, prof.fclk, prof.spr, prof.prescale)
+    assert rc == EID, f"stepramp_init on an exact core: {await cdrv.call('stepramp_strresult', rc)}"
+    position = 0
+    for name in ("trap_basic", "triangle_negative"):
+        prof = EXACT_BY_NAME[name]
+        rc = await cdrv.dev_call("stepramp_init_ramp", cdrv.base, prof.fclk, prof.spr, prof.prescale, RAMP_EXACT)
+        assert rc == OK, f"stepramp_init_ramp: {await cdrv.call('stepramp_strresult', rc)}"
+        n0, s0 = len(tb.step_edges), len(tb.start_edges)
+        await c_move(cdrv, prof)
+        rc = await cdrv.dev_call("stepramp_wait_done", 1_000_000)
+        assert rc == OK, f"{name}: {await cdrv.call('stepramp_strresult', rc)}"
+        edges, want = tb.edges_since(n0, s0), model_edges(plan_move(**prof.args(), ramp=RAMP_EXACT))
+        assert edges == want, f"{name} (exact): {edges_differ(edges, want)}"
+        position += prof.steps
+    prof = EXACT_BY_NAME["trap_basic"]
+    rc = await cdrv.dev_call("stepramp_init_ramp", cdrv.base, prof.fclk, prof.spr, prof.prescale, RAMP_EXACT)
+    assert rc == OK, f"stepramp_init_ramp: {await cdrv.call('stepramp_strresult', rc)}"
+    cdrv.so.stepramp_jog.argtypes = [ctypes.POINTER(cdrv.dev_t), *(ctypes.c_double,) * 3]
+    cdrv.so.stepramp_jog.restype = ctypes.c_int
+    requests: list[int] = []
+    assert tb.pins is not None
+    cocotb.start_soon(tb.pins.watch(dut.core_inst.soft_stop, requests))
+    seg = plan_change(0.0, None, prof.accel, prof.decel, prof.speed, prof.spr, prof.fclk, prof.prescale, RAMP_EXACT)
+    n0, s0 = len(tb.step_edges), len(tb.start_edges)
+    rc = await cdrv.dev_call("stepramp_jog", prof.speed, prof.accel, prof.decel)
+    assert rc == OK, f"stepramp_jog: {await cdrv.call('stepramp_strresult', rc)}"
+    await until_pulses(tb, n0 + seg.segment.sa + 5)
+    await cdrv.dev_call("stepramp_soft_stop")
+    rc = await cdrv.dev_call("stepramp_wait_done", 1_000_000)
+    assert rc == OK, f"jog, soft stop: {await cdrv.call('stepramp_strresult', rc)}"
+    edges = tb.edges_since(n0, s0)
+    want = segment_edges(seg.segment, prof.prescale, stop=("soft", requests[0] + 1 - tb.start_edges[s0]))
+    assert edges == want, f"jog (exact), soft stop in RUN: {edges_differ(edges, want)}"
+    position += len(edges)
+    assert await cdrv.dev_call("stepramp_position") == position
+    tb.finish()
+
+
 C_TESTS = [
     "c_driver_moves_by_polling",
     "c_driver_isr",
@@ -380,5 +431,18 @@ def test_c_driver_on_rtl(top: str) -> None:
         "test_c_driver_rtl",
         build_dir(f"{top}_c_driver"),
         testcase=C_TESTS,
+        extra_env={"STEPRAMP_C_CB_LIB": str(C_CB_LIB)},
+    )
+
+
+def test_c_driver_exact_mode() -> None:
+    """The C driver against stepramp_plb built with G_RAMP = 1 (the exact ramp)."""
+    clib.build("lib")
+    run_cocotb(
+        "stepramp_plb",
+        "test_c_driver_rtl",
+        build_dir("plb_c_driver_exact"),
+        parameters={"G_RAMP": RAMP_EXACT},
+        testcase="c_driver_exact",
         extra_env={"STEPRAMP_C_CB_LIB": str(C_CB_LIB)},
     )

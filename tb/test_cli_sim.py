@@ -80,3 +80,20 @@ def test_sim_invalid_input_simulates_nothing() -> None:
     run = subprocess.run([BIN, "sim", *bad], capture_output=True, text=True, check=False)
     assert run.returncode == 2
     assert "fclk must be finite and > 0" in json.loads(run.stdout)["error"]
+
+
+def test_sim_equals_model_in_exact_mode(tmp_path: Path) -> None:
+    """`--ramp exact`: `stepramp sim` runs the engine built with G_RAMP = 1; its edges equal `stepramp model
+    --ramp exact`'s, and differ from the AVR446 mode's (the same move)."""
+    move = [*MOVES[1][:-2], "--prescale", "4"]  # 2 MHz, PRESCALE 4: a slow triangle, 40 steps
+    model = json.loads(
+        subprocess.run([BIN, "model", *move, "--ramp", "exact"], capture_output=True, text=True, check=True).stdout
+    )
+    avr = json.loads(subprocess.run([BIN, "model", *move], capture_output=True, text=True, check=True).stdout)
+    cmd = [BIN, "sim", *move, "--ramp", "exact", "--build", str(tmp_path)]
+    run = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stderr[-2000:]
+    sim = json.loads(run.stdout)
+    assert sim["ramp"] == "exact" and sim["error"] is None
+    assert sim["registers"] == model["registers"] and sim["edges"] == model["edges"]
+    assert sim["edges"] != avr["edges"]

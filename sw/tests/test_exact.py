@@ -37,7 +37,7 @@ from stepramp.models.engine import (
     soft_stop_values,
     tick_times,
 )
-from stepramp.sim.profiles import EXACT_PROFILES, Profile, design_args
+from stepramp.sim.profiles import EXACT_PROFILES, Profile, random_exact_moves
 
 SEED = int(os.environ.get("EXACT_SEED", "1723"))
 BOUND = 1.0
@@ -62,28 +62,7 @@ def check_move(args: dict[str, Any], label: str) -> float:
     return worst
 
 
-def _random_moves(seed: int, count: int, long_moves: int) -> list[dict[str, Any]]:
-    """Random moves the exact mode takes: spr, f_clk and PRESCALE 1 .. 8 varied, accel / decel up to 100 both ways."""
-    rng = random.Random(seed)
-    out: list[dict[str, Any]] = []
-    while len(out) < count:
-        prescale = rng.randint(1, 8)
-        spr = rng.choice((24.0, 200.0, 400.0, 1000.0, 1600.0, 3200.0, 25600.0, 51200.0)) * rng.choice((1, 1.37))
-        fclk = math.exp(rng.uniform(math.log(1e5), math.log(2e8)))
-        period = math.ceil(256 / prescale) + math.exp(rng.uniform(0.0, math.log(1e4)))
-        n_a = math.exp(rng.uniform(math.log(0.05), math.log(3e4)))
-        n_d = n_a * math.exp(rng.uniform(-math.log(100.0), math.log(100.0)))
-        steps = rng.randint(20_000, 100_000) if len(out) < long_moves else rng.randint(1, 3000)
-        args = design_args(steps * rng.choice((1, -1)), period, n_a, n_d, spr, fclk, prescale)
-        try:
-            plan_move(**args, ramp=RAMP_EXACT)
-        except ValueError:
-            continue
-        out.append(args)
-    return out
-
-
-RANDOM_MOVES = _random_moves(SEED, RANDOM_COUNT, long_moves=4)
+RANDOM_MOVES = random_exact_moves(SEED, RANDOM_COUNT, long_moves=4)
 
 
 def test_root_is_the_rounded_square_root() -> None:

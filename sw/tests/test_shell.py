@@ -14,11 +14,11 @@ from pathlib import Path
 import pytest
 
 from stepramp.board.driver import StepRampError
-from stepramp.board.plan import MIN_INTERVAL_CLKS, plan_move
+from stepramp.board.plan import MIN_INTERVAL_CLKS, MIN_INTERVAL_CLKS_EXACT, RAMP_EXACT, plan_move
 from stepramp.models.engine import edges as model_edges
 from stepramp.sim.runner import _sim_stop_s
 from stepramp.sim.waves import LAYOUT, LAYOUTS, missing_in, signal_paths, write_gtkw, zoom_for
-from stepramp.tools.shell import SHELL_CONFIG, ModelBackend, Shell, speed_limit
+from stepramp.tools.shell import SHELL_CONFIG, SHELL_EXACT_CONFIG, ModelBackend, Shell, speed_limit
 
 BIN = Path(sys.executable).parent / "stepramp"
 INFO = re.compile(r"^Motor pos: (-?\d+)   a:(\d+) d:(\d+) s:(\d+) m:(-?\d+)$")
@@ -234,3 +234,19 @@ def test_home_command_needs_the_machine() -> None:
     ]
     assert [g[0] for g in infos(lines)][-1] == 50 and backend.position == 50
     assert any(line.startswith("home [pos]") for line in lines)
+
+
+def test_exact_mode_shell() -> None:
+    """`stepramp shell --model --ramp exact`: the same session in exact mode (1 MHz, PRESCALE 4: the same 4 us tick),
+    each move planned for the exact ramp; the speed limit is one step per MIN_INTERVAL_CLKS_EXACT clocks."""
+    cfg = {**SHELL_EXACT_CONFIG, "ramp": RAMP_EXACT}
+    backend = ModelBackend(**cfg)
+    out = io.StringIO()
+    Shell(backend, out, **cfg).run(io.StringIO("a 4000\nm 400\n\nj 1500 200\n"))
+    assert [g[0] for g in infos(out.getvalue().splitlines())][:4] == [0, 0, 400, 800]
+    limit = speed_limit(**cfg)
+    alpha = 2 * math.pi / cfg["spr"]
+    assert limit == math.floor(100 * alpha * cfg["fclk"] / cfg["prescale"] / (MIN_INTERVAL_CLKS_EXACT / 4))
+    cmd = [BIN, "shell", "--model", "--ramp", "exact"]
+    run = subprocess.run(cmd, input="a 4000\nm 400\n", capture_output=True, text=True, timeout=60)
+    assert run.returncode == 0 and [g[0] for g in infos(run.stdout.splitlines())][-1] == 400

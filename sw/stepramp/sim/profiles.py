@@ -277,3 +277,27 @@ def exact_profile(profile: Profile) -> Profile:
 
 EXACT_PROFILES: list[Profile] = [exact_profile(p) for p in PROFILES]
 """The 64 profiles in exact mode (exact_profile; plan them with ramp=RAMP_EXACT)."""
+
+
+def random_exact_moves(seed: int, count: int, long_moves: int) -> list[dict[str, Any]]:
+    """Random moves the exact mode takes (sw/tests/test_exact.py, scripts/exact_check.py): spr, f_clk and PRESCALE
+    1 .. 8 varied, accel / decel up to 100 both ways; the first long_moves of 20,000 .. 100,000 steps."""
+    from stepramp.board.plan import RAMP_EXACT, plan_move
+
+    rng = random.Random(seed)
+    out: list[dict[str, Any]] = []
+    while len(out) < count:
+        prescale = rng.randint(1, 8)
+        spr = rng.choice((24.0, 200.0, 400.0, 1000.0, 1600.0, 3200.0, 25600.0, 51200.0)) * rng.choice((1, 1.37))
+        fclk = math.exp(rng.uniform(math.log(1e5), math.log(2e8)))
+        period = math.ceil(256 / prescale) + math.exp(rng.uniform(0.0, math.log(1e4)))
+        n_a = math.exp(rng.uniform(math.log(0.05), math.log(3e4)))
+        n_d = n_a * math.exp(rng.uniform(-math.log(100.0), math.log(100.0)))
+        steps = rng.randint(20_000, 100_000) if len(out) < long_moves else rng.randint(1, 3000)
+        args = design_args(steps * rng.choice((1, -1)), period, n_a, n_d, spr, fclk, prescale)
+        try:
+            plan_move(**args, ramp=RAMP_EXACT)
+        except ValueError:
+            continue
+        out.append(args)
+    return out
