@@ -1259,6 +1259,8 @@ def _random_inputs(rng: random.Random, script: dict[str, Any]) -> None:
             added.append({"at": off, "op": "input", "name": pin, "level": 0})
             if pin == "estop" and rng.random() < 0.7 and off + 3 * PREP_CLOCKS < until:
                 added.append({"at": off + rng.randint(2 * PREP_CLOCKS, 3 * PREP_CLOCKS), "op": "clear_fault"})
+    # a bounce can carry an edge past the end: the script ends there (a command after `until` is not a script)
+    added = [cmd for cmd in added if cmd["at"] <= until]
     script["commands"] = sorted([*script["commands"], *added], key=lambda c: c["at"])
 
 
