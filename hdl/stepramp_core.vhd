@@ -46,10 +46,14 @@ entity stepramp_core is
     limit_pos : in    std_logic;
     home      : in    std_logic;
     estop     : in    std_logic;
-    -- The multi-axis top: a START on this clock (as if written), and STATUS.BUSY / STATUS.DONE.
-    sync_start : in    std_logic;
-    st_busy    : out   std_logic;
-    st_done    : out   std_logic
+    -- The multi-axis top: a START or a SOFT_STOP on this clock (as if written), STATUS.BUSY / STATUS.DONE, and the
+    -- common start (stepramp_stepper's start_hold and gate_wait; tie to '0', open alone).
+    sync_start     : in    std_logic;
+    sync_soft_stop : in    std_logic;
+    st_busy        : out   std_logic;
+    st_done        : out   std_logic;
+    sync_hold      : in    std_logic;
+    gate_wait      : out   std_logic
   );
 end entity stepramp_core;
 
@@ -89,8 +93,8 @@ architecture rtl of stepramp_core is
   signal c_sa          : std_logic_vector(47 downto 0);
   signal sd            : std_logic_vector(30 downto 0);
   signal c_sd          : std_logic_vector(47 downto 0);
-  signal accel_seed    : std_logic_vector(47 downto 0);
-  signal decel_seed    : std_logic_vector(47 downto 0);
+  signal accel_seed    : std_logic_vector(63 downto 0);
+  signal decel_seed    : std_logic_vector(63 downto 0);
   signal cruise        : std_logic_vector(63 downto 0);
   signal stop_ratio    : std_logic_vector(31 downto 0);
   signal head_down     : std_logic;
@@ -199,7 +203,9 @@ begin
       eng_chg_refused => chg_refused,
       dir_fault       => dir_fault,
       ext_start       => sync_start,
+      ext_soft_stop   => sync_soft_stop,
       done_sticky     => st_done,
+      busy_status     => st_busy,
       in_filter       => in_filter,
       in_pol          => in_pol,
       latch_src       => latch_src,
@@ -242,7 +248,6 @@ begin
   -- decided after it (docs/stepramp_inputs.md, "ESTOP timing").
   estop_stop <= in_level(3) or estop_fault;
   step_hard  <= hard_stop or estop_stop;
-  st_busy    <= busy_any;
 
   -- STATUS.BUSY covers a start held back by the stepping logic for DIR setup/hold or STEP spacing.
   busy_any <= busy or gate_busy;
@@ -276,6 +281,8 @@ begin
       soft_stop     => soft_stop,
       gate_busy     => gate_busy,
       dir_fault     => dir_fault,
+      start_hold    => sync_hold,
+      gate_wait     => gate_wait,
       eng_step      => eng_step,
       eng_busy      => busy,
       eng_dir       => eng_dir,

@@ -143,7 +143,7 @@ begin
           for i in 0 to C_PAIRS - 1 loop
 
             if (to_unsigned(i, C_IDX_W - 1) = unsigned(num_msb(C_IDX_W - 1 downto 1))) then
-              pair := num_r(2 * i + 1 downto 2 * i);
+              pair := pair or num_r(2 * i + 1 downto 2 * i);
             end if;
 
           end loop;

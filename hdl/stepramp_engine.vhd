@@ -41,8 +41,8 @@ entity stepramp_engine is
     c_sa        : in    std_logic_vector(47 downto 0);
     sd          : in    std_logic_vector(30 downto 0);
     c_sd        : in    std_logic_vector(47 downto 0);
-    accel_seed  : in    std_logic_vector(47 downto 0);
-    decel_seed  : in    std_logic_vector(47 downto 0);
+    accel_seed  : in    std_logic_vector(63 downto 0);
+    decel_seed  : in    std_logic_vector(63 downto 0);
     cruise      : in    std_logic_vector(63 downto 0);
     stop_ratio  : in    std_logic_vector(31 downto 0);
     -- The segment (docs/algorithm.md, "Changes while moving"): all 0 for a move from rest to rest.
@@ -105,13 +105,16 @@ architecture rtl of stepramp_engine is
   signal p_sd          : unsigned(30 downto 0);
   signal p_c_sd        : unsigned(47 downto 0);
   signal p_accel_seed0 : std_logic;             -- seed_zero(accel_seed) (the seed is latched by the precompute)
-  signal p_decel_seed  : unsigned(47 downto 0);
+  signal p_decel_seed  : unsigned(63 downto 0);
   signal p_decel_seed0 : std_logic;             -- seed_zero(decel_seed)
   signal p_cruise      : unsigned(63 downto 0);
   signal p_stop_ratio  : unsigned(31 downto 0); -- accel / decel, Q16.16
   signal p_head_down   : std_logic;
   signal p_endless     : std_logic;
   signal p_run_stop    : unsigned(30 downto 0);
+  -- The running segment's last pulse, counted in the motion's pulses (STEP_COUNT): L = N - 1 from a start, P + L of
+  -- the segment from a take-over at pulse P (32 bits: the sum does not wrap). A CHANGE_AT past it is refused.
+  signal p_last_pulse : unsigned(31 downto 0);
   -- For the parameter check, latched with the move: K - sa (bit 31 the borrow: a down head ends after its rest) and
   -- n0 + sa - 1 (bit 31: an up head's last index passes 2^31 - 1).
   signal p_k_sa  : unsigned(31 downto 0);
@@ -231,21 +234,22 @@ architecture rtl of stepramp_engine is
 
   end function int_zero;
 
-  -- A seed that cannot give a ramp value: its integer part is 0 (AVR446: a Q32.16 value below one tick), or it is 0
-  -- (the exact ramp: a ramp constant c0^2 * 2^8 is below 2^16 for any c0 under 16 ticks).
+  -- A seed that cannot give a ramp value: its integer part is 0 (AVR446: a Q32.16 value in bits 47:0 below one
+  -- tick; bits 63:48 are not used), or (the exact ramp, a seed word) its mantissa (bits 59:0) is 0 or its scale
+  -- (bits 63:60) above 6 (a ramp constant c0^2 * 2^8 is below 2^16 for any c0 under 16 ticks).
   function seed_zero (
-    v : std_logic_vector(47 downto 0)
+    v : std_logic_vector(63 downto 0)
   ) return std_logic is
   begin
 
     if (G_RAMP = 1) then
-      if (unsigned(v) = 0) then
+      if (unsigned(v(59 downto 0)) = 0 or unsigned(v(63 downto 60)) > 6) then
         return '1';
       end if;
       return '0';
     end if;
 
-    return int_zero(v);
+    return int_zero(v(47 downto 0));
 
   end function seed_zero;
 
@@ -546,6 +550,12 @@ begin
       p_head_down <= head_down;
       p_endless   <= endless;
       p_run_stop  <= unsigned(run_stop);
+      -- At a take-over CHANGE_AT still holds P (the staging is locked until now); at a start it may hold anything.
+      if (tk = '1') then
+        p_last_pulse <= ('0' & unsigned(change_at)) + ('0' & unsigned(steps)) - 1;
+      else
+        p_last_pulse <= ('0' & unsigned(steps)) - 1;
+      end if;
 
     end procedure latch_move;
 
@@ -681,15 +691,17 @@ begin
       end if;
 
       -- Take-over (docs/algorithm.md, "The take-over, the queue and the script contract"). A commit is accepted while
-      -- busy, with nothing pending, no soft stop requested or in effect (nor one in this write), and pulse P - 1 not
-      -- yet emitted (STEP_COUNT < P); else refused (the motion goes on).
+      -- busy, with nothing pending, no soft stop requested or in effect (nor one in this write), pulse P - 1 not
+      -- yet emitted (STEP_COUNT < P) and P not past the running segment's last pulse (an endless one has none);
+      -- else refused (the motion goes on).
       chg_hit       <= to_sl(step_count_r = unsigned(change_at));
       chg_refused_r <= '0';
       tk_d1         <= tk;
       tk_d2         <= tk_d1;
       if (change = '1') then
         if (busy_r = '1' and chg_pend_r = '0' and sreq = '0' and stop_mode_m = '0' and soft_stop = '0' and
-            step_count_r < unsigned(change_at) and d_finish = '0') then
+            step_count_r < unsigned(change_at) and d_finish = '0' and
+            (p_endless = '1' or ('0' & unsigned(change_at)) <= p_last_pulse)) then
           chg_pend_r <= '1';
         else
           chg_refused_r <= '1';

@@ -1,7 +1,8 @@
 -- SPDX-License-Identifier: MIT
 -- stepramp_isqrt: iterative integer square root, rounded to the nearest integer, that starts at the radicand's most
--- significant bit pair (floor(msb(R) / 2) + 1 root bits, one per clock, no barrel shifter). Ports, algorithm and
--- latency: docs/stepramp_isqrt.md.
+-- significant bit pair (floor(msb(R) / 2) + 1 root bits, one per clock, no barrel shifter), optionally of R with
+-- zero pairs appended below it (root(R 4^e), one clock per pair). Ports, algorithm and latency:
+-- docs/stepramp_isqrt.md.
 
 library ieee;
   use ieee.std_logic_1164.all;
@@ -12,17 +13,21 @@ library work;
 
 entity stepramp_isqrt is
   generic (
-    G_WIDTH : positive := 80
+    G_WIDTH : positive := 80;
+    -- The most zero pairs that can be appended below the radicand (the root of R 4^e, e = min(extra, G_EXTRA)).
+    G_EXTRA : natural := 0
   );
   port (
     clk      : in    std_logic;
     rst      : in    std_logic;
     start    : in    std_logic;
     radicand : in    std_logic_vector(G_WIDTH - 1 downto 0);
-    busy     : out   std_logic;
-    done     : out   std_logic;
-    -- One bit more than G_WIDTH / 2: rounding can carry to 2^(G_WIDTH / 2).
-    root : out   std_logic_vector(G_WIDTH / 2 downto 0)
+    -- e, sampled with start: zero pairs appended below the radicand (values above G_EXTRA are taken as G_EXTRA).
+    extra : in    std_logic_vector(3 downto 0);
+    busy  : out   std_logic;
+    done  : out   std_logic;
+    -- One bit more than G_WIDTH / 2 + G_EXTRA: rounding can carry to 2^(G_WIDTH / 2 + G_EXTRA).
+    root : out   std_logic_vector(G_WIDTH / 2 + G_EXTRA downto 0)
   );
 end entity stepramp_isqrt;
 
@@ -33,9 +38,10 @@ architecture rtl of stepramp_isqrt is
   -- iteration and the rounded root (t + 1) / 2 = s + b one increment.
   constant C_PAIRS : positive := G_WIDTH / 2;
   constant C_IDX_W : positive := clog2(C_PAIRS);
-  -- The root t < 2^(C_PAIRS + 1), and the remainder after a pair of the radicand is at most 2 s < 2^(C_PAIRS + 1)
-  -- (the remainder after the zero pair is not kept: only its sign is used).
-  constant C_RW : positive := C_PAIRS + 1;
+  -- The root t < 2^(C_PAIRS + G_EXTRA + 1), and the remainder after a pair of the radicand or an appended zero pair
+  -- is at most 2 s < 2^(C_PAIRS + G_EXTRA + 1) (the remainder after the last zero pair is not kept: only its sign
+  -- is used).
+  constant C_RW : positive := C_PAIRS + G_EXTRA + 1;
   -- The trial 4 rem + pair - (4 t + 1): both operands below 2^(C_RW + 2), one sign bit above them. A carry-select
   -- difference, as in the divider: the low C_LO bits are one carry chain, the bits above are computed for both
   -- borrows and picked by the low chain's borrow.
@@ -83,6 +89,8 @@ architecture rtl of stepramp_isqrt is
   signal sel_r : std_logic_vector(C_PAIRS + 1 downto 0);
   -- The selected pair, fetched one clock ahead so that the AND-OR that picks it is off the subtractor's path.
   signal pair_r : unsigned(1 downto 0);
+  -- The appended zero pairs still to come: the iteration stays on pair 0 (a zero pair) until they are done.
+  signal ext_r  : unsigned(3 downto 0);
   signal done_r : std_logic;
   -- Which pairs hold a '1': the priority encoder then gives the top pair's index directly, at half the width.
   signal pair_any : std_logic_vector(C_PAIRS - 1 downto 0);
@@ -93,6 +101,10 @@ begin
 
   assert G_WIDTH >= 4 and G_WIDTH <= 128 and G_WIDTH mod 2 = 0
     report "stepramp_isqrt: G_WIDTH must be even and in 4 .. 128"
+    severity failure;
+
+  assert G_EXTRA <= 15
+    report "stepramp_isqrt: G_EXTRA must be in 0 .. 15"
     severity failure;
 
   pairs_gen : for i in 0 to C_PAIRS - 1 generate
@@ -129,6 +141,11 @@ begin
 
           if (start = '1') then
             rad_r <= unsigned(radicand);
+            if (unsigned(extra) > G_EXTRA) then
+              ext_r <= to_unsigned(G_EXTRA, 4);
+            else
+              ext_r <= unsigned(extra);
+            end if;
             state <= C_ALIGN;
           end if;
 
@@ -192,8 +209,14 @@ begin
             root_r <= root_r(C_RW - 2 downto 0) & '0';
           end if;
 
+          -- On pair 0 the select stays: the appended zero pairs (ext_r of them) and then the last zero pair, whose
+          -- trial decides the rounding.
           if (sel_r(0) = '1') then
-            state <= C_ROUND;
+            if (ext_r = 0) then
+              state <= C_ROUND;
+            else
+              ext_r <= ext_r - 1;
+            end if;
           else
             sel_r <= '0' & sel_r(C_PAIRS + 1 downto 1);
           end if;

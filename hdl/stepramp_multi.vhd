@@ -1,8 +1,9 @@
 -- SPDX-License-Identifier: MIT
 -- stepramp_multi: G_AXES stepramp_core axes behind one bus-agnostic register port with a 12-bit address: a global
--- window (ID / AXES, SYNC_START, AXES_STATUS, IRQ_MASK) at 0x000 and axis i's register window at 0x100 * (i + 1).
--- SYNC_START starts the selected axes on one clock edge; irq is the OR of the axes' (masked) interrupts. The bus
--- tops stepramp_multi_plb and stepramp_multi_axil turn their bus into the strobes. docs/stepramp_multi.md.
+-- window (ID / AXES, SYNC_START, AXES_STATUS, IRQ_MASK, SYNC_SOFT_STOP) at 0x000 and axis i's register window at
+-- 0x100 * (i + 1). SYNC_START starts the selected axes with their pulse 0 on one clock edge (the common start);
+-- SYNC_SOFT_STOP soft-stops them on one clock; irq is the OR of the axes' (masked) interrupts. The bus tops
+-- stepramp_multi_plb and stepramp_multi_axil turn their bus into the strobes. docs/stepramp_multi.md.
 
 library ieee;
   use ieee.std_logic_1164.all;
@@ -76,13 +77,14 @@ architecture rtl of stepramp_multi is
 
   end function word;
 
-  -- '1' for the offset of a global register (window 0, ID .. IRQ_MASK); the global logic answers the rest with err.
+  -- '1' for the offset of a global register (window 0, ID .. SYNC_SOFT_STOP); the global logic answers the rest
+  -- with err.
   function global_mapped (
     a : std_logic_vector(C_MULTI_ADDR_BITS - 1 downto 0)
   ) return std_logic is
   begin
 
-    if (window(a) = 0 and word(a) <= C_MREG_IRQ_MASK / 4) then
+    if (window(a) = 0 and word(a) <= C_MREG_SYNC_SOFT_STOP / 4) then
       return '1';
     end if;
 
@@ -134,6 +136,13 @@ architecture rtl of stepramp_multi is
   signal glob_wr    : std_logic;
   signal glob_rd    : std_logic;
   signal sync_start : std_logic_vector(G_AXES - 1 downto 0);
+  signal sync_soft  : std_logic_vector(G_AXES - 1 downto 0);
+
+  -- The common start: the axes of the last SYNC_START that accepted it (idle), kept while one of them waits in its
+  -- start gate; every axis's gate holds a start that could go while sync_hold is '1'.
+  signal sync_group : std_logic_vector(G_AXES - 1 downto 0);
+  signal gate_wait  : std_logic_vector(G_AXES - 1 downto 0);
+  signal sync_hold  : std_logic;
 
   -- The axes' answers and status.
   signal axis_rdata : word_array_t;
@@ -193,22 +202,32 @@ begin
   end process decode_proc;
 
   -- SYNC_START: bit i of a write (byte lane 0) is a START of axis i at the edge that samples the write, exactly as
-  -- a CTRL.START written to every selected axis at that edge.
+  -- a CTRL.START written to every selected axis at that edge; SYNC_SOFT_STOP likewise a CTRL.SOFT_STOP.
   sync_proc : process (glob_wr, wsel, wdata, be) is
   begin
 
     for i in 0 to G_AXES - 1 loop
 
       sync_start(i) <= '0';
+      sync_soft(i)  <= '0';
 
       if (glob_wr = '1' and window(wsel) = 0 and word(wsel) = C_MREG_SYNC_START / 4 and be(0) = '1' and
           wdata(i) = '1') then
         sync_start(i) <= '1';
       end if;
 
+      if (glob_wr = '1' and window(wsel) = 0 and word(wsel) = C_MREG_SYNC_SOFT_STOP / 4 and be(0) = '1' and
+          wdata(i) = '1') then
+        sync_soft(i) <= '1';
+      end if;
+
     end loop;
 
   end process sync_proc;
+
+  -- The common start: while an axis of the group still waits for its own DIR hold / setup or STEP spacing, the
+  -- others hold their starts; all fire at the edge at which none waits, the latest of their own start edges.
+  sync_hold <= any(sync_group and gate_wait);
 
   global_proc : process (clk) is
   begin
@@ -236,11 +255,20 @@ begin
         irq_mask <= wdata(G_AXES - 1 downto 0);
       end if;
 
+      -- The group of a SYNC_START: the selected axes that are idle (a busy axis ignores the START); it ends at the
+      -- edge at which none of them waits in its start gate (all fire there).
+      if (any(sync_start) = '1') then
+        sync_group <= sync_start and not axis_busy;
+      elsif (sync_hold = '0') then
+        sync_group <= (others => '0');
+      end if;
+
       if (rst = '1') then
-        glob_ack <= '0';
-        glob_err <= '0';
-        rd_axis  <= (others => '0');
-        irq_mask <= (others => '1');
+        glob_ack   <= '0';
+        glob_err   <= '0';
+        rd_axis    <= (others => '0');
+        irq_mask   <= (others => '1');
+        sync_group <= (others => '0');
       end if;
     end if;
 
@@ -281,32 +309,35 @@ begin
         G_WADDR      => G_WADDR
       )
       port map (
-        clk        => clk,
-        rst        => rst,
-        wr         => axis_wr(i),
-        rd         => axis_rd(i),
-        addr       => addr(C_ADDR_BITS - 1 downto 0),
-        waddr      => waddr(C_ADDR_BITS - 1 downto 0),
-        wdata      => wdata,
-        be         => be,
-        rdata      => axis_rdata(i),
-        ack        => axis_ack(i),
-        err        => axis_err(i),
-        irq        => axis_irq(i),
-        step       => step(i),
-        dir        => dir(i),
-        enable     => enable(i),
-        a1         => a1(i),
-        a2         => a2(i),
-        b1         => b1(i),
-        b2         => b2(i),
-        limit_neg  => limit_neg(i),
-        limit_pos  => limit_pos(i),
-        home       => home(i),
-        estop      => estop,
-        sync_start => sync_start(i),
-        st_busy    => axis_busy(i),
-        st_done    => axis_done(i)
+        clk            => clk,
+        rst            => rst,
+        wr             => axis_wr(i),
+        rd             => axis_rd(i),
+        addr           => addr(C_ADDR_BITS - 1 downto 0),
+        waddr          => waddr(C_ADDR_BITS - 1 downto 0),
+        wdata          => wdata,
+        be             => be,
+        rdata          => axis_rdata(i),
+        ack            => axis_ack(i),
+        err            => axis_err(i),
+        irq            => axis_irq(i),
+        step           => step(i),
+        dir            => dir(i),
+        enable         => enable(i),
+        a1             => a1(i),
+        a2             => a2(i),
+        b1             => b1(i),
+        b2             => b2(i),
+        limit_neg      => limit_neg(i),
+        limit_pos      => limit_pos(i),
+        home           => home(i),
+        estop          => estop,
+        sync_start     => sync_start(i),
+        sync_soft_stop => sync_soft(i),
+        st_busy        => axis_busy(i),
+        st_done        => axis_done(i),
+        sync_hold      => sync_hold,
+        gate_wait      => gate_wait(i)
       );
 
   end generate axes_gen;

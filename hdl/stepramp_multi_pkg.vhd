@@ -17,10 +17,11 @@ package stepramp_multi_pkg is
   constant C_MULTI_ID_VERSION : std_logic_vector(7 downto 0)  := x"01";
 
   -- Byte offsets in the global window.
-  constant C_MREG_ID          : natural := 16#00#;
-  constant C_MREG_SYNC_START  : natural := 16#04#;
-  constant C_MREG_AXES_STATUS : natural := 16#08#;
-  constant C_MREG_IRQ_MASK    : natural := 16#0C#;
+  constant C_MREG_ID             : natural := 16#00#;
+  constant C_MREG_SYNC_START     : natural := 16#04#;
+  constant C_MREG_AXES_STATUS    : natural := 16#08#;
+  constant C_MREG_IRQ_MASK       : natural := 16#0C#;
+  constant C_MREG_SYNC_SOFT_STOP : natural := 16#10#;
 
   -- AXES_STATUS fields: bit i of each is axis i.
   constant C_AXES_STATUS_BUSY_LSB : natural := 0;

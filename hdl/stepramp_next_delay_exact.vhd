@@ -1,8 +1,8 @@
 -- SPDX-License-Identifier: MIT
 -- stepramp_next_delay_exact: the next-delay unit of the exact ramp arithmetic. It answers "what is the ramp value at
--- this index?" as root(C (x + 1)) - root(C x) (rounded square roots, on one stepramp_isqrt), and continues a run of
--- neighbouring indices with one square root per answer. Ports, algorithm and latency: docs/stepramp_isqrt.md,
--- "stepramp_next_delay_exact".
+-- this index?" as root(C (x + 1)) - root(C x) (rounded square roots, on one stepramp_isqrt), C = m 4^e given as
+-- a seed word (mantissa m, scale e), and continues a run of neighbouring indices with one square root per answer.
+-- Ports, algorithm and latency: docs/stepramp_isqrt.md, "stepramp_next_delay_exact".
 
 library ieee;
   use ieee.std_logic_1164.all;
@@ -21,8 +21,8 @@ entity stepramp_next_delay_exact is
     req_decel : in    std_logic;
     req_alt   : in    std_logic;
     req_index : in    std_logic_vector(30 downto 0);
-    c_head    : in    std_logic_vector(47 downto 0);
-    c_dec     : in    std_logic_vector(47 downto 0);
+    c_head    : in    std_logic_vector(63 downto 0);
+    c_dec     : in    std_logic_vector(63 downto 0);
     busy      : out   std_logic;
     ans_valid : out   std_logic;
     ans_value : out   std_logic_vector(47 downto 0);
@@ -34,12 +34,15 @@ end entity stepramp_next_delay_exact;
 architecture rtl of stepramp_next_delay_exact is
 
   constant C_X_W : positive := 31;
-  constant C_C_W : positive := 48;
-  -- C (x + 1) < 2^48 * 2^31: the radicands fit 79 bits; the square root takes bit pairs.
-  constant C_R_W : positive := 80;
-  -- root(C (x + 1)) - root(C x) <= sqrt(C) + 1 / 2 + 1 / 2 < 2^24 + 1: the answer is at most 2^24, so 25 bits of
-  -- each root give it exactly (the difference modulo 2^25); only those are kept.
-  constant C_D_W : positive := 25;
+  -- A seed word: the mantissa m in bits 59:0, the scale e in bits 63:60; C = m 4^e.
+  constant C_C_W : positive := 60;
+  -- The radicands are m x and m (x + 1) < 2^60 * 2^31: 91 bits; the square root takes bit pairs, and appends e zero
+  -- pairs below them (at most C_E_MAX: the root of C x = m x 4^e).
+  constant C_R_W   : positive := 92;
+  constant C_E_MAX : natural  := 6;
+  -- root(C (x + 1)) - root(C x) <= sqrt(C) + 1 / 2 + 1 / 2 < 2^36 + 1 (C < 2^72): the answer is at most 2^36, so
+  -- 37 bits of each root give it exactly (the difference modulo 2^37); only those are kept.
+  constant C_D_W : positive := 37;
   -- The roots are Q.4 ticks, the answer Q32.16.
   constant C_SHIFT : positive := 12;
 
@@ -53,6 +56,7 @@ architecture rtl of stepramp_next_delay_exact is
 
   signal state   : std_logic_vector(2 downto 0);
   signal c_r     : unsigned(C_C_W - 1 downto 0);
+  signal e_r     : std_logic_vector(3 downto 0);
   signal x_r     : unsigned(C_X_W - 1 downto 0);
   signal decel_r : std_logic;
   signal alt_r   : std_logic;
@@ -90,9 +94,9 @@ architecture rtl of stepramp_next_delay_exact is
   signal x_next   : unsigned(C_X_W downto 0);
   signal next_bit : std_logic;
 
-  -- The one adder of the radicands: acc * 2 + bit * C (multiply step), acc + C (the second root of a fresh
-  -- request), acc +/- C (a continued request). The subtraction is acc + not C + 1, the + 1 the carry of an extra
-  -- low bit. 80 bits in one carry chain would be the clock's path (56 MHz on HX8K): a carry-select adder, the low
+  -- The one adder of the radicands (in units of 4^e: m x, m (x + 1)): acc * 2 + bit * m (multiply step), acc + m (the
+  -- second root of a fresh request), acc +/- m (a continued request). The subtraction is acc + not m + 1, the + 1 the
+  -- carry of an extra low bit. 92 bits in one carry chain would be the clock's path: a carry-select adder, the low
   -- C_SPLIT bits one chain, the bits above computed with and without the low part's carry, picked by it.
   constant C_SPLIT : positive := C_R_W / 2;
 
@@ -113,7 +117,7 @@ architecture rtl of stepramp_next_delay_exact is
   signal sq_rst   : std_logic;
   signal sq_start : std_logic;
   signal sq_done  : std_logic;
-  signal sq_root  : std_logic_vector(C_R_W / 2 downto 0);
+  signal sq_root  : std_logic_vector(C_R_W / 2 + C_E_MAX downto 0);
   signal sq_low   : unsigned(C_D_W - 1 downto 0);
 
 begin
@@ -189,13 +193,15 @@ begin
 
   isqrt_inst : entity work.stepramp_isqrt
     generic map (
-      G_WIDTH => C_R_W
+      G_WIDTH => C_R_W,
+      G_EXTRA => C_E_MAX
     )
     port map (
       clk      => clk,
       rst      => sq_rst,
       start    => sq_start,
       radicand => std_logic_vector(rad),
+      extra    => e_r,
       busy     => open,
       done     => sq_done,
       root     => sq_root
@@ -228,9 +234,11 @@ begin
 
             if (accept = '1') then
               if (req_decel = '1') then
-                c_r <= unsigned(c_dec);
+                c_r <= unsigned(c_dec(C_C_W - 1 downto 0));
+                e_r <= c_dec(63 downto C_C_W);
               else
-                c_r <= unsigned(c_head);
+                c_r <= unsigned(c_head(C_C_W - 1 downto 0));
+                e_r <= c_head(63 downto C_C_W);
               end if;
               x_r     <= unsigned(req_index);
               decel_r <= req_decel;
@@ -313,9 +321,10 @@ begin
 
   busy      <= busy_i;
   ans_valid <= ans_valid_r;
-  ans_value <= std_logic_vector(shift_left(resize(ans_r, 48), C_SHIFT));
-  -- Exact: no remainder, and the answer is below 2^37 (Q32.16): never out of range.
+  ans_value <= std_logic_vector(shift_left(resize(ans_r(C_D_W - 2 downto 0), 48), C_SHIFT));
+  -- Exact: no remainder. An answer of 2^36 Q.4 ticks or more does not fit Q32.16 (only x = 0 with C above
+  -- 2^72 - 2^36, which the driver never writes).
   ans_rem <= (others => '0');
-  ans_ovf <= '0';
+  ans_ovf <= ans_r(C_D_W - 1);
 
 end architecture rtl;

@@ -38,11 +38,11 @@ entity stepramp_precompute is
     c_last     : in    std_logic_vector(47 downto 0);
     c_sa       : in    std_logic_vector(47 downto 0);
     c_sd       : in    std_logic_vector(47 downto 0);
-    accel_seed : in    std_logic_vector(47 downto 0);
+    accel_seed : in    std_logic_vector(63 downto 0);
     -- Taken at latch, like c_first and accel_seed (the segment's head: docs/algorithm.md, "Changes while moving").
     head_index : in    std_logic_vector(30 downto 0);
     head_prod  : in    std_logic_vector(47 downto 0);
-    decel_seed : in    std_logic_vector(47 downto 0);
+    decel_seed : in    std_logic_vector(63 downto 0);
     cruise     : in    std_logic_vector(63 downto 0);
     stop_ratio : in    std_logic_vector(31 downto 0);
     -- The rest of the segment: all 0 for a move from rest to rest.
@@ -111,7 +111,7 @@ architecture rtl of stepramp_precompute is
   signal p_c_last     : unsigned(47 downto 0);
   signal p_c_sa       : unsigned(47 downto 0);
   signal p_c_sd       : unsigned(47 downto 0);
-  signal p_decel_seed : unsigned(47 downto 0);
+  signal p_decel_seed : unsigned(63 downto 0);
   signal p_cruise     : unsigned(63 downto 0);
   signal p_stop_ratio : unsigned(31 downto 0);
   signal state_r      : std_logic_vector(1 downto 0);
@@ -242,7 +242,7 @@ begin
   -- A seed load carries its seed (the accel seed is already the running value, from latch); a recurrence step
   -- carries the running value (and its remainder); the first value of a soft stop's ramp is a step from D_m := D
   -- with remainder 0.
-  nd_req_value <= std_logic_vector(p_decel_seed) when req_seed_r = '1' and req_decel_r = '1' else
+  nd_req_value <= std_logic_vector(p_decel_seed(47 downto 0)) when req_seed_r = '1' and req_decel_r = '1' else
                   std_logic_vector(v_r(63 downto 16)) when req_alt_r = '1' else
                   std_logic_vector(rec_val);
   nd_req_num   <= std_logic_vector(resize(v_r(63 downto 16) & '0', G_DIV_WIDTH)) when req_alt_r = '1' else
@@ -637,7 +637,7 @@ begin
       if (latch = '1') then
         nxt_d_r <= resize(unsigned(c_first(47 downto 16)), 33);
         nxt_acc <= unsigned(c_first(15 downto 0)) & C_Q16_PAD;
-        rec_val <= unsigned(accel_seed);
+        rec_val <= unsigned(accel_seed(47 downto 0));
         rec_rem <= (others => '0');
         -- The head's index (setup moves it on to interval 2's), and an up head's running product n0 * stop_ratio.
         head_ctr <= unsigned(head_index);

@@ -51,8 +51,8 @@ entity stepramp_regfile is
     c_sa       : out   std_logic_vector(47 downto 0);
     sd         : out   std_logic_vector(30 downto 0);
     c_sd       : out   std_logic_vector(47 downto 0);
-    accel_seed : out   std_logic_vector(47 downto 0);
-    decel_seed : out   std_logic_vector(47 downto 0);
+    accel_seed : out   std_logic_vector(63 downto 0);
+    decel_seed : out   std_logic_vector(63 downto 0);
     cruise     : out   std_logic_vector(63 downto 0);
     stop_ratio : out   std_logic_vector(31 downto 0);
     head_down  : out   std_logic;
@@ -87,8 +87,11 @@ entity stepramp_regfile is
     dir_fault       : in    std_logic;
     -- A START from outside the bus (the multi-axis top's SYNC_START): taken as a START written at this edge.
     ext_start : in    std_logic;
-    -- STATUS.DONE, for the multi-axis top's status word.
+    -- A SOFT_STOP from outside the bus (the multi-axis top's SYNC_SOFT_STOP): a CTRL.SOFT_STOP written at this edge.
+    ext_soft_stop : in    std_logic;
+    -- STATUS.DONE and STATUS.BUSY, for the multi-axis top's status word.
     done_sticky : out   std_logic;
+    busy_status : out   std_logic;
     -- Machine inputs (stepramp_inputs): configuration out; filtered levels (bit 0 LIMIT_NEG, 1 LIMIT_POS, 2 HOME,
     -- 3 ESTOP), activation strobes, the latch and TIME in.
     in_filter     : out   std_logic_vector(19 downto 0);
@@ -172,6 +175,10 @@ architecture rtl of stepramp_regfile is
   -- A take-over commit on its way to the engine, and a queued move (started at the engine's next done).
   signal change_r : std_logic;
   signal q_pend   : std_logic;
+  -- STATUS.BUSY: the engine or a held start (eng_busy), or a start on its way to them: the START strobe, and a queued
+  -- move in the clock between the engine's done and its START strobe. POSITION and the configuration words are
+  -- written only while it is low.
+  signal moving : std_logic;
   -- STATUS.PENDING: the staging registers are locked until the change is taken or the queued move started.
   signal locked : std_logic;
   -- STEPS' sign: the direction of the staged move (1: position counts down).
@@ -361,7 +368,7 @@ begin
 
         if (not mapped_w) then
           err_r <= '1';
-        elsif (C_CONFIG_WORDS(ww) = '1' and eng_busy = '1') then
+        elsif (C_CONFIG_WORDS(ww) = '1' and moving = '1') then
           error_flag <= '1';
           err_code_r <= C_ERR_CFG_BUSY;
         elsif (C_STORAGE_WORDS(ww) = '1' and C_CONFIG_WORDS(ww) = '0' and locked = '1') then
@@ -408,13 +415,18 @@ begin
             q_pend <= '0';
           end if;
 
-          -- CHANGE and QUEUE need a running motion, nothing pending, and one of them; CHANGE keeps the direction.
+          -- CHANGE and QUEUE need a running motion, nothing pending, and one of them; CHANGE keeps the direction; a
+          -- QUEUE needs no ESTOP fault.
           if (new_ctrl(C_CTRL_CHANGE_LSB) = '1' or new_ctrl(C_CTRL_QUEUE_LSB) = '1') then
-            if (eng_busy = '0' or locked = '1' or (new_ctrl(C_CTRL_CHANGE_LSB) and new_ctrl(C_CTRL_QUEUE_LSB)) = '1' or
+            if (moving = '0' or locked = '1' or (new_ctrl(C_CTRL_CHANGE_LSB) and new_ctrl(C_CTRL_QUEUE_LSB)) = '1' or
                 (new_ctrl(C_CTRL_CHANGE_LSB) = '1' and mem(word(C_REG_STEPS))(31) /= eng_dir) or
                 (new_ctrl(C_CTRL_QUEUE_LSB) = '1' and steps_bad = '1')) then
               error_flag <= '1';
               err_code_r <= C_ERR_CHANGE;
+            elsif (new_ctrl(C_CTRL_QUEUE_LSB) = '1' and (in_ev(3) = '1' or in_level(3) = '1')) then
+              -- A move queued during an ESTOP fault could never start: refused as a START would be.
+              error_flag <= '1';
+              err_code_r <= C_ERR_ESTOP;
             elsif (new_ctrl(C_CTRL_CHANGE_LSB) = '1') then
               change_r <= '1';
             else
@@ -424,7 +436,7 @@ begin
         elsif (ww = word(C_REG_STATUS)) then
           clr := merge(x"00000000", wdata, be);
         elsif (ww = word(C_REG_POSITION)) then
-          if (eng_busy = '1') then
+          if (moving = '1') then
             error_flag <= '1';
             err_code_r <= C_ERR_POS_BUSY;
           else
@@ -463,7 +475,7 @@ begin
         ctrl_v(C_CTRL_IRQ_LATCH_EN_LSB downto C_CTRL_IRQ_LIMIT_NEG_EN_LSB) := irq_in_en;
 
         stat_v(C_STATUS_STATE_LSB + 1 downto C_STATUS_STATE_LSB)          := eng_state;
-        stat_v(C_STATUS_BUSY_LSB)                                         := eng_busy;
+        stat_v(C_STATUS_BUSY_LSB)                                         := moving;
         stat_v(C_STATUS_DIR_LSB)                                          := eng_dir;
         stat_v(C_STATUS_DONE_LSB)                                         := done_flag;
         stat_v(C_STATUS_ERROR_LSB)                                        := error_flag;
@@ -512,6 +524,12 @@ begin
       end if;
 
       latch_clr_r <= clr(C_STATUS_LATCHED_LSB);
+
+      -- The multi-axis top's SYNC_SOFT_STOP: as a CTRL.SOFT_STOP (without QUEUE) written at this edge.
+      if (ext_soft_stop = '1') then
+        soft_stop_r <= '1';
+        q_pend      <= '0';
+      end if;
 
       -- A START (written, or the multi-axis top's) while idle: refused with STEPS = -2^31 (no 31-bit magnitude),
       -- during an ESTOP fault, or towards an active limit; it then ends at once (DONE and ERROR), nothing moves.
@@ -652,7 +670,7 @@ begin
   -- word's first write since reset enables every lane, the disabled ones taking the reset value (what mem holds).
   ram_addr <= to_integer(unsigned(addr(C_ADDR_BITS - 1 downto 2)));
 
-  ram_wr_proc : process (wr, ram_addr, wdata, be, eng_busy, written, locked) is
+  ram_wr_proc : process (wr, ram_addr, wdata, be, moving, written, locked) is
 
     variable fresh : std_logic;
 
@@ -671,7 +689,7 @@ begin
     ram_wdata <= merge(reset_value(ram_addr), wdata, be) and storage_mask(ram_addr);
     ram_we    <= (others => '0');
 
-    if (wr = '1' and C_STORAGE_WORDS(ram_addr) = '1' and not (C_CONFIG_WORDS(ram_addr) = '1' and eng_busy = '1') and
+    if (wr = '1' and C_STORAGE_WORDS(ram_addr) = '1' and not (C_CONFIG_WORDS(ram_addr) = '1' and moving = '1') and
         (locked = '0' or C_CONFIG_WORDS(ram_addr) = '1')) then
 
       for b in 0 to 3 loop
@@ -718,8 +736,10 @@ begin
   pos_load  <= pos_load_r;
   change    <= change_r;
   locked    <= change_r or eng_chg_pend or q_pend;
+  moving    <= eng_busy or start_r or q_pend;
 
   done_sticky   <= done_flag;
+  busy_status   <= moving;
   estop_fault   <= in_ev(3);
   latch_clr     <= latch_clr_r;
   in_filter     <= mem(word(C_REG_INPUT_FILTER))(19 downto 0);
@@ -756,8 +776,8 @@ begin
   c_sa       <= mem(word(C_REG_C_SA_HI))(15 downto 0) & mem(word(C_REG_C_SA_LO));
   sd         <= mem(word(C_REG_SD))(30 downto 0);
   c_sd       <= mem(word(C_REG_C_SD_HI))(15 downto 0) & mem(word(C_REG_C_SD_LO));
-  accel_seed <= mem(word(C_REG_ACCEL_SEED_HI))(15 downto 0) & mem(word(C_REG_ACCEL_SEED_LO));
-  decel_seed <= mem(word(C_REG_DECEL_SEED_HI))(15 downto 0) & mem(word(C_REG_DECEL_SEED_LO));
+  accel_seed <= mem(word(C_REG_ACCEL_SEED_HI)) & mem(word(C_REG_ACCEL_SEED_LO));
+  decel_seed <= mem(word(C_REG_DECEL_SEED_HI)) & mem(word(C_REG_DECEL_SEED_LO));
   cruise     <= mem(word(C_REG_CRUISE_HI)) & mem(word(C_REG_CRUISE_LO));
   stop_ratio <= mem(word(C_REG_STOP_RATIO));
   head_down  <= mem(word(C_REG_SEGMENT))(C_SEGMENT_HEAD_DOWN_LSB);

@@ -9,7 +9,7 @@ package stepramp_regs_pkg is
 
   -- Decoded address bits and the ID register's value.
   constant C_ADDR_BITS : natural                       := 8;
-  constant C_ID_VALUE  : std_logic_vector(31 downto 0) := x"53520007";
+  constant C_ID_VALUE  : std_logic_vector(31 downto 0) := x"53520008";
 
   -- Byte offsets.
   constant C_REG_ID            : natural := 16#00#;
@@ -195,9 +195,9 @@ package stepramp_regs_pkg is
     13     => x"FFFFFFFF",
     14     => x"0000FFFF",
     15     => x"FFFFFFFF",
-    16     => x"0000FFFF",
+    16     => x"FFFFFFFF",
     17     => x"FFFFFFFF",
-    18     => x"0000FFFF",
+    18     => x"FFFFFFFF",
     19     => x"FFFFFFFF",
     20     => x"FFFFFFFF",
     21     => x"FFFFFFFF",
@@ -227,7 +227,7 @@ package stepramp_regs_pkg is
 
   constant C_REG_RESET : t_reg_words :=
   (
-    0      => x"53520007",
+    0      => x"53520008",
     1      => x"00000000",
     2      => x"00000000",
     3      => x"00000000",

@@ -36,6 +36,11 @@ entity stepramp_stepper is
     soft_stop : in    std_logic;
     gate_busy : out   std_logic;
     dir_fault : out   std_logic;
+    -- The multi-axis top's common start (docs/stepramp_stepper.md, "Start gate"): gate_wait is '1' while the gate
+    -- holds a start that its own DIR hold / setup or STEP spacing does not yet let go; while start_hold is '1' a
+    -- start that could go waits (in SETUP), so that every axis of one SYNC_START fires on one edge. Tie to '0' alone.
+    start_hold : in    std_logic;
+    gate_wait  : out   std_logic;
     -- From the ramp engine (eng_X is the engine's port X).
     eng_step     : in    std_logic;
     eng_busy     : in    std_logic;
@@ -266,6 +271,30 @@ begin
   setup_wait <= unsigned(dir_setup) - C_SETUP_MIN when unsigned(dir_setup) > C_SETUP_MIN else
                 (others => '0');
 
+  -- A held start that the gate's own rules do not yet let go (the common start waits for it); a stop lets it go.
+  gate_wait_proc : process (gstate, start_req, eng_busy, hard_stop, soft_stop, new_dir, dir_r, space_ok,
+                            setup_cnt) is
+  begin
+
+    gate_wait <= '0';
+
+    if (gstate = C_GS_IDLE) then
+      if (start_req = '1' and eng_busy = '0' and hard_stop = '0' and
+          (new_dir /= dir_r or space_ok = '0')) then
+        gate_wait <= '1';
+      end if;
+    elsif (gstate = C_GS_HOLD) then
+      if (hard_stop = '0' and soft_stop = '0') then
+        gate_wait <= '1';
+      end if;
+    elsif (gstate = C_GS_SETUP) then
+      if (hard_stop = '0' and soft_stop = '0' and (setup_cnt /= 0 or space_ok = '0')) then
+        gate_wait <= '1';
+      end if;
+    end if;
+
+  end process gate_wait_proc;
+
   gate_proc : process (clk) is
 
     variable v_next : std_logic_vector(1 downto 0);
@@ -308,8 +337,8 @@ begin
               stop_r  <= '1';
               v_next  := C_GS_FIRED;
             elsif (setup_cnt = 0) then
-              -- Setup kept; the STEP spacing across moves may hold the start a little longer.
-              if (space_ok = '1') then
+              -- Setup kept; the STEP spacing across moves, or the common start, may hold the start a little longer.
+              if (space_ok = '1' and start_hold = '0') then
                 start_r <= '1';
                 v_next  := C_GS_FIRED;
               end if;
@@ -330,11 +359,12 @@ begin
                 start_r <= '1';
                 stop_r  <= '1';
                 v_next  := C_GS_FIRED;
-              elsif (new_dir = dir_r and space_ok = '1') then
+              elsif (new_dir = dir_r and space_ok = '1' and start_hold = '0') then
                 start_r <= '1';
                 v_next  := C_GS_FIRED;
               elsif (new_dir = dir_r) then
-                -- Same direction, but too close to the last STEP pulse: wait in SETUP (nothing to set up).
+                -- Same direction, but too close to the last STEP pulse or held for the common start: wait in SETUP
+                -- (nothing to set up).
                 setup_cnt <= (others => '0');
                 v_next    := C_GS_SETUP;
               else

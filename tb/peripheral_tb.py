@@ -30,6 +30,7 @@ from stepramp.models.engine import edges_with_stop, last_edge
 from stepramp.sim.clocking import (
     CLK_PERIOD_NS,
     CLK_PERIOD_PS,
+    Cycles,
     apply_reset,
     quiet_inputs,
     reset_held,
@@ -223,7 +224,7 @@ class MotionBench:
         self.outputs, self.enabled = outputs, enable
         # The PWM duty follows a new mode after the serial multipliers (stepramp.models.stepping.winding_latency, < 40
         # clocks): let the outputs settle before the monitors look at them.
-        await ClockCycles(self.clk, 100)
+        await Cycles(self.clk, 100)
         self._start_monitors(position=self.elec_pos)
 
 

@@ -44,6 +44,7 @@ from stepramp.models.engine import change_edges, edges_with_stop, phase_of, segm
 from stepramp.models.engine import edges as model_edges
 from stepramp.models.stepping import gate_timing
 from stepramp.sim.cdriver import CDriver
+from stepramp.sim.clocking import Cycles
 from stepramp.sim.profiles import EXACT_PROFILES, PROFILES_BY_NAME, Profile
 from stepramp.sim.runner import run_cocotb
 from stepramp.tools import clib
@@ -66,7 +67,7 @@ async def c_bench(dut: Any, prof: Profile) -> tuple[PeripheralTb, CDriver]:
     """The top, reset, with the C driver on its bus master, initialised for a profile's clock and motor (the driver's
     STEPRAMP_IDLE() waits 200 clocks)."""
     tb = await PeripheralTb.started(dut)
-    cdrv = CDriver(Path(os.environ["STEPRAMP_C_CB_LIB"]), tb.bus, idle=lambda: ClockCycles(tb.clk, 200))
+    cdrv = CDriver(Path(os.environ["STEPRAMP_C_CB_LIB"]), tb.bus, idle=lambda: Cycles(tb.clk, 200))
     await c_init(cdrv, prof)
     return tb, cdrv
 
@@ -99,7 +100,7 @@ async def irq_dropped(tb: PeripheralTb) -> None:
 
 async def irq_within(tb: PeripheralTb, cycles: int) -> bool:
     if not int(tb.dut.irq.value):
-        await First(RisingEdge(tb.dut.irq), ClockCycles(tb.clk, cycles))
+        await First(RisingEdge(tb.dut.irq), Cycles(tb.clk, cycles))
     return bool(int(tb.dut.irq.value))
 
 
@@ -179,7 +180,7 @@ async def c_driver_isr(dut) -> None:
     assert rc == ECORE_BASE + ERR["PRESCALE"], f"isr returned {rc}"
     assert cdrv.status.done and cdrv.status.error
     await irq_dropped(tb)
-    await ClockCycles(tb.clk, 2_000)
+    await Cycles(tb.clk, 2_000)
     assert len(tb.step_edges) == n0, "a rejected move pulsed STEP"
     tb.finish()
 
@@ -371,7 +372,7 @@ async def c_driver_exact(dut) -> None:
     stepramp_soft_stop in RUN: every edge as the model says of the Python driver's exact plans (the C plans are
     bit-identical), POSITION the pulses seen."""
     tb = await PeripheralTb.started(dut)
-    cdrv = CDriver(Path(os.environ["STEPRAMP_C_CB_LIB"]), tb.bus, idle=lambda: ClockCycles(tb.clk, 200))
+    cdrv = CDriver(Path(os.environ["STEPRAMP_C_CB_LIB"]), tb.bus, idle=lambda: Cycles(tb.clk, 200))
     prof = EXACT_BY_NAME["trap_basic"]
     rc = await cdrv.dev_call("stepramp_init", cdrv.base, prof.fclk, prof.spr, prof.prescale)
     assert rc == EID, f"stepramp_init on an exact core: {await cdrv.call('stepramp_strresult', rc)}"

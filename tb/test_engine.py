@@ -532,6 +532,9 @@ def check_error_cases() -> list[tuple[str, Plan, int]]:
         ("C_SD", rep(neg, c_sd=0), ERR["C_SD"]),
         ("CRUISE", rep(good, cruise=Q32 - 1), ERR["CRUISE"]),
         ("ACCEL_SEED", rep(good, accel_seed=Q16 - 1), ERR["ACCEL_SEED"]),
+        # sa = 3 and sa = 4: each side of the check's "sa >= 3" split into bits (trap_basic's sa = 31 has both)
+        ("ACCEL_SEED sa=3", rep(good, sa=3, accel_seed=Q16 - 1), ERR["ACCEL_SEED"]),
+        ("ACCEL_SEED sa=4", rep(good, sa=4, accel_seed=Q16 - 1), ERR["ACCEL_SEED"]),
         ("DECEL_SEED", rep(neg, decel_seed=0), ERR["DECEL_SEED"]),
         ("all of them", rep(good, prescale=0, sa=0, c_first=0, c_last=0, cruise=0, decel_seed=0), ERR["PRESCALE"]),
         ("all zero but PRESCALE", hand_plan(5, c_first=0, c_last=0, sa=0, sd=0), ERR["BOUNDS"]),

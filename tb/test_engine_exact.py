@@ -10,8 +10,11 @@
   sustains at PRESCALE 1.
 * test_exact_engine_segments: segments from START in exact mode (an up head from n0 > 0, a down head, an endless
   jog) with soft stops in the head and in the cruise (the run stop's c_sd), and a move whose soft stop comes at the
-  ACCEL / RUN junction: every edge as segment_edges / edges_with_stop say. The parameter check: ramp constants below
-  2^16 (c0 under 16 ticks) run, a ramp constant of 0 is refused with ACCEL_SEED / DECEL_SEED (no pulse).
+  ACCEL / RUN junction: every edge as segment_edges / edges_with_stop say; slow ramps (ramp constants of 2^48 or
+  more, seed words of scale 0, 3 and 6: c0 of 2^22, 2^28 and 2^31 ticks) taken at large head indices, where their
+  intervals are a few hundred to 23,000 clocks: an up head with a soft stop, a down head. The parameter check: ramp
+  constants below 2^16 (c0 under 16 ticks) run, a ramp constant of 0, a mantissa of 0 at scale 3 and a scale of 7
+  are refused with ACCEL_SEED / DECEL_SEED (no pulse).
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ from stepramp.board.regmap import ERROR_CODES
 from stepramp.models import exact
 from stepramp.models.engine import HALF, accumulate, edges_with_stop, segment_edges
 from stepramp.models.engine import edges as model_edges
-from stepramp.models.exact_unit import FRESH_WORST, fresh_latency
+from stepramp.models.exact_unit import FRESH_WORST, FRESH_WORST_NARROW, fresh_latency
 from stepramp.sim.engine_sim import Stop, simulate
 from stepramp.sim.profiles import EXACT_PROFILES
 from tbutil import build_dir
@@ -30,15 +33,20 @@ from test_engine import move_problems
 
 ERR = {name: code for name, (code, _) in ERROR_CODES.items()}
 Q16 = 1 << 16
-C_MAX = (1 << exact.C_WIDTH) - 1
+C_NARROW_MAX = (1 << 48) - 1
+"""The largest constant below 2^48 (a seed word of scale 0)."""
+C_MAX = exact.seed_word(exact.C_MAX >> 12, exact.SCALE_MAX)
+"""The largest constant the driver writes, 2^72 - 2^36 (a seed word of scale 6)."""
 
 #: docs/stepramp_engine.md, "Latency budget in exact mode": a value the unit answers `lat` edges after the edge
 #: that samples its request is ready for a pulse at E + NORMAL + lat (E the pulse edge that starts the interval
 #: before it); the soft-stop alternative of an ACCEL interval at E + ALT + lat_normal + lat_alt.
 NORMAL = 6
 ALT = 9
-#: The value-independent worst case: both requests fresh at C = 2^48 - 1 and an index near 2^31.
+#: The value-independent worst case: both requests fresh at C = 2^72 - 2^36 and an index near 2^31; with constants
+#: below 2^48 (FRESH_WORST_NARROW) the driver's shorter limit.
 WORST = ALT + 2 * FRESH_WORST
+WORST_NARROW = ALT + 2 * FRESH_WORST_NARROW
 
 
 def _segment(length: int, head: str, n0: int, c_first_ticks: int, **regs: int) -> tuple[Plan, dict[str, int], Segment]:
@@ -71,8 +79,8 @@ def budget_cases() -> list[tuple[str, Plan, dict[str, int], list[Stop], list[int
     # 1. The first value of a move's accel ramp (interval 2: index 1, a fresh request sampled at the edge after pulse
     # 0's) is ready for a pulse at E + NORMAL + lat: interval 1 of c1 clocks must reach that. A hard stop after
     # pulse 2 ends the move that is in time.
-    for c_acc in (1 << 20, 1 << 47, C_MAX):
-        need = NORMAL + fresh_latency(c_acc, 1)
+    for c_acc in (1 << 20, 1 << 47, C_NARROW_MAX, C_MAX):
+        need = NORMAL + fresh_latency(exact.constant_of(c_acc), 1)
         for c1 in (need - 1, need):
             plan, fields, _ = _segment(1000, UP, 0, c1, sa=900, sd=950, accel_seed=c_acc)
             values = [plan.c_first << 16, exact.value(c_acc, 1) << 16]
@@ -90,11 +98,13 @@ def budget_cases() -> list[tuple[str, Plan, dict[str, int], list[Stop], list[int
     # E + ALT + lat_normal + lat_alt. In time, the stop runs (a hard stop after its second value ends the move).
     corners = (
         (1 << 20, 1 << 16, 1 << 30, 1 << 30),  # small indices
-        ((1 << 31) - (1 << 10), (1 << 16) - 1, C_MAX, C_MAX),  # the worst case: both near 2^31 at C = 2^48 - 1
+        # the worst case below 2^48: both near 2^31 at C = 2^48 - 1
+        ((1 << 31) - (1 << 10), (1 << 16) - 1, C_NARROW_MAX, C_NARROW_MAX),
+        ((1 << 31) - (1 << 10), (1 << 16) - 1, C_MAX, C_MAX),  # the worst case: at C = 2^72 - 2^36
     )
     for n0, ratio, c_acc, c_dec in corners:
         m = (n0 + 1) * ratio >> 16
-        need = ALT + fresh_latency(c_acc, n0 + 1) + fresh_latency(c_dec, m - 1)
+        need = ALT + fresh_latency(exact.constant_of(c_acc), n0 + 1) + fresh_latency(exact.constant_of(c_dec), m - 1)
         for c1 in (need - 1, need):
             length = (1 << 31) - 2  # STEPS = length + 1 <= 2^31 - 1
             plan, fields, _ = _segment(
@@ -116,7 +126,9 @@ def budget_cases() -> list[tuple[str, Plan, dict[str, int], list[Stop], list[int
 
 def test_exact_latency_budget() -> None:
     cases = budget_cases()
-    assert any(need == WORST for need in (_need(label) for label, *_ in cases)), "the worst case is not among them"
+    needs = [_need(label) for label, *_ in cases]
+    assert WORST in needs and WORST_NARROW in needs, "the worst cases are not among them"
+    assert (WORST, WORST_NARROW) == (299, 251)
     results = simulate(
         [c[1] for c in cases],
         build_dir("engine_exact_budget"),
@@ -129,7 +141,10 @@ def test_exact_latency_budget() -> None:
     for (label, _, _, _, expected, code), res in zip(cases, results, strict=True):
         problems += [f"{label}: {p}" for p in move_problems(res, expected, code=code)]
     assert not problems, "\n".join(problems)
-    print(f"exact mode: the worst case needs an interval of {WORST} clocks at PRESCALE 1 (late at {WORST - 1})")
+    print(
+        f"exact mode: the worst case needs an interval of {WORST} clocks at PRESCALE 1 (late at {WORST - 1}), "
+        f"{WORST_NARROW} with constants below 2^48"
+    )
 
 
 def _need(label: str) -> int | None:
@@ -182,6 +197,34 @@ def test_exact_engine_segments() -> None:
                 segment_edges(jog, 1, stop=("soft", at)),
             )
         )
+    # slow ramps: wide constants at large head indices, where their intervals are short enough to simulate; a hard
+    # stop after pulse 40 ends each (the rest of such a segment, its decel to rest, takes about c0 ticks and more)
+    slow = (
+        # (label, head, c0 in ticks, head index, cruise ticks)
+        ("scale 0, c0 = 2^22: up head from 2^26", UP, 2.0**22, 1 << 26, 250),
+        ("scale 3, c0 = 2^28: down head from 2^30", DOWN, 2.0**28, 1 << 30, 4000),
+        ("scale 6, c0 = 2^31: up head from 2^31 - 2^13", UP, 2.0**31, (1 << 31) - (1 << 13), 20000),
+    )
+    for label, head, c0, n0, cruise in slow:
+        seed = exact.ramp_constant(c0)
+        assert exact.mantissa_scale(seed)[1] == int(label.split()[1].rstrip(","))
+        assert exact.constant_of(seed) >= 1 << 48
+        plan, fields, seg = _segment(
+            5000,
+            head,
+            n0,
+            cruise * 2,
+            sa=2000,
+            sd=4000,
+            accel_seed=seed,
+            decel_seed=seed,
+            cruise=cruise << 32,
+            c_sa=cruise * Q16,
+            c_sd=cruise * Q16,
+            c_last=cruise * 3 * Q16,
+        )
+        hard = ("hard", segment_edges(seg, 1)[40] + 1)
+        runs.append((label, plan, fields, Stop(*hard), segment_edges(seg, 1, stop=hard)))
     move = plan_move(**EXACT_PROFILES[0].args(), ramp=RAMP_EXACT)
     edges = model_edges(move)
     for pulse in (move.sa - 1, move.sa, move.sd - 1):  # decided at the pulse after the sample
@@ -200,9 +243,10 @@ def test_exact_engine_segments() -> None:
     runs.append(("move with ramp constants below 2^16", small, {}, None, model_edges(small)))
     codes = [0] * len(runs)
     for name in ("accel_seed", "decel_seed"):
-        bad = Plan(**{**move.to_dict(), name: 0, "ramp": RAMP_EXACT})
-        runs.append((f"move with {name} 0", bad, {}, None, []))
-        codes.append(ERR[name.upper()])
+        for word in (0, exact.seed_word(0, 3), exact.seed_word(getattr(move, name), 7)):
+            bad = Plan(**{**move.to_dict(), name: word, "ramp": RAMP_EXACT})
+            runs.append((f"move with {name} {word:#x}", bad, {}, None, []))
+            codes.append(ERR[name.upper()])
     results = simulate(
         [r[1] for r in runs],
         build_dir("engine_exact_segments"),

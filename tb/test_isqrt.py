@@ -1,12 +1,15 @@
 # SPDX-License-Identifier: MIT
 """stepramp_isqrt: the rounded root and the latency of every run against the model (stepramp.models.exact_unit.isqrt:
-exact.root, and L = floor(msb(R) / 2) + 5, 1 for R = 0), with busy and done checked in every clock.
+exact.root of R 4^e, and L = floor(msb(R) / 2) + e + 5, 1 for R = 0, e = min(extra, G_EXTRA)), with busy and done
+checked in every clock.
 
 * isqrt_against_model: width 4 and 12, every radicand (0 .. 4095 at 12, all ones included: the rounding carries into
   the root's extra bit); width 80 (the next-delay unit's) and 128 (the largest): the corners (0, 1, 2^k, 2^k - 1,
   2^k + 1, s^2 - 1, s^2, s^2 + s, s^2 + s + 1, all ones) and random radicands of every bit length. Runs back to back
   (start held into the done cycle) or after a pause; while busy, start and the radicand are random and must be
-  ignored. The seed is printed and replays the run: ISQRT_SEED=<seed> pytest tb/test_isqrt.py.
+  ignored. Every run has a random `extra` of 0 .. 15 (taken as at most G_EXTRA: 0 at widths 4, 12, 80 and 128; 3 at
+  width 12 and 6 at width 92, the next-delay unit's). The seed is printed and replays the run:
+  ISQRT_SEED=<seed> pytest tb/test_isqrt.py.
 * reset_drops_the_run: a reset at the sampling edge or during a run: no done, busy '0' and root 0 after it, and the
   next run is answered as usual.
 """
@@ -56,12 +59,18 @@ def outputs(dut: Any) -> tuple[int, int]:
     return int(dut.busy.value), int(dut.done.value)
 
 
+def max_extra(dut: Any) -> int:
+    """G_EXTRA, from the root port's width (G_WIDTH / 2 + G_EXTRA + 1)."""
+    return len(dut.root) - 1 - len(dut.radicand) // 2
+
+
 async def run_radicands(dut: Any, values: list[int], rng: random.Random) -> tuple[list[str], dict[str, int]]:
-    """Each radicand at a falling edge with the unit idle (after a pause, or in the previous done cycle), sampled by
-    the next rising edge e; then, clock by clock, busy must be '1' and done '0' until the cycle after edge e + L,
-    where done is '1' (one cycle), busy '0' and the root the model's."""
+    """Each radicand (and a random extra) at a falling edge with the unit idle (after a pause, or in the previous
+    done cycle), sampled by the next rising edge e; then, clock by clock, busy must be '1' and done '0' until the
+    cycle after edge e + L, where done is '1' (one cycle), busy '0' and the root the model's."""
     width = len(dut.radicand)
-    worst = width // 2 + 5
+    top_extra = max_extra(dut)
+    worst = width // 2 + top_extra + 5
     failures: list[str] = []
     counts = {"runs": 0, "held": 0, "max_latency": 0, "carry": 0}
     for i, r in enumerate(values):
@@ -74,10 +83,12 @@ async def run_radicands(dut: Any, values: list[int], rng: random.Random) -> tupl
                 if outputs(dut) != (0, 0):
                     failures.append(f"idle before radicand {i}: busy, done = {outputs(dut)}")
         counts["held"] += gap == 0
+        extra = rng.randrange(16) if rng.random() < 0.5 else min(top_extra, 15)
         dut.radicand.value = r
+        dut.extra.value = extra
         dut.start.value = 1
         await RisingEdge(dut.clk)  # the sampling edge e
-        expect = isqrt(r, width)
+        expect = isqrt(r, width, extra, top_extra)
         latency = None
         for k in range(worst + 2):
             await FallingEdge(dut.clk)  # the cycle after edge e + k
@@ -97,15 +108,17 @@ async def run_radicands(dut: Any, values: list[int], rng: random.Random) -> tupl
             # ignored while busy
             dut.start.value = rng.getrandbits(1)
             dut.radicand.value = rng.getrandbits(width)
+            dut.extra.value = rng.getrandbits(4)
         if latency is None:
             failures.append(f"R={r:#x}: no done within {worst + 1} edges (expected {expect.latency})")
             break
         counts["runs"] += 1
         counts["max_latency"] = max(counts["max_latency"], latency)
-        counts["carry"] += expect.root >> (width // 2)
+        counts["carry"] += expect.root >> (width // 2 + top_extra)
         if len(failures) > 20:
             break
     dut.start.value = 0
+    dut.extra.value = 0
     await FallingEdge(dut.clk)
     if outputs(dut) != (0, 0):
         failures.append(f"after the last run: busy, done = {outputs(dut)}")
@@ -115,6 +128,7 @@ async def run_radicands(dut: Any, values: list[int], rng: random.Random) -> tupl
 async def reset_unit(dut: Any) -> None:
     dut.start.value = 0
     dut.radicand.value = 0
+    dut.extra.value = 0
     await start_clock_and_reset(dut.clk, dut.rst)
     await FallingEdge(dut.clk)
 
@@ -132,7 +146,7 @@ async def isqrt_against_model(dut) -> None:
     assert not failures, f"{SEED_ENV}={seed} width {width}:\n" + "\n".join(failures)
     assert counts["runs"] == len(values)
     # the set covers what it claims: the longest run, the rounding's carry out of the top bit, runs back to back
-    assert counts["max_latency"] == width // 2 + 4, counts
+    assert counts["max_latency"] == width // 2 + max_extra(dut) + 4, counts
     assert counts["carry"] >= 1 and counts["held"] > 0, counts
 
 
@@ -174,17 +188,17 @@ async def reset_drops_the_run(dut) -> None:
     assert not failures, f"{SEED_ENV}={seed}:\n" + "\n".join(failures)
 
 
-@pytest.mark.parametrize("width", [4, 12, 80, 128])
-def test_isqrt(width: int) -> None:
-    """Both cocotb tests at one width; the seed is random unless ISQRT_SEED is set."""
+@pytest.mark.parametrize(("width", "extra"), [(4, 0), (12, 0), (12, 3), (80, 0), (92, 6), (128, 0)])
+def test_isqrt(width: int, extra: int) -> None:
+    """Both cocotb tests at one width and G_EXTRA; the seed is random unless ISQRT_SEED is set."""
     seed = int(os.environ.get(SEED_ENV, random.SystemRandom().randrange(1 << 32)))
-    print(f"stepramp_isqrt width {width}: {SEED_ENV}={seed}")
+    print(f"stepramp_isqrt width {width}, G_EXTRA {extra}: {SEED_ENV}={seed}")
     # every run at the worst latency with the longest pause, and margin (10 ns clock)
-    limit_us = len(radicands(width, random.Random(seed))) * (width // 2 + 5 + 4) * 10 // 1000 + 100
+    limit_us = len(radicands(width, random.Random(seed))) * (width // 2 + extra + 5 + 4) * 10 // 1000 + 100
     run_cocotb(
         "stepramp_isqrt",
         "test_isqrt",
-        build_dir(f"isqrt_w{width}"),
-        parameters={"G_WIDTH": width},
+        build_dir(f"isqrt_w{width}_e{extra}"),
+        parameters={"G_WIDTH": width, "G_EXTRA": extra},
         extra_env={SEED_ENV: str(seed), "ISQRT_LIMIT_US": str(limit_us)},
     )

@@ -26,6 +26,9 @@ Tests (one simulation per top):
 * coordinated_move: MultiAxis.move_coordinated of a 3-axis linear move (one axis backwards, so its DIR changes):
   the plans are stepramp.board.coord.plan_coordinated's, every STEP edge of every axis equals the model's, and the
   last pulses lie within max(2 ticks, 0.01 c0 of the slowest axis) of each other;
+* coordinated_stop_on_the_line: MultiAxis.stop_coordinated (one CHANGE per axis, stepramp.board.coord
+  .plan_coordinated_stop) of a 3-axis coordinated move in its ACCEL and of another in its RUN: every STEP edge of
+  every axis equals change_edges of its plan and its take-over, every axis rests within half a step of the line;
 * estop_stops_every_axis: the shared ESTOP pin raised while three axes run, each axis with its own INPUT_FILTER N:
   no STEP rising edge later than 2 clocks after the axis's filtered edge F = a + N + 2 (docs/algorithm.md, "Machine
   inputs"), every pulse before it as the model says, ERROR with ERR_CODE ESTOP, ENABLE low, and a SYNC_START during
@@ -47,8 +50,9 @@ from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge, Timer
 from cocotb.utils import get_sim_time
 
 from peripheral_tb import AxilPort, BusError, BusPort, IpifPort
-from stepramp.board.coord import plan_coordinated_info
-from stepramp.board.driver import Outputs, StepRamp
+from stepramp.board.change import Segment
+from stepramp.board.coord import plan_coordinated_info, plan_coordinated_stop
+from stepramp.board.driver import Outputs, StepRamp, plan_writes, segment_writes
 from stepramp.board.multi import (
     AXIS_WINDOW,
     ID_MAGIC,
@@ -56,15 +60,18 @@ from stepramp.board.multi import (
     REG_AXES_STATUS,
     REG_ID,
     REG_IRQ_MASK,
+    REG_SYNC_SOFT_STOP,
     REG_SYNC_START,
     AxesStatus,
     MultiAxis,
     MultiAxisError,
     axis_base,
+    soft_stop_line_bound,
 )
 from stepramp.board.plan import Plan, plan_move
 from stepramp.board.regmap import ERROR_CODES, ID_VALUE, REGISTERS, REGISTERS_BY_NAME, offset
 from stepramp.models import stepping as sm
+from stepramp.models.engine import change_edges, edges_with_stop, phase_of, soft_stop_pulse
 from stepramp.models.engine import edges as model_edges
 from stepramp.sim.clocking import CLK_PERIOD_NS, CLK_PERIOD_PS, quiet_inputs, start_clock
 from stepramp.sim.profiles import design_args
@@ -78,7 +85,7 @@ TOPS = ("stepramp_multi_plb", "stepramp_multi_axil")
 PORTS: dict[str, type[BusPort]] = {"stepramp_multi_plb": IpifPort, "stepramp_multi_axil": AxilPort}
 
 MAPPED = {r.offset for r in REGISTERS}
-GLOBAL = (REG_ID, REG_SYNC_START, REG_AXES_STATUS, REG_IRQ_MASK)
+GLOBAL = (REG_ID, REG_SYNC_START, REG_AXES_STATUS, REG_IRQ_MASK, REG_SYNC_SOFT_STOP)
 STATUS = REGISTERS_BY_NAME["STATUS"]
 ESTOP_CODE = ERROR_CODES["ESTOP"][0]
 #: The stepping outputs of the motion tests (STEP/DIR only): exact STEP width 4, the shortest DIR timing.
@@ -201,6 +208,40 @@ class MultiTb:
         engine_edge0 = gate.start_edge + 1  # eng_start is '1' in the cycle after start_edge
         return [engine_edge0 + sm.STEP_LATENCY + e for e in model_edges(plan)]
 
+    def expected_sync(
+        self,
+        plans: list[Plan],
+        write_edge: int,
+        dirs_before: list[int] | None = None,
+        last_rises: list[int | None] | None = None,
+    ) -> tuple[int, list[list[int]]]:
+        """The engine's edge 0 and each axis's STEP rising edges (none for 0 steps) when one SYNC_START sampled at
+        `write_edge` starts `plans`: each axis's start gate (gate_timing from its DIR and last STEP edge before), then
+        the common start of the selected axes (stepramp.models.stepping.sync_gate_timing)."""
+        dirs = dirs_before or [0] * len(plans)
+        lasts = last_rises or [None] * len(plans)
+        chosen = [i for i, plan in enumerate(plans) if plan.steps > 0]
+        gates = []
+        for i in chosen:
+            o = self.outputs[i]
+            gates.append(
+                sm.gate_timing(
+                    write_edge + 1,
+                    plans[i].direction != dirs[i],
+                    lasts[i],
+                    o.dir_hold,
+                    o.dir_setup,
+                    o.step_width,
+                    o.step_space,
+                )
+            )
+        synced = sm.sync_gate_timing(gates)
+        edge0 = synced[0].start_edge + 1
+        out: list[list[int]] = [[] for _ in plans]
+        for i in chosen:
+            out[i] = [edge0 + sm.STEP_LATENCY + e for e in model_edges(plans[i])]
+        return edge0, out
+
     def check_pins(self) -> None:
         """Exact STEP width and DIR setup / hold on every axis, from the recorded pins."""
         problems: list[str] = []
@@ -255,6 +296,7 @@ async def register_windows(dut) -> None:
     assert await bus.read(REG_IRQ_MASK) == all_axes, "IRQ_MASK resets to every axis"
     assert await bus.read(REG_AXES_STATUS) == 0, "AXES_STATUS after reset"
     assert await bus.read(REG_SYNC_START) == 0
+    assert await bus.read(REG_SYNC_SOFT_STOP) == 0
     await bus.write(REG_IRQ_MASK, 0xFFFF_FFFF)
     assert await bus.read(REG_IRQ_MASK) == all_axes, "IRQ_MASK keeps a bit per axis only"
     await bus.write(REG_IRQ_MASK, 0b010, strobe=0b1110)  # byte lane 0 not enabled: no change
@@ -271,6 +313,9 @@ async def register_windows(dut) -> None:
     await bus.write(REG_SYNC_START, all_axes, strobe=0b1110)  # the mask's byte lane not enabled: no START
     await ClockCycles(tb.clk, 4)
     assert await bus.read(REG_AXES_STATUS) == 0, "SYNC_START without its byte lane started an axis"
+    await tb.multi.sync_soft_stop(range(axes))  # idle axes: nothing to stop, no flag
+    await ClockCycles(tb.clk, 4)
+    assert await bus.read(REG_AXES_STATUS) == 0, "SYNC_SOFT_STOP of idle axes changed AXES_STATUS"
     await tb.multi.set_irq_mask(range(axes))
 
     # Every axis window: its own ID, STEPS written with a value of its own, read back from every window.
@@ -284,7 +329,7 @@ async def register_windows(dut) -> None:
         assert (await tb.axis(i).status()).done is False
 
     # Unmapped: the rest of the global window, the unmapped offsets of each axis window, the windows past the axes.
-    for addr in range(0x10, AXIS_WINDOW, 4):
+    for addr in range(REG_SYNC_SOFT_STOP + 4, AXIS_WINDOW, 4):
         await expect_err(bus, "rd", addr)
         await expect_err(bus, "wr", addr)
     for i in range(axes):
@@ -429,15 +474,148 @@ async def coordinated_move(dut) -> None:
     assert got == plans, "the driver's plans are not plan_coordinated's"
     w = tb.write_edges[-1]
     await tb.multi.wait_done(range(3), idle=lambda: tb.idle(1000))
-    for i, plan in enumerate(plans):
-        want = tb.expected(i, plan, w, 0, None)
-        assert tb.rises[i] == want, f"axis {i}: {edges_differ(tb.rises[i], want)}"
+    _, wants = tb.expected_sync(plans, w)
+    for i in range(3):
+        assert tb.rises[i] == wants[i], f"axis {i}: {edges_differ(tb.rises[i], wants[i])}"
         assert await tb.axis(i).position() == steps[i], f"axis {i}: POSITION"
     ends = [r[-1] for r in tb.rises]
     c0_slowest = max(move.c0 for move in info.infos)
     tolerance = max(2.0, 0.01 * c0_slowest) * prescale  # clocks
     spread = max(ends) - min(ends)
     assert spread <= tolerance, f"last pulses at {ends}: {spread} clocks apart, more than {tolerance}"
+    tb.check_pins()
+
+
+@cocotb.test(timeout_time=400, timeout_unit="us")
+async def coordinated_dir_changes(dut) -> None:
+    """A coordinated 3-axis move in which two axes change DIR (DIR setup 60 clocks): SYNC_START gives every axis its
+    pulse 0 on one clock edge, the latest gate among them (sync_gate_timing); every edge as the model says, the last
+    pulses within max(2 ticks, 0.01 c0 of the slowest axis) of each other, DIR setup kept on the pins."""
+    prescale = 2
+    tb = await MultiTb.started(dut, prescale=prescale)
+    await tb.configure(Outputs(step_width=4, dir_setup=60, dir_hold=0))
+    lead = design_args(40, 60.0, 8.0, 8.0, prescale=prescale)
+    steps = [40, -23, -13]
+    args = (lead["accel"], lead["decel"], lead["speed"])
+    plans, info = plan_coordinated_info(steps, *args, spr=lead["spr"], fclk=lead["fclk"], prescale=prescale)
+    await tb.multi.move_coordinated(steps, *args)
+    w = tb.write_edges[-1]
+    await tb.multi.wait_done(range(3), idle=lambda: tb.idle(1000))
+    _, wants = tb.expected_sync(plans, w)
+    assert len({want[0] for want in wants}) == 1, "the model's pulses 0 are not on one edge"
+    for i in range(3):
+        assert tb.rises[i] == wants[i], f"axis {i}: {edges_differ(tb.rises[i], wants[i])}"
+        assert await tb.axis(i).position() == steps[i], f"axis {i}: POSITION"
+    ends = [r[-1] for r in tb.rises]
+    c0_slowest = max(move.c0 for move in info.infos)
+    tolerance = max(2.0, 0.01 * c0_slowest) * prescale  # clocks
+    spread = max(ends) - min(ends)
+    assert spread <= tolerance, f"last pulses at {ends}: {spread} clocks apart, more than {tolerance}"
+    tb.check_pins()
+
+
+@cocotb.test(timeout_time=400, timeout_unit="us")
+async def coordinated_soft_stop(dut) -> None:
+    """SYNC_SOFT_STOP during a coordinated 3-axis move (in its ACCEL, then in a second move's RUN): every axis
+    soft-stopped at the edge that samples the write, each edge as the model says (edges_with_stop of each plan at
+    that edge), and each axis at rest within the documented distance of the line (the lead's stop point times
+    L_i / L_lead, multi.soft_stop_line_bound)."""
+    prescale = 2
+    tb = await MultiTb.started(dut, prescale=prescale)
+    await tb.configure()
+    lead = design_args(60, 60.0, 12.0, 12.0, prescale=prescale)
+    args = (lead["accel"], lead["decel"], lead["speed"])
+    position = [0, 0, 0]
+    assert not any(tb.dir_changes)
+    for steps, wait, phase in (([60, -37, 22], 6, "ACCEL"), ([-60, 41, -17], 25, "RUN")):
+        plans, info = plan_coordinated_info(steps, *args, spr=lead["spr"], fclk=lead["fclk"], prescale=prescale)
+        dirs = [len(tb.dir_changes[i]) % 2 for i in range(3)]  # DIR after reset is 0; the pins show each change
+        lasts: list[int | None] = [r[-1] if r else None for r in tb.rises]
+        n0 = [len(r) for r in tb.rises]
+        await tb.axis(0).program(plans[0])
+        await tb.axis(1).program(plans[1])
+        await tb.axis(2).program(plans[2])
+        await tb.multi.sync_start(range(3))
+        w = tb.write_edges[-1]
+        await tb.wait_rises(info.lead, n0[info.lead] + wait)
+        await tb.multi.sync_soft_stop(range(3))
+        s = tb.write_edges[-1]
+        await tb.multi.wait_done(range(3), idle=lambda: tb.idle(1000))
+        edge0, _ = tb.expected_sync(plans, w, dirs, lasts)
+        request = s + 1 - edge0  # the engine samples the strobe one edge after the write's
+        finals = []
+        for i, plan in enumerate(plans):
+            want = [edge0 + sm.STEP_LATENCY + e for e in edges_with_stop(plan, "soft", request)]
+            got = tb.rises[i][n0[i] :]
+            assert got == want, f"move {steps}, axis {i}: {edges_differ(got, want)}"
+            finals.append(len(got) - 1)
+            position[i] += (len(got)) * (1 if plan.direction == 0 else -1)
+            assert await tb.axis(i).position() == position[i], f"axis {i}: POSITION"
+        assert finals[info.lead] < abs(steps[info.lead]) - 1, "the stop did not shorten the lead's move"
+        p_lead = soft_stop_pulse(plans[info.lead], request)
+        assert p_lead is not None and phase_of(plans[info.lead], p_lead) == phase, f"not a stop in {phase}"
+        bound = soft_stop_line_bound(plans[info.lead], p_lead)
+        for i in range(3):
+            off = abs(finals[i] - info.ratios[i] * finals[info.lead])
+            assert off <= bound, f"axis {i} rests {off:.3f} steps off the line (bound {bound:.3f}), finals {finals}"
+            dut._log.info(f"{phase} stop: axis {i} rests at {finals[i]}, {off:.3f} steps off the line (bound {bound})")
+    tb.check_pins()
+
+
+@cocotb.test(timeout_time=400, timeout_unit="us")
+async def coordinated_stop_on_the_line(dut) -> None:
+    """The coordinated stop on the line (MultiAxis.stop_coordinated of plan_coordinated_stop) of a 3-axis coordinated
+    move in its ACCEL, then of another in its RUN: one CHANGE per axis, each committed no later than the edge its
+    take-over pulse was named for; every STEP edge of every axis equals the model's (change_edges of its plan and its
+    segment), and every axis rests on its T_i, within half a step of the line point k_i R_L of the lead's rest."""
+    prescale = 2
+    tb = await MultiTb.started(dut, prescale=prescale)
+    await tb.configure()
+    lead = design_args(80, 40.0, 14.0, 10.0, prescale=prescale)
+    args = (lead["accel"], lead["decel"], lead["speed"])
+    position = [0, 0, 0]
+    for steps, wait, phase in (([80, -53, 29], 4, "ACCEL"), ([-80, 61, -23], 35, "RUN")):
+        plans, info = plan_coordinated_info(steps, *args, spr=lead["spr"], fclk=lead["fclk"], prescale=prescale)
+        dirs = [len(tb.dir_changes[i]) % 2 for i in range(3)]
+        lasts: list[int | None] = [r[-1] if r else None for r in tb.rises]
+        n0 = [len(r) for r in tb.rises]
+        for i in range(3):
+            await tb.axis(i).program(plans[i])
+        await tb.multi.sync_start(range(3))
+        edge0, wants = tb.expected_sync(plans, tb.write_edges[-1], dirs, lasts)
+        await tb.wait_rises(info.lead, n0[info.lead] + wait)
+        now = tb.edge()
+        commits = [now + 150 * (i + 1) for i in range(3)]  # (each axis's writes take well under 150 clocks)
+        stop = plan_coordinated_stop(plans, info, wants, commits, *args, lead["spr"], lead["fclk"], prescale)
+        assert stop.fallback is None and stop.changes == [0, 1, 2], f"{phase}: {stop}"
+        p_lead = stop.axes[info.lead].pulse
+        assert phase_of(plans[info.lead], p_lead) == phase, f"the lead takes over at {p_lead}, not in {phase}"
+        seen = len(tb.write_edges)
+        await tb.multi.stop_coordinated(stop, plans)
+        await tb.multi.wait_done(range(3), idle=lambda: tb.idle(500))
+        writes = tb.write_edges[seen:]
+        k = 0
+        for i in stop.changes:
+            seg_plan, regs = stop.axes[i].change.segment.registers(plans[i].direction)
+            k += len(plan_writes(seg_plan)) + len(segment_writes(regs)) + 2
+            assert writes[k - 1] <= commits[i], f"axis {i}: CHANGE committed at {writes[k - 1]}, after {commits[i]}"
+        for i, plan in enumerate(plans):
+            axis = stop.axes[i]
+            assert axis.change is not None
+            model = change_edges(Segment.of_move(plan), axis.pulse, axis.change.segment, prescale)
+            want = [edge0 + sm.STEP_LATENCY + e for e in model]
+            got = tb.rises[i][n0[i] :]
+            assert got == want, f"{phase} stop, axis {i}: {edges_differ(got, want)}"
+            assert len(got) - 1 == axis.target, f"axis {i}: rests at {len(got) - 1}, T_i = {axis.target}"
+            off = abs(axis.target - info.ratios[i] * stop.rest)
+            assert off <= 0.5, f"axis {i} rests {off:.3f} steps off the line"
+            position[i] += len(got) * (1 if plan.direction == 0 else -1)
+            assert await tb.axis(i).position() == position[i], f"axis {i}: POSITION"
+            dut._log.info(
+                f"{phase} stop: axis {i} takes over at {axis.pulse}, rests at {axis.target} "
+                f"({off:.3f} steps off the line point {info.ratios[i] * stop.rest:.3f}; plan's end {plan.steps - 1})"
+            )
+        assert stop.rest < abs(steps[info.lead]) - 1, "the stop did not shorten the lead's move"
     tb.check_pins()
 
 
@@ -455,7 +633,7 @@ async def estop_stops_every_axis(dut) -> None:
         await tb.axis(i).program(plan)
     await tb.multi.sync_start(range(3))
     w = tb.write_edges[-1]
-    want = [tb.expected(i, plan, w, 0, None) for i, plan in enumerate(plans)]
+    _, want = tb.expected_sync(plans, w)  # (axis 1 changes DIR: the common start waits for it)
     await tb.wait_rises(0, 20)
     await FallingEdge(tb.clk)
     dut.estop.value = 1
@@ -505,6 +683,9 @@ TESTS = [
     "sync_start_same_clock",
     "axes_status_and_irq",
     "coordinated_move",
+    "coordinated_dir_changes",
+    "coordinated_soft_stop",
+    "coordinated_stop_on_the_line",
     "estop_stops_every_axis",
 ]
 

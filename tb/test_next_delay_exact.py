@@ -5,10 +5,11 @@ formulas, fresh msb(x) + L(C x) + L(C (x + 1)) + 3 or continued L(radicand) + 2,
 busy, ans_valid and the held answer checked in every clock of every request.
 
 * random_requests: random requests (accel and decel, plain, seed and alternative; x of every bit length with 0 and
-  2^31 - 1, C of every bit length with 0 and 2^48 - 1; about half of them the next index of the kept run, so that
-  runs continue and break), back to back (req held high into the answer cycle) or after a pause, the inputs random
-  while busy (ignored). The seed is printed and replays the run: NEXT_DELAY_EXACT_SEED=<seed> pytest
-  tb/test_next_delay_exact.py.
+  2^31 - 1; C = m 4^e as seed words, of every bit length up to 2^72 with 0, 2^48 - 1, the driver's largest
+  2^72 - 2^36 and the unit's (2^60 - 1) 4^6, whose value at x = 0 overflows, and now and then a scale of 7 .. 15,
+  taken as 6; about half of them the next index of the kept run, so that runs continue and break), back to back
+  (req held high into the answer cycle) or after a pause, the inputs random while busy (ignored). The seed is
+  printed and replays the run: NEXT_DELAY_EXACT_SEED=<seed> pytest tb/test_next_delay_exact.py.
 * long_runs: runs of 200 consecutive indices up (accel) and down (decel), with alternatives interleaved that must
   not break them (each run's answers after the first are all continued: one square root each, seen in the
   latency); up to 2^31 - 1 and down to 0, then the index on the other side of the range, which must be fresh.
@@ -26,15 +27,21 @@ from typing import Any
 
 from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge
 
+from stepramp.models import exact
 from stepramp.models.exact_unit import FRESH_WORST, ExactRequest, NextDelayExact, fresh_latency
 from stepramp.sim.runner import run_cocotb
 from tbutil import build_dir, cocotb, env_int, start_clock_and_reset
 
 SEED_ENV = "NEXT_DELAY_EXACT_SEED"
 X_BITS = 31
-C_BITS = 48
+SEED_BITS = 64
 X_MAX = (1 << X_BITS) - 1
-C_MAX = (1 << C_BITS) - 1
+C_NARROW = exact.seed_word((1 << 48) - 1, 0)
+"""The largest constant below 2^48 (scale 0)."""
+C_DRIVER_MAX = exact.seed_word(exact.C_MAX >> 12, 6)
+"""C = 2^72 - 2^36, the driver's largest (c0 below 2^32 ticks)."""
+C_MAX = exact.seed_word((1 << exact.MANT_WIDTH) - 1, exact.SCALE_MAX)
+"""The unit's largest constant, (2^60 - 1) 4^6: its value at x = 0 is 2^36 Q.4 ticks, ans_ovf."""
 #: Random requests of random_requests.
 N_REQUESTS = env_int("N_REQUESTS", 1500)
 #: Edges an answer may take before the bench gives up on it: more than the longest (FRESH_WORST).
@@ -51,8 +58,22 @@ class Step:
     gap: int = 1
 
 
+def seed_of(c: int) -> int:
+    """The seed word of a constant below 2^72, with the smallest scale (as the driver encodes it)."""
+    e = 0
+    while c >> (2 * e) >= 1 << exact.MANT_WIDTH:
+        e += 1
+    return exact.seed_word(c >> (2 * e), e)
+
+
 def random_c(rng: random.Random) -> int:
-    return rng.choice((0, C_MAX, rng.getrandbits(rng.randint(0, C_BITS))))
+    """A seed word: 0, the corners, a constant of any bit length, or a scale of 7 .. 15 (the unit takes 6)."""
+    r = rng.random()
+    if r < 0.05:
+        return exact.seed_word(rng.getrandbits(60), rng.randint(7, 15))
+    if r < 0.45:
+        return rng.choice((0, C_MAX, C_NARROW, C_DRIVER_MAX))
+    return seed_of(rng.getrandbits(rng.randint(0, 72)))
 
 
 def random_x(rng: random.Random) -> int:
@@ -74,8 +95,8 @@ def drive_garbage(dut: Any, rng: random.Random) -> None:
     garbage = ExactRequest(
         bool(bits & 1),
         rng.getrandbits(X_BITS),
-        rng.getrandbits(C_BITS),
-        rng.getrandbits(C_BITS),
+        rng.getrandbits(SEED_BITS),
+        rng.getrandbits(SEED_BITS),
         bool(bits & 2),
         bool(bits & 4),
     )
@@ -97,9 +118,9 @@ class Bench:
         self.dut = dut
         self.rng = rng
         self.model = NextDelayExact()
-        self.held = 0  # ans_value after reset: 0
+        self.held = (0, 0)  # ans_value and ans_ovf after reset: 0
         self.failures: list[str] = []
-        self.counts = {"answers": 0, "continued": 0, "held_req": 0, "max_latency": 0}
+        self.counts = {"answers": 0, "continued": 0, "held_req": 0, "max_latency": 0, "ovf": 0}
 
     def fail(self, text: str) -> None:
         self.failures.append(text)
@@ -117,7 +138,7 @@ class Bench:
         for _ in range(cycles):
             drive_garbage(self.dut, self.rng)
             await FallingEdge(self.dut.clk)
-            if flags(self.dut) != (0, 0) or answer_now(self.dut) != (self.held, 0, 0):
+            if flags(self.dut) != (0, 0) or answer_now(self.dut) != (self.held[0], 0, self.held[1]):
                 self.fail(f"idle: busy, ans_valid {flags(self.dut)}, answer {answer_now(self.dut)} (held {self.held})")
 
     async def play(self, steps: list[Step]) -> list[bool]:
@@ -149,7 +170,7 @@ class Bench:
                 if valid:
                     latency = k
                     break
-                if not busy or answer_now(dut) != (self.held, 0, 0):
+                if not busy or answer_now(dut) != (self.held[0], 0, self.held[1]):
                     self.fail(f"{step.req}, cycle after e + {k}: busy {busy}, answer {answer_now(dut)} not held")
                 drive_garbage(dut, self.rng)
                 dut.req.value = self.rng.getrandbits(1)
@@ -157,13 +178,14 @@ class Bench:
                 self.fail(f"{step.req}: no answer within {ANSWER_LIMIT} edges (model: {expect})")
                 break
             got = answer_now(dut)
-            if flags(dut) != (0, 1) or got != (expect.value, 0, 0) or latency != expect.latency:
+            if flags(dut) != (0, 1) or got != (expect.value, 0, int(expect.ovf)) or latency != expect.latency:
                 self.fail(
                     f"{step.req}: busy {flags(dut)[0]}, value {got[0]:#x} rem {got[1]} ovf {got[2]}, latency "
-                    f"{latency}; model: value {expect.value:#x}, latency {expect.latency} "
+                    f"{latency}; model: value {expect.value:#x} ovf {int(expect.ovf)}, latency {expect.latency} "
                     f"({'continued' if expect.continued else 'fresh'})"
                 )
-            self.held = expect.value
+            self.held = (expect.value, int(expect.ovf))
+            self.counts["ovf"] += expect.ovf
             continued.append(expect.continued)
             self.counts["answers"] += 1
             self.counts["continued"] += expect.continued
@@ -184,7 +206,7 @@ def random_step(model: NextDelayExact, rng: random.Random) -> Step:
         if 0 <= x <= X_MAX:
             req = replace(req, decel=model.decel, x=x, seed=rng.random() < 0.05, alt=rng.random() < 0.1)
     if model.continues(req):  # the run's constant goes on (the contract: it changes only with a flush)
-        req = replace(req, c_dec=model.constant) if req.decel else replace(req, c_head=model.constant)
+        req = replace(req, c_dec=model.word) if req.decel else replace(req, c_head=model.word)
     return Step(req, rng.choice((0, 0, 1, 2, 5)))
 
 
@@ -205,7 +227,7 @@ async def random_requests(dut) -> None:
     dut._log.info("%s", bench.counts)
     assert not bench.failures, f"{SEED_ENV}={seed}:\n" + "\n".join(bench.failures)
     assert bench.counts["answers"] == len(steps)
-    assert bench.counts["max_latency"] == FRESH_WORST, bench.counts  # x = 2^31 - 1 and C = 2^48 - 1, fresh
+    assert bench.counts["max_latency"] == FRESH_WORST, bench.counts  # x = 2^31 - 1 and C = (2^60 - 1) 4^6, fresh
     # the draw covers what it claims: fresh and continued of both kinds, seeds and alternatives, the range ends
     reqs = [s.req for s in steps]
     for what, n in {
@@ -217,7 +239,11 @@ async def random_requests(dut) -> None:
         "x = 0": sum(r.x == 0 for r in reqs),
         "x = 2^31 - 1": sum(r.x == X_MAX for r in reqs),
         "C = 0": sum(r.constant == 0 for r in reqs),
-        "C = 2^48 - 1": sum(r.constant == C_MAX for r in reqs),
+        "C = 2^48 - 1": sum(r.constant == exact.constant_of(C_NARROW) for r in reqs),
+        "C = 2^72 - 2^36": sum(r.constant == exact.C_MAX for r in reqs),
+        "C = (2^60 - 1) 4^6": sum(r.constant == exact.constant_of(C_MAX) for r in reqs),
+        "scale above 6": sum(((r.c_dec if r.decel else r.c_head) >> 60) > 6 for r in reqs),
+        "ovf": bench.counts["ovf"],
         "held": bench.counts["held_req"],
     }.items():
         assert n > 0, f"no request of the kind '{what}'"
@@ -247,9 +273,9 @@ async def long_runs(dut) -> None:
     plans = [
         (rng.getrandbits(20) | 1, 0, False),
         (C_MAX, X_MAX - 199, False),
-        (rng.getrandbits(48), 199, True),
+        (seed_of(rng.getrandbits(48)), 199, True),
         (C_MAX, X_MAX, True),
-        (rng.getrandbits(36), rng.getrandbits(24) + 200, False),
+        (seed_of(rng.getrandbits(70)), rng.getrandbits(24) + 200, False),
     ]
     for c, first, decel in plans:
         xs = [first - i for i in range(200)] if decel else [first + i for i in range(200)]
@@ -283,7 +309,7 @@ async def flush_drops_the_request(dut) -> None:
     for trial in range(40):
         port = "rst" if trial % 8 == 7 else "flush"
         decel = bool(trial % 2)
-        c = rng.getrandbits(rng.randint(1, C_BITS)) | 1
+        c = seed_of(rng.getrandbits(rng.randint(1, 72))) | 1
         x0 = rng.getrandbits(rng.randint(2, X_BITS - 1)) + 3  # x0 +/- 3 is an index
         step = -1 if decel else 1
         # a run of two sets the kept state up; the request to drop continues it or is fresh
@@ -312,9 +338,9 @@ async def flush_drops_the_request(dut) -> None:
         getattr(dut, port).value = 0
         bench.model.flush()
         if port == "rst":
-            bench.held = 0  # a reset clears the answer
+            bench.held = (0, 0)  # a reset clears the answer
         what = f"{port} at e + {at} of {req} (answer due at e + {latency})"
-        if flags(dut) != (0, 0) or answer_now(dut) != (bench.held, 0, 0):
+        if flags(dut) != (0, 0) or answer_now(dut) != (bench.held[0], 0, bench.held[1]):
             bench.fail(f"{what}: busy, ans_valid {flags(dut)}, answer {answer_now(dut)} after it")
         # nothing comes later either (idle checks every cycle), then the next index of the forgotten run: fresh
         pause = rng.choice((0, latency + 2))

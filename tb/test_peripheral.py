@@ -28,14 +28,14 @@ from peripheral_tb import (
     profiles_limit_us,
     stop_cases,
 )
-from stepramp.board.change import plan_change
+from stepramp.board.change import Segment, plan_change
 from stepramp.board.driver import Outputs, StepRampError, plan_writes
 from stepramp.board.plan import Plan, plan_move
 from stepramp.board.regmap import ADDR_BITS, ERROR_CODES, ID_VALUE, LIVE, REGISTERS, REGISTERS_BY_NAME, RW, offset
 from stepramp.models import stepping as sm
+from stepramp.models.engine import change_edges, segment_edges
 from stepramp.models.engine import edges as model_edges
-from stepramp.models.engine import segment_edges
-from stepramp.sim.profiles import PROFILES, PROFILES_BY_NAME
+from stepramp.sim.profiles import PROFILES, PROFILES_BY_NAME, design_args
 from stepramp.sim.runner import run_cocotb
 from tbutil import build_dir, cocotb, edges_differ, env_int
 
@@ -619,6 +619,93 @@ async def change_and_queue_refusals(dut) -> None:
     tb.finish()
 
 
+@cocotb.test(timeout_time=400, timeout_unit="us")  # measured 60 us
+async def change_past_the_last_pulse_is_refused(dut) -> None:
+    """A CHANGE naming a pulse past the running motion's last pulse L (CHANGE_AT = L + 1) is refused at the engine's
+    answer (docs/algorithm.md, "The take-over, the queue and the script contract": `P <= L`): ERROR with code CHANGE
+    and PENDING low four clocks after the write, the staging free (a later staging write sets no STAGED), the motion
+    exactly the model's. CHANGE_AT = L is accepted (PENDING) and taken over at pulse L: every edge the model's."""
+    tb = await PeripheralTb.started(dut)
+    drv = tb.driver()
+    args = design_args(60, 70.0, 6.0, 6.0)
+    plan = plan_move(**args)
+    last = plan.steps - 1
+    keys = ("accel", "decel", "speed", "spr", "fclk", "prescale")
+    seg = plan_change(0.0, 10, *(args[k] for k in keys)).segment
+    for pulse in (last + 1, last):
+        await drv.clear_flags()
+        await drv.program(plan)
+        n0, s0 = len(tb.step_edges), len(tb.start_edges)
+        await drv.start()
+        while len(tb.step_edges) < n0 + 6:
+            await RisingEdge(dut.step)
+        await drv.change(seg, plan.direction, pulse)
+        await ClockCycles(tb.clk, 4)  # the engine answers two clocks after the register file's strobe
+        st = await drv.status()
+        if pulse > last:
+            assert (st.error, st.err_name, st.pending, st.busy) == (True, "CHANGE", False, True), f"P = L + 1: {st}"
+            await drv.clear_flags()
+            await drv.access.write(offset("STEPS"), plan.steps)  # the staging is free: no STAGED
+            st = await drv.status()
+            assert (st.error, st.pending) == (False, False), f"a staging write after the refusal: {st}"
+            want = model_edges(plan)
+        else:
+            assert (st.error, st.pending, st.busy) == (False, True, True), f"P = L: {st}"
+            want = change_edges(Segment.of_move(plan), pulse, seg, args["prescale"])
+        st = await drv.wait_done(idle=lambda: tb.irq_or(5_000))
+        got = tb.edges_since(n0, s0)
+        assert got == want, f"CHANGE_AT = {pulse} (L = {last}): {edges_differ(got, want)}"
+    tb.finish()
+
+
+#: The queued start's window (docs/stepramp_plb.md, STATUS.BUSY): the read or write train's phases, enough to put one
+#: access on every clock of a bus access period.
+QUEUE_PHASES = 6
+
+
+@cocotb.test(timeout_time=4, timeout_unit="ms")  # measured 0.9 ms
+async def queued_start_is_never_idle(dut) -> None:
+    """A move queued behind a running one starts as a START written at the engine's done: no STATUS read between the
+    QUEUE and the queued move's end shows the core idle (BUSY and PENDING both 0), and no POSITION write in that window
+    is taken (POS_BUSY; POSITION ends at the sum of both moves). Each run sends a train of back-to-back reads, or
+    POSITION writes, across the first move's last pulse, its phase moved by one clock per run (QUEUE_PHASES runs), in
+    the same and in the other direction with DIR setup 500 and hold 6 (the held start)."""
+    tb = await PeripheralTb.started(dut)
+    await tb.configure(Outputs(dir_setup=500, dir_hold=6))
+    drv = tb.driver()
+    args = design_args(40, 70.0, 6.0, 6.0)
+    first = plan_move(**args)
+    first_edges = model_edges(first)
+    gap = first_edges[-1] - first_edges[-2]
+    position = 0
+    for what in ("read", "write"):
+        for back in (False, True):
+            second = plan_move(**{**args, "steps": -30 if back else 30})
+            for phase in range(QUEUE_PHASES):
+                await drv.clear_flags()
+                await drv.program(first)
+                n0 = len(tb.step_edges)
+                await drv.start()
+                await drv.queue(second)
+                assert (await drv.status()).pending, "the QUEUE was not taken"
+                while len(tb.step_edges) < n0 + first.steps - 1:
+                    await RisingEdge(dut.step)
+                await ClockCycles(tb.clk, gap - 12 + phase)
+                for k in range(12):
+                    if what == "read":
+                        st = await drv.status()
+                        assert st.busy or st.pending, f"phase {phase}, read {k}: the core looks idle: {st}"
+                    else:
+                        await drv.access.write(offset("POSITION"), 1000)
+                await drv.clear_flags()
+                while (await drv.status()).busy:
+                    await tb.irq_or(500)
+                position += first.steps + (-30 if back else 30)
+                got = await drv.position()
+                assert got == position, f"{what} phase {phase}: POSITION {got}, expected {position}"
+    tb.finish()
+
+
 REGISTER_TESTS = [
     "reset_values_and_id",
     "read_write_every_register",
@@ -637,6 +724,8 @@ REGISTER_TESTS = [
     "hard_stop_cancels_a_held_start",
     "jog_through_the_bus",
     "change_and_queue_refusals",
+    "change_past_the_last_pulse_is_refused",
+    "queued_start_is_never_idle",
 ]
 
 

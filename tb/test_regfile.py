@@ -32,16 +32,19 @@ Rules the model holds (docs/registers.md, docs/stepramp_plb.md, docs/algorithm.m
   in_level(1) LIMIT_POS with bit 31 = 0), else ESTOP when STATUS.ESTOP_FAULT or in_level(3) is set; it records the
   move's direction mv_dir = STEPS bit 31. While busy the start strobe pulses (the core ignores it), nothing is
   checked and mv_dir stays;
-* a POSITION write while eng_busy = '0' pulses pos_load with the written bytes merged into eng_position; while
-  busy it is ignored and sets ERROR with POS_BUSY; a write to a configuration word (DRIVE .. STEP_SPACE,
-  INPUT_FILTER, INPUT_CFG) while busy is ignored and sets ERROR with CFG_BUSY (CTRL can be written at any time);
+* busy (STATUS.BUSY, and the busy_status output) = eng_busy or the start strobe (the registered start output) or a
+  queued move (q_pend); a POSITION write while not busy pulses pos_load with the written bytes merged into
+  eng_position; while busy it is ignored and sets ERROR with POS_BUSY; a write to a configuration word (DRIVE ..
+  STEP_SPACE, INPUT_FILTER, INPUT_CFG) while busy is ignored and sets ERROR with CFG_BUSY (CTRL can be written at any
+  time);
 * locked = the change strobe (the registered change output) or eng_chg_pend or a queued move (q_pend); STATUS.PENDING
   reads it. A write to a staging word (regmap.STAGING: STEPS .. STOP_RATIO, SEGMENT .. CHANGE_AT) while locked is
   ignored (the word, its output and its read-back keep their value) and sets ERROR with STAGED (acknowledged, no
   err); otherwise the staging words are written at any time. The configuration words (INPUT_FILTER and INPUT_CFG
   among them) keep their CFG_BUSY rule only;
-* a CTRL write with CHANGE or QUEUE is refused (ERROR with CHANGE; no change strobe, no queue) when eng_busy = '0',
-  or locked, or both are set, or (CHANGE) STEPS bit 31 differs from eng_dir, or (QUEUE) STEPS = 0x80000000; else
+* a CTRL write with CHANGE or QUEUE is refused (ERROR with CHANGE; no change strobe, no queue) when not busy,
+  or locked, or both are set, or (CHANGE) STEPS bit 31 differs from eng_dir, or (QUEUE) STEPS = 0x80000000; a QUEUE
+  is refused with ESTOP (no queue) when STATUS.ESTOP_FAULT or in_level(3) is set; else
   CHANGE pulses change for one clock and QUEUE sets q_pend. A CTRL write with SOFT_STOP or HARD_STOP and without
   QUEUE clears q_pend (its stop strobes still pulse);
 * at an edge with eng_done = '1' and q_pend = '1' (q_pend as it was before the edge): q_pend clears and mv_dir =
@@ -157,7 +160,6 @@ ESTOP_BIT = 1 << INPUTS.index("ESTOP")
 #: that port).
 SOURCES: dict[tuple[str, str], tuple[str, int]] = {
     ("STATUS", "STATE"): ("eng_state", 0),
-    ("STATUS", "BUSY"): ("eng_busy", 0),
     ("STATUS", "DIR"): ("eng_dir", 0),
     ("STATUS", "DIR_FAULT"): ("dir_fault", 0),
     ("POSITION", "VALUE"): ("eng_position", 0),
@@ -299,6 +301,12 @@ class RegfileModel:
         self.mv_dir = 0  # STEPS bit 31 of the last START taken while idle (or queued move)
         self.lim_hit = False  # a limit stopped the motion since eng_busy was last 0
         self.time_hi = 0  # TIME_HI: time_count bits 63:32 at the last read of TIME_LO
+        self.eng_busy = 0  # eng_busy at the last edge (busy_status follows it)
+
+    def moving(self, ins: dict[str, int]) -> bool:
+        """STATUS.BUSY at the edge that samples ins: the engine or a held start (eng_busy), the start strobe out, or
+        a queued move (in the clock between the engine's done and its start strobe)."""
+        return bool(ins["eng_busy"] or self.strobes["start"] or self.q_pend)
 
     def locked(self, ins: dict[str, int]) -> bool:
         """STATUS.PENDING at the edge that samples ins: the change strobe out, the engine's pending change, or a
@@ -316,6 +324,8 @@ class RegfileModel:
                 v = self.err_code
             elif reg.name == "STATUS" and f.name == "PENDING":
                 v = int(self.locked(ins))
+            elif reg.name == "STATUS" and f.name == "BUSY":
+                v = int(self.moving(ins))
             elif reg.name == "TIME_HI":
                 v = self.time_hi
             elif f.access == RO:
@@ -343,9 +353,9 @@ class RegfileModel:
         self.err_code = ERR[code]
         self.events[f"error {code}"] += 1
 
-    def _refusal(self, cmd: dict[str, int], ins: dict[str, int], locked: bool) -> str | None:
-        """Why a CTRL write with CHANGE or QUEUE is refused (None: accepted)."""
-        if not ins["eng_busy"]:
+    def _refusal(self, cmd: dict[str, int], ins: dict[str, int], locked: bool, busy: bool) -> str | None:
+        """Why a CTRL write with CHANGE or QUEUE is refused (None: accepted); busy: STATUS.BUSY before the edge."""
+        if not busy:
             return "idle"
         if locked:
             return "locked"
@@ -355,9 +365,11 @@ class RegfileModel:
             return "direction"
         if cmd["QUEUE"] and self.store["STEPS"] == STEPS_REJECTED:
             return "steps"
+        if cmd["QUEUE"] and (self._flag("ESTOP_FAULT") or ins["in_level"] & ESTOP_BIT):
+            return "estop"
         return None
 
-    def _ctrl_write(self, data: int, m: int, ins: dict[str, int], locked: bool) -> bool:
+    def _ctrl_write(self, data: int, m: int, ins: dict[str, int], locked: bool, busy: bool) -> bool:
         """A CTRL write (data already masked to the enabled lanes), START aside; returns the queued-move flag after
         it."""
         self.ctrl = ((self.ctrl & ~m) | data) & access_mask(CTRL, RW)
@@ -369,9 +381,9 @@ class RegfileModel:
             self.events["queue dropped by a stop"] += q_pend
             q_pend = False
         if cmd["CHANGE"] or cmd["QUEUE"]:
-            reason = self._refusal(cmd, ins, locked)
+            reason = self._refusal(cmd, ins, locked, busy)
             if reason is not None:
-                self._error("CHANGE")
+                self._error("ESTOP" if reason == "estop" else "CHANGE")
                 self.events[f"refused: {reason}"] += 1
             elif cmd["CHANGE"]:
                 self.strobes["change"] = 1
@@ -407,9 +419,11 @@ class RegfileModel:
         """One rising edge with these inputs."""
         if ins["rst"]:
             self.reset()
+            self.eng_busy = ins["eng_busy"]
             self.events["reset"] += 1
             return
-        busy = ins["eng_busy"]
+        busy = self.moving(ins)
+        self.eng_busy = ins["eng_busy"]
         level = ins["in_level"]
         locked = self.locked(ins)
         self.events["locked"] += locked
@@ -449,7 +463,7 @@ class RegfileModel:
                 self.store[reg.name] = ((self.store[reg.name] & ~m) | data) & access_mask(reg, RW)
                 self.events["config written while locked, idle"] += reg.name in CONFIG and locked
             elif reg is CTRL:
-                q_pend = self._ctrl_write(data, m, ins, locked)
+                q_pend = self._ctrl_write(data, m, ins, locked, busy)
                 written_start = bool(data & CTRL.field("START").mask)
             elif reg is STATUS:
                 clear = data & access_mask(STATUS, W1C)
@@ -511,7 +525,7 @@ class RegfileModel:
             self.events["chg_refused code over engine's"] += ins["eng_error"]
 
         # A limit towards the running motion stops it, once per motion.
-        if not busy:
+        if not ins["eng_busy"]:
             self.lim_hit = False
         elif not self.lim_hit and toward_limit(cfg, level, mv_dir):
             self.lim_hit = True
@@ -557,6 +571,7 @@ class RegfileModel:
         out["estop_fault"] = self._flag("ESTOP_FAULT")
         out["enable"] = out["enable"] & (1 - out["estop_fault"])
         out["done_sticky"] = self._flag("DONE")
+        out["busy_status"] = int(bool(self.eng_busy or self.strobes["start"] or self.q_pend))
         return out
 
 
@@ -1680,9 +1695,10 @@ async def estop_fault(dut) -> None:
     queued move and sets ERROR with ESTOP; while ESTOP is active CTRL.ENABLE cannot be set, a QUEUE is dropped at once,
     the fault's W1C clear is refused and a START is refused (ESTOP). Released, the fault stays (START still refused,
     ENABLE written 1 reads 1 but the pin stays low) until the W1C clear, which brings the pin back. Codes: STEPS and
-    LIMIT before ESTOP at a START; ESTOP's activation over the engine's code. Pinned as the RTL has them: a queued
-    move whose done comes at ESTOP's activation edge, or while the fault is set with ESTOP released, starts (no ESTOP
-    check of the queued START)."""
+    LIMIT before ESTOP at a START; ESTOP's activation over the engine's code. A QUEUE while ESTOP is active or its
+    fault is set is refused with ESTOP (nothing pending), so a queued move never meets the fault at its start. Pinned
+    as the RTL has it: a queued move whose done comes at ESTOP's activation edge starts (its START meets the core's
+    ESTOP hard stop)."""
     tb = await new_bench(dut)
     enable_m, fault_m = CTRL.field("ENABLE").mask, status_bits("ESTOP_FAULT")
 
@@ -1707,8 +1723,8 @@ async def estop_fault(dut) -> None:
     got = await tb.write(off("STATUS"), fault_m)
     assert got["estop_fault"] == 1 and (await status(tb))["ESTOP_FAULT"] == 1
     await fresh_error(tb)
-    await tb.write(off("CTRL"), cmd("QUEUE"))  # busy: taken (no error), and dropped at that edge
-    s = await flagged(tb, None, "QUEUE while ESTOP is active")
+    await tb.write(off("CTRL"), cmd("QUEUE"))  # busy, ESTOP active: refused (it was taken and dropped silently)
+    s = await flagged(tb, "ESTOP", "QUEUE while ESTOP is active")
     assert s["PENDING"] == 0
     await engine_done(tb)
     await refused_start(tb, "ESTOP", "START while ESTOP is active")
@@ -1767,17 +1783,17 @@ async def estop_fault(dut) -> None:
     assert got["start"] == 1 and got["estop_fault"] == 1
     s = await flagged(tb, "ESTOP", "queued move at ESTOP's activation")
     assert s["PENDING"] == 0
-    # ... and a QUEUE while the fault is set (ESTOP released, the engine still busy) stays queued and starts.
+    # ... and a QUEUE while the fault is set (ESTOP released, the engine still busy) is refused with ESTOP: nothing
+    # is pending, and the engine's done starts nothing (it was queued and started into the fault, DONE without ESTOP).
     tb.release("ESTOP")
     tb.set_engine(eng_busy=1, eng_state=1)
     await tb.idle()
     await fresh_error(tb)
     await tb.write(off("CTRL"), cmd("QUEUE"))
-    s = await flagged(tb, None, "QUEUE during the fault")
-    assert s["PENDING"] == 1 and s["ESTOP_FAULT"] == 1
+    s = await flagged(tb, "ESTOP", "QUEUE during the fault")
+    assert s["PENDING"] == 0 and s["ESTOP_FAULT"] == 1
     got = await engine_done(tb)
-    assert got["start"] == 1 and got["estop_fault"] == 1
-    await flagged(tb, None, "queued move during the fault")
+    assert got["start"] == 0 and got["estop_fault"] == 1
     await clear_all(tb)
 
 

@@ -183,6 +183,7 @@ async def setup(dut: Any, cfg: Outputs, position: int = 0, enable: int = 1) -> F
     dut.new_dir.value = 0
     dut.hard_stop.value = 0
     dut.soft_stop.value = 0
+    dut.start_hold.value = 0
     eng = FakeEngine(dut, position=position).start()
     _CLOCK_T0_PS[0] = round(get_sim_time("ps"))
     await start_clock_and_reset(dut.clk, dut.rst, settle=4)

@@ -7,9 +7,11 @@ is '1' is compared with the model's list.
 
 from __future__ import annotations
 
-from cocotb.triggers import FallingEdge, RisingEdge
+from cocotb.triggers import ClockCycles, FallingEdge, First, ReadOnly, RisingEdge, Timer
+from cocotb.utils import get_sim_time
 
 from stepramp.models.blocks import timer_ticks
+from stepramp.sim.clocking import Cycles, cycles
 from stepramp.sim.runner import run_cocotb
 from tbutil import build_dir, cocotb, now_cycles, start_clock_and_reset
 
@@ -75,6 +77,41 @@ async def timer_restart_realigns(dut) -> None:
         await record_ticks(dut, skew)  # leave the counter somewhere inside a period
         restart, ticks = await record_ticks(dut, 60)
         assert ticks == [restart + 9 * k for k in range(1, 7)], f"skew {skew}: {ticks}"
+
+
+@cocotb.test(timeout_time=200, timeout_unit="us")  # measured 47 us
+async def bench_cycles_is_clock_cycles(dut) -> None:
+    """The benches' fast waits stepramp.sim.clocking.cycles(clk, n) and Cycles(clk, n) (alone and inside First) end
+    at the same time as cocotb's ClockCycles(clk, n) started at the same moment, whatever the phase they are called
+    in (at a rising or a falling edge, in ReadOnly, between edges) and whatever n."""
+    dut.restart.value = 0
+    dut.prescale.value = 1
+    await start_clock_and_reset(dut.clk, dut.rst)
+
+    async def ends(wait) -> int:
+        await wait
+        return get_sim_time("ps")
+
+    phases = {
+        "rising edge": lambda: RisingEdge(dut.clk),
+        "falling edge": lambda: FallingEdge(dut.clk),
+        "read-only": lambda: ReadOnly(),
+        "3 ns after a falling edge": lambda: Timer(3, unit="ns"),
+    }
+    for phase, reach in phases.items():
+        for n in (1, 2, 3, 4, 5, 17, 200, 1001):
+            await FallingEdge(dut.clk)
+            await reach()
+            waits = {
+                "cycles": cycles(dut.clk, n),
+                "Cycles": Cycles(dut.clk, n),
+                "First(Cycles, restart)": First(Cycles(dut.clk, n), RisingEdge(dut.restart)),
+            }
+            mine = {name: cocotb.start_soon(ends(w)) for name, w in waits.items()}
+            want = await cocotb.start_soon(ends(ClockCycles(dut.clk, n)))
+            for name, task in mine.items():
+                got = await task
+                assert got == want, f"{name}(clk, {n}) from the {phase}: ends at {got} ps, ClockCycles at {want} ps"
 
 
 def test_timer() -> None:

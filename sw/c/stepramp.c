@@ -322,8 +322,12 @@ void stepramp_hard_stop(const stepramp_t *dev)
 
 void stepramp_enable_irq(const stepramp_t *dev, int done, int error)
 {
-    uint32_t value = (done ? STEPRAMP_CTRL_IRQ_DONE_EN_MASK : 0u) | (error ? STEPRAMP_CTRL_IRQ_ERROR_EN_MASK : 0u);
+    /* the input interrupt enables (bits 10 .. 14) share byte 1: kept as read */
+    uint32_t value = read_reg(dev, STEPRAMP_REG_CTRL) &
+                     (STEPRAMP_CTRL_IRQ_LIMIT_NEG_EN_MASK | STEPRAMP_CTRL_IRQ_LIMIT_POS_EN_MASK |
+                      STEPRAMP_CTRL_IRQ_HOME_EN_MASK | STEPRAMP_CTRL_IRQ_ESTOP_EN_MASK | STEPRAMP_CTRL_IRQ_LATCH_EN_MASK);
 
+    value |= (done ? STEPRAMP_CTRL_IRQ_DONE_EN_MASK : 0u) | (error ? STEPRAMP_CTRL_IRQ_ERROR_EN_MASK : 0u);
     STEPRAMP_WRITE8(CTRL_BYTE(dev, 1u), (uint8_t)(value >> 8)); /* byte 1 only: no command, ENABLE kept */
 }
 
@@ -588,8 +592,9 @@ int stepramp_wait_done(const stepramp_t *dev, uint32_t max_polls)
     X(ZERO_TICKS, "an interval of zero ticks would have been emitted; the move stopped")                               \
     X(RANGE, "a recurrence value left its 48-bit range; the move stopped")                                             \
     X(STEPS, "STEPS is -2^31 (|steps| must be <= 2^31 - 1)")                                                           \
-    X(POS_BUSY, "POSITION written while a move runs (the write was ignored)")                                          \
-    X(CFG_BUSY, "DRIVE, STEP_WIDTH, DIR_TIMING, PWM_PERIOD or STEP_SPACE written while a move runs (ignored)")         \
+    X(POS_BUSY, "POSITION written while STATUS.BUSY (the write was ignored)")                                          \
+    X(CFG_BUSY, "DRIVE, STEP_WIDTH, DIR_TIMING, PWM_PERIOD, STEP_SPACE, INPUT_FILTER or INPUT_CFG written while "     \
+                "STATUS.BUSY (ignored)")                                                                                \
     X(STEP_SPACE, "a pulse would have come less than STEP_WIDTH + STEP_SPACE clocks after the previous one (the two "  \
                   "would merge on the STEP pin); it was not emitted and the move stopped")                             \
     X(SEGMENT, "a down head with HEAD_INDEX < SA, or an up head whose index HEAD_INDEX + SA - 1 passes "               \
@@ -601,8 +606,8 @@ int stepramp_wait_done(const stepramp_t *dev, uint32_t max_polls)
               "write was ignored")                                                                                     \
     X(LIMIT, "a limit input stopped a motion towards it (soft or hard, INPUT_CFG.LIMIT_HARD), or a START or queued "   \
              "move towards an active limit was refused (nothing moved)")                                               \
-    X(ESTOP, "the ESTOP input hard-stopped every motion and dropped ENABLE, or a START came while "                   \
-             "STATUS.ESTOP_FAULT was set (refused, nothing moved)")
+    X(ESTOP, "the ESTOP input hard-stopped every motion and dropped ENABLE, or a START or QUEUE came while ESTOP "     \
+             "was active or STATUS.ESTOP_FAULT was set (refused, nothing moved)")
 
 #define CORE_TABLE_SIZE 32u /* ERR_CODE is 5 bits */
 #define CAUSE(name, text) [STEPRAMP_ERR_##name] = text,

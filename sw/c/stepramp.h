@@ -379,7 +379,8 @@ void stepramp_hard_stop(const stepramp_t *dev);
 
 /**
  * Set the interrupt enables (CTRL.IRQ_DONE_EN, CTRL.IRQ_ERROR_EN): the level irq output follows STATUS.DONE /
- * STATUS.ERROR where enabled. A byte write of CTRL byte 1 only: it starts nothing and keeps CTRL.ENABLE.
+ * STATUS.ERROR where enabled. CTRL is read, then byte 1 written with the input interrupt enables (bits 10 .. 14,
+ * stepramp_enable_input_irq) as read: they are kept; it starts nothing and keeps CTRL.ENABLE.
  *
  * @param done  nonzero: interrupt on DONE; error: nonzero: interrupt on ERROR
  */

@@ -118,14 +118,15 @@ static int64_t boundary(double x, double last)
 /* _check_speed: the shortest interval, f_tick / fastest, must leave the engine its MIN_INTERVAL_CLKS (exact mode:
  * MIN_INTERVAL_CLKS_EXACT); an infinite one (a zero or underflowing speed, math.floor's OverflowError in change.py)
  * passes */
-static int check_speed(double f_tick, double fastest, uint32_t prescale, uint32_t ramp)
+static int check_speed(double f_tick, double fastest, uint32_t prescale, uint32_t ramp, double a, double d)
 {
     double shortest = (fastest > 0.0) ? f_tick / fastest : (double)INFINITY;
     if (!(shortest >= 1.0)) {
         return STEPRAMP_ETOOFAST;
     }
     /* Python multiplies the exact integers; the double product rounds monotonically: the same outcome */
-    if (floor(shortest) * (double)prescale < (double)stepramp_priv_min_interval_clks(ramp)) {
+    if (floor(shortest) * (double)prescale <
+        (double)stepramp_priv_min_interval_clks(ramp, f_tick * sqrt(2.0 / a), f_tick * sqrt(2.0 / d))) {
         return STEPRAMP_ETOOFAST;
     }
     return STEPRAMP_OK;
@@ -243,7 +244,8 @@ static int stop_segment(stepramp_segment_t *seg, stepramp_change_info_t *raw, in
 }
 
 /*
- * The head's seed and the half of its recurrence deficit that goes into interval 1 (plan_change's head == UP /
+ * The head's seed (an up head's without its recurrence's mean truncation) and the half of its recurrence deficit
+ * that goes into interval 1 (plan_change's head == UP /
  * DOWN branches): *seed and *t_first updated. index: n0 (up) or K (down); n = sa - 2 recurrence intervals.
  */
 static void head_seed(uint32_t head, double index, int64_t n, const change_args_t *args, double *seed,
@@ -253,6 +255,7 @@ static void head_seed(uint32_t head, double index, int64_t n, const change_args_
     double c0;
     double unit = 0.0;
     double half = 0.0;
+    double trunc = 0.0;
 
     if (head == STEPRAMP_HEAD_UP) {
         c0 = args->f_tick * sqrt(2.0 / args->a);
@@ -260,6 +263,8 @@ static void head_seed(uint32_t head, double index, int64_t n, const change_args_
         if (n >= 1) { /* A_{n0+1} .. A_{n0+n} against the ideal from virtual position n0 + 1 to n0 + n + 1 */
             unit = sum_products(index, index + nd) / stepramp_priv_decel_product(index);
             half = (c0 * (sqrt(index + nd + 1.0) - sqrt(index + 1.0)) - *seed * unit) / 2.0;
+            /* the integer recurrence's mean truncation from index n0 with r = 0 (change.py's doubles) */
+            trunc = nd - (2.0 * index + 3.0) / (4.0 * index + 3.0) * unit;
         }
     } else {
         c0 = args->f_tick * sqrt(2.0 / args->d); /* cd0 */
@@ -272,7 +277,7 @@ static void head_seed(uint32_t head, double index, int64_t n, const change_args_
     }
     if (n >= 1) { /* unit > 0: n >= 1 positive products summed (by telescoping), over a positive product */
         *t_first = *t_first + half;
-        *seed = *seed + half / unit;
+        *seed = *seed + half / unit - trunc / unit / TWO_POW_16;
     }
 }
 
@@ -342,7 +347,7 @@ static int plan_segment(stepramp_segment_t *seg, stepramp_change_info_t *raw, do
         profile_add(&prof, x_c, end, cap2, -2.0 * d);
     }
     v_peak = sqrt(peak2);
-    err = check_speed(args->f_tick, py_max(v_peak, sqrt(start2)), args->prescale, args->ramp);
+    err = check_speed(args->f_tick, py_max(v_peak, sqrt(start2)), args->prescale, args->ramp, a, d);
     if (err != STEPRAMP_OK) {
         return err;
     }

@@ -86,8 +86,9 @@ typedef struct {
     double t_last;       /**< exact interval L; endless: cd0 = f_tick sqrt(2 / d) */
     double t_sa;         /**< exact interval sa */
     double t_sd;         /**< exact interval sd; exact mode, endless: the first interval of a soft stop in the cruise */
-    double t_accel_seed; /**< the head's seed, plus half its recurrence deficit spread over its values; exact mode: the
-                              head's c0 (ticks), whose ramp constant accel_seed is */
+    double t_accel_seed; /**< the head's seed, plus half its recurrence deficit spread over its values (an up head's
+                              less its recurrence's mean truncation); exact mode: the head's c0 (ticks), whose ramp
+                              constant accel_seed is */
     double t_decel_seed; /**< the final decel's seed, plus half its deficit; exact mode: cd0, whose ramp constant
                               decel_seed is */
     double t_cruise;     /**< f_tick / v_peak */

@@ -16,12 +16,6 @@
 
 #include "stepramp_plan_priv.h"
 
-/* coord._accel_bias: the accel recurrence's mean truncation over A_1 .. A_n, Q32.16 LSB */
-static double accel_bias(int64_t n)
-{
-    return (double)n - (2.0 * ((double)n + 0.75) * stepramp_decel_product(n) - 1.5);
-}
-
 /* coord._decel_bias: the decel recurrence's mean truncation over D_(m0-1) .. D_1, Q32.16 LSB */
 static double decel_bias(int64_t m0)
 {
@@ -63,7 +57,7 @@ double stepramp_time_before_last(const stepramp_plan_t *plan)
     n = sa - 2;
     if (n >= 1) { /* intervals 2 .. sa - 1: A_1 .. A_n */
         double unit_a = 2.0 * ((double)n + 0.75) * stepramp_decel_product(n) - 1.5;
-        t += ((double)plan->accel_seed * unit_a + accel_bias(n)) / TWO_POW_16;
+        t += ((double)plan->accel_seed * unit_a + stepramp_priv_accel_truncation(n)) / TWO_POW_16;
     }
     m0 = length - sd - 1;
     if (m0 >= 1) { /* intervals sd + 1 .. L - 1: D_m0 .. D_1 */
@@ -90,25 +84,7 @@ double stepramp_ideal_end(const stepramp_info_t *info)
     return (t_d + info->v_peak / info->d) * info->f_tick;
 }
 
-uint64_t stepramp_seed_without_truncation(const stepramp_plan_t *plan)
-{
-    int64_t n;
-    double unit_a;
-
-    if (plan == NULL) {
-        return 0u;
-    }
-    n = (int64_t)plan->sa - 2;
-    if (n < 1) {
-        return plan->accel_seed;
-    }
-    /* round() of a double that is >= 0 and far below the seed (0.68 sqrt(n) LSB against 0.676 c0 * 2^16, c0 >=
-     * 2 sqrt(n) ticks): no wrap-around of the unsigned subtraction for any plan stepramp_plan_move makes */
-    unit_a = 2.0 * ((double)n + 0.75) * stepramp_decel_product(n) - 1.5;
-    return plan->accel_seed - (uint64_t)rint(accel_bias(n) / unit_a);
-}
-
-/* coord._end_on: the last interval (the seed already without the truncation; rest its time_before_last) set so that
+/* coord._end_on: the last interval (rest: the plan's time_before_last) set so that
  * pulse N - 1 lies at target ticks (N >= 2), into *plan, and the interval's value before rounding into *last; the
  * plan is left alone on error */
 static int end_on(stepramp_plan_t *plan, const stepramp_info_t *info, double rest, double target, double *last)
@@ -209,10 +185,9 @@ int stepramp_plan_coordinated_info(stepramp_plan_t *plans, stepramp_coord_info_t
         inf.ratio[axis] = ratio;
     }
 
-    /* the accel recurrence's truncation out of each seed, then the time each axis needs before its last interval */
+    /* the time each axis needs before its last interval (the seeds are already without the accel truncation) */
     for (axis = 0; axis < count; axis++) {
         if (out[axis].steps >= 2) {
-            out[axis].accel_seed = stepramp_seed_without_truncation(&out[axis]);
             rests[axis] = stepramp_time_before_last(&out[axis]);
         } else {
             rests[axis] = 0.0;
@@ -256,4 +231,97 @@ int stepramp_plan_coordinated(stepramp_plan_t *plans, const int64_t *steps, uint
                               double decel, double speed, double spr, double fclk, uint32_t prescale)
 {
     return stepramp_plan_coordinated_info(plans, NULL, steps, count, accel, decel, speed, spr, fclk, prescale);
+}
+
+/* ceil(a / b) for a >= 0, b >= 1 (Python's -(-a // b)) */
+static uint64_t ceil_div(uint64_t a, uint64_t b)
+{
+    return a / b + (a % b != 0u ? 1u : 0u);
+}
+
+int stepramp_plan_coordinated_stop(stepramp_coord_stop_t *out, const stepramp_plan_t *plans,
+                                   const stepramp_coord_info_t *info, const uint32_t *pulses, uint32_t count,
+                                   double accel, double decel, double speed, double spr, double fclk,
+                                   uint32_t prescale)
+{
+    uint32_t i;
+    uint64_t lead_len, need = 0u, rest;
+    int moving[STEPRAMP_COORD_MAX_AXES];
+    if (out == NULL || plans == NULL || info == NULL || pulses == NULL) {
+        return STEPRAMP_ENULL;
+    }
+    if (count < 1u || count > STEPRAMP_COORD_MAX_AXES || info->lead >= count) {
+        return STEPRAMP_ECOORD_AXES;
+    }
+    *out = (stepramp_coord_stop_t){0};
+    out->count = count;
+    out->fallback_axis = STEPRAMP_COORD_NO_AXIS;
+    out->fallback_err = STEPRAMP_OK;
+    lead_len = plans[info->lead].steps >= 1u ? (uint64_t)plans[info->lead].steps - 1u : 0u;
+    for (i = 0; i < count; i++) {
+        moving[i] = plans[i].steps >= 2u && lead_len >= 1u;
+        if (moving[i]) {
+            uint64_t length = (uint64_t)plans[i].steps - 1u;
+            uint32_t pulse = pulses[i];
+            stepramp_coord_axis_stop_t *ax = &out->axis[i];
+            if (pulse == 0u || pulse >= length) {
+                ax->natural = (int64_t)length;
+                need = need > ceil_div((2u * length - 1u) * lead_len, 2u * length)
+                           ? need
+                           : ceil_div((2u * length - 1u) * lead_len, 2u * length);
+            } else {
+                double u = stepramp_speed_at_pulse(&info->axis[i], (int64_t)pulse);
+                double stop = ceil(u * u / (2.0 * info->axis[i].d));
+                uint64_t n_i;
+                if (!(stop < 1099511627776.0)) {
+                    stop = 1099511627776.0; /* 2^40 (Python's min(.., 1 << 40)) */
+                }
+                n_i = (uint64_t)pulse + (uint64_t)stop;
+                ax->speed = u;
+                ax->natural = (int64_t)n_i;
+                need = need > ceil_div(n_i * lead_len, length) ? need : ceil_div(n_i * lead_len, length);
+            }
+        }
+    }
+    rest = lead_len < need ? lead_len : need;
+    out->rest = (int64_t)rest;
+    for (i = 0; i < count; i++) {
+        stepramp_coord_axis_stop_t *ax = &out->axis[i];
+        uint64_t length, target;
+        uint32_t pulse;
+        double ratio;
+        int rc;
+        if (!moving[i]) {
+            *ax = (stepramp_coord_axis_stop_t){0};
+            ax->target = plans[i].steps >= 1u ? (int64_t)plans[i].steps - 1 : 0;
+            continue;
+        }
+        length = (uint64_t)plans[i].steps - 1u;
+        target = (2u * length * rest + lead_len) / (2u * lead_len);
+        pulse = pulses[i] > 0u && pulses[i] < length ? pulses[i] : 0u;
+        ax->pulse = pulse;
+        if (pulse == 0u || target >= length) {
+            ax->target = (int64_t)length;
+            continue;
+        }
+        ratio = info->ratio[i];
+        rc = stepramp_plan_change_ramp(&ax->change, ax->speed, (int64_t)(target - pulse), accel * ratio,
+                                       decel * ratio, speed * ratio, spr, fclk, prescale, plans[i].ramp);
+        if (rc == STEPRAMP_OK && ax->change.has_back) {
+            rc = STEPRAMP_ECOORD_END; /* (T_i >= N_i: not expected) */
+        }
+        if (rc != STEPRAMP_OK) {
+            uint32_t j;
+            ax->change = (stepramp_change_t){0};
+            out->fallback_axis = i;
+            out->fallback_err = rc;
+            for (j = i; j < count; j++) {
+                out->axis[j] = (stepramp_coord_axis_stop_t){0};
+            }
+            return STEPRAMP_OK;
+        }
+        ax->target = (int64_t)target;
+        ax->has_change = 1;
+    }
+    return STEPRAMP_OK;
 }

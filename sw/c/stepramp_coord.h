@@ -19,6 +19,7 @@
 
 #include <stdint.h>
 
+#include "stepramp_change.h"
 #include "stepramp_plan.h"
 
 #ifdef __cplusplus
@@ -55,9 +56,9 @@ typedef struct {
  * Plan a coordinated linear move, exactly like Python's stepramp.board.coord.plan_coordinated.
  *
  * Axis i's accel, decel and speed are the path's times r_i = (|steps[i]| - 1) / (|steps[lead]| - 1), so that its
- * ideal trajectory is r_i times the lead's; its plan is stepramp_plan_move's of those values with accel_seed less the
- * accel recurrence's mean truncation (stepramp_seed_without_truncation) and the last interval (c_last, and c_first,
- * c_sa or c_sd where they are interval L) set so that its last pulse lies on the tick nearest the ideal end of the
+ * ideal trajectory is r_i times the lead's; its plan is stepramp_plan_move's of those values (its accel_seed
+ * already without the accel recurrence's mean truncation) with the last interval (c_last, and c_first, c_sa or c_sd
+ * where they are interval L) set so that its last pulse lies on the tick nearest the ideal end of the
  * path, floor(t_end + 1/2). An axis of 1 step pulses once at the start, one of 0 steps not at all.
  *
  * @param plans    output, count plans; written only on success (left untouched on error)
@@ -96,15 +97,48 @@ int stepramp_plan_coordinated_info(stepramp_plan_t *plans, stepramp_coord_info_t
  */
 double stepramp_time_before_last(const stepramp_plan_t *plan);
 
-/**
- * accel_seed less the accel recurrence's mean truncation over its sa - 2 values, like coord.seed_without_truncation;
- * the seed itself without an accel recurrence, 0 for a NULL plan.
- */
-uint64_t stepramp_seed_without_truncation(const stepramp_plan_t *plan);
-
 /** The ideal trajectory's duration in ticks from a stepramp_info_t, like coord.ideal_end; 0.0 without an interval
  * or for a NULL info. */
 double stepramp_ideal_end(const stepramp_info_t *info);
+
+/** One axis of a coordinated stop on the line: Python's coord.AxisStop. */
+typedef struct {
+    uint32_t pulse;        /**< P_i, the take-over pulse (0: the axis takes no CHANGE) */
+    int has_change;        /**< 1: change holds the segment taken over at pulse (Python's change is not None) */
+    double speed;          /**< u_i, its ideal speed at P_i, steps/s (0.0 without a take-over pulse) */
+    int64_t natural;       /**< N_i = P_i + ceil(u_i^2 / (2 d_i)) (the ceil capped at 2^40), or L_i */
+    int64_t target;        /**< T_i, the pulse it rests on */
+    stepramp_change_t change; /**< plan_change(u_i, T_i - P_i, ...); all 0 when has_change is 0 */
+} stepramp_coord_axis_stop_t;
+
+/** A coordinated stop on the line: Python's coord.CoordStop. */
+typedef struct {
+    int64_t rest;           /**< R_L, the lead's rest (a pulse of the lead) */
+    uint32_t count;         /**< the number of axes */
+    uint32_t fallback_axis; /**< the axis whose plan_change failed (then SYNC_SOFT_STOP is the stop), or
+                                 STEPRAMP_COORD_NO_AXIS */
+    int fallback_err;       /**< that plan_change's error (STEPRAMP_OK when none) */
+    stepramp_coord_axis_stop_t axis[STEPRAMP_COORD_MAX_AXES];
+} stepramp_coord_stop_t;
+
+/**
+ * The take-overs that stop a running coordinated move on the line, exactly like Python's
+ * stepramp.board.coord.plan_coordinated_stop_at (docs/algorithm.md, "Coordinated moves": the coordinated stop on the
+ * line): N_i = P_i + ceil(u_i^2 / (2 d_i)) with u_i = stepramp_speed_at_pulse, R_L = min(L_lead, max_i
+ * ceil(N_i L_lead / L_i)), T_i = round(L_i R_L / L_lead) (halves up), and stepramp_plan_change_ramp(u_i, T_i - P_i,
+ * the path's accel, decel and speed times r_i, ...) for each axis with 0 < P_i < L_i and T_i < L_i.
+ * @param out      output: every field written (on a fallback, the axes after fallback_axis are left 0)
+ * @param plans    the coordinated move's plans (stepramp_plan_coordinated_info), count of them
+ * @param info     its info (lead, ratio, axis[i].d and the moves for stepramp_speed_at_pulse)
+ * @param pulses   each axis's take-over pulse P_i (0: none; the host picks it as change_pulse does)
+ * @param count    the number of axes, 1 .. STEPRAMP_COORD_MAX_AXES
+ * @return STEPRAMP_OK (a failed plan_change is a fallback, not an error); STEPRAMP_ENULL for a NULL pointer;
+ *         STEPRAMP_ECOORD_AXES for a bad count
+ */
+int stepramp_plan_coordinated_stop(stepramp_coord_stop_t *out, const stepramp_plan_t *plans,
+                                   const stepramp_coord_info_t *info, const uint32_t *pulses, uint32_t count,
+                                   double accel, double decel, double speed, double spr, double fclk,
+                                   uint32_t prescale);
 
 #ifdef __cplusplus
 }

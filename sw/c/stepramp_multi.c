@@ -94,6 +94,18 @@ int stepramp_multi_sync_start(const stepramp_multi_t *m, uint32_t mask)
     return STEPRAMP_OK;
 }
 
+int stepramp_multi_sync_soft_stop(const stepramp_multi_t *m, uint32_t mask)
+{
+    if (m == NULL) {
+        return STEPRAMP_ENULL;
+    }
+    if ((mask & ~all_axes(m)) != 0u) {
+        return STEPRAMP_EMULTI_AXES;
+    }
+    write_global(m, STEPRAMP_MULTI_REG_SYNC_SOFT_STOP, mask);
+    return STEPRAMP_OK;
+}
+
 uint32_t stepramp_multi_status(const stepramp_multi_t *m, stepramp_axes_status_t *status)
 {
     uint32_t raw;

@@ -4,11 +4,11 @@
  * tops stepramp_multi_plb / stepramp_multi_axil (docs/stepramp_multi.md).
  *
  * The top holds G_AXES (1 .. 8) stepramp cores behind one slave with a 12-bit address: a global window at byte offset
- * 0x000 (ID / AXES, SYNC_START, AXES_STATUS, IRQ_MASK) and axis i's register window at 0x100 * (i + 1). Each axis is
- * an ordinary stepramp core, driven by stepramp.h's functions on its own stepramp_t (stepramp_multi_axis); this
- * driver adds the global window: the axis count, SYNC_START (the selected axes start on the same clock edge), the
- * status word, the interrupt mask, and coordinated linear moves planned by stepramp_plan_coordinated
- * (stepramp_coord.h) and started together. Register access as in stepramp.h (STEPRAMP_READ32 / STEPRAMP_WRITE32,
+ * 0x000 (ID / AXES, SYNC_START, AXES_STATUS, IRQ_MASK, SYNC_SOFT_STOP) and axis i's register window at
+ * 0x100 * (i + 1). Each axis is an ordinary stepramp core, driven by stepramp.h's functions on its own stepramp_t
+ * (stepramp_multi_axis); this driver adds the global window: the axis count, SYNC_START (the selected axes' pulse 0
+ * on one clock edge), SYNC_SOFT_STOP (their soft stop on one clock edge), the status word, the interrupt mask, and
+ * coordinated linear moves planned by stepramp_plan_coordinated (stepramp_coord.h) and started together. Register access as in stepramp.h (STEPRAMP_READ32 / STEPRAMP_WRITE32,
  * STEPRAMP_CONFIG_HEADER); the global registers are written as whole words. C99, no malloc, no stdio. Link
  * stepramp.c, stepramp_plan.c, stepramp_change.c and stepramp_coord.c with it.
  *
@@ -46,6 +46,7 @@ extern "C" {
 #define STEPRAMP_MULTI_REG_SYNC_START 0x004u
 #define STEPRAMP_MULTI_REG_AXES_STATUS 0x008u
 #define STEPRAMP_MULTI_REG_IRQ_MASK 0x00Cu
+#define STEPRAMP_MULTI_REG_SYNC_SOFT_STOP 0x010u
 /** AXES_STATUS: bit i of each field is axis i: BUSY, DONE, and the axis's irq line (before IRQ_MASK). */
 #define STEPRAMP_MULTI_AXES_STATUS_BUSY_SHIFT 0u
 #define STEPRAMP_MULTI_AXES_STATUS_DONE_SHIFT 8u
@@ -98,6 +99,14 @@ stepramp_t *stepramp_multi_axis(stepramp_multi_t *m, uint32_t i);
  * @return STEPRAMP_OK; STEPRAMP_EMULTI_AXES (nothing written) for a bit at or above the axis count; STEPRAMP_ENULL
  */
 int stepramp_multi_sync_start(const stepramp_multi_t *m, uint32_t mask);
+
+/**
+ * SYNC_SOFT_STOP: a SOFT_STOP of every axis in mask on one clock edge, as if CTRL.SOFT_STOP were written to each at
+ * that edge (Python's MultiAxis.sync_soft_stop; docs/algorithm.md, "Coordinated moves": the coordinated soft stop).
+ *
+ * @return STEPRAMP_OK; STEPRAMP_EMULTI_AXES (nothing written) for a bit at or above the axis count; STEPRAMP_ENULL
+ */
+int stepramp_multi_sync_soft_stop(const stepramp_multi_t *m, uint32_t mask);
 
 /**
  * Read AXES_STATUS.

@@ -111,6 +111,11 @@ uint32_t stepramp_priv_stop_ratio(double accel, double decel)
     return (ratio < 4294967295.0) ? (uint32_t)rint(ratio) : UINT32_MAX;
 }
 
+double stepramp_priv_accel_truncation(int64_t n)
+{
+    return (double)n - (2.0 * ((double)n + 0.75) * stepramp_decel_product(n) - 1.5);
+}
+
 double stepramp_priv_decel_seed(double cd0, int64_t m0)
 {
     double seed_d = stepramp_seed_factor * cd0 * stepramp_decel_product(m0);
@@ -215,23 +220,43 @@ static double ramp_interval(const ramp_t *r, int64_t i)
 
 stepramp_err_t stepramp_ramp_constant(double c0_ticks, uint64_t *constant)
 {
-    /* exact.ramp_constant: round(c0 * c0 * 2^8) in 1 .. 2^48 - 1; a square that is not finite (Python's round()
-     * raises OverflowError) or a NaN fails the range check too */
-    double value;
+    /* exact.ramp_constant: C = round(c0 * c0 * 2^8) in 1 .. 2^72 - 2^36 as the seed word m | e << 60, the smallest
+     * scale e (0 .. 6) whose mantissa m = round(c0 * c0 * 2^8 / 4^e) is below 2^60 (a division by a power of two:
+     * exact, as in Python); a square that is not finite or a NaN gives m = 0 and fails the range check */
+    double scaled;
+    double value = 0.0;
+    int scale = 0;
     if (constant == NULL) {
         return STEPRAMP_ENULL;
     }
-    value = rint(c0_ticks * c0_ticks * (double)(1 << (2 * STEPRAMP_FRAC_EXACT)));
-    if (!(value >= 1.0 && value < TWO_POW_48)) {
+    scaled = c0_ticks * c0_ticks * (double)(1 << (2 * STEPRAMP_FRAC_EXACT));
+    if (isfinite(scaled)) {
+        value = rint(scaled);
+        while (value >= TWO_POW_60 && scale < STEPRAMP_EXACT_SCALE_MAX) {
+            scale += 1;
+            value = rint(scaled / ldexp(1.0, 2 * scale));
+        }
+    }
+    if (!(value >= 1.0 && ldexp(value, 2 * scale) <= STEPRAMP_EXACT_C_MAX)) {
         return STEPRAMP_EOVERFLOW;
     }
-    *constant = (uint64_t)value;
+    *constant = ((uint64_t)scale << 60) | (uint64_t)value;
     return STEPRAMP_OK;
 }
 
-uint32_t stepramp_priv_min_interval_clks(uint32_t ramp)
+/* plan.exact_narrow: the ramp constant of c0 is below 2^48 (the same double comparison) */
+static int exact_narrow(double c0_ticks)
 {
-    return (ramp == STEPRAMP_RAMP_EXACT) ? STEPRAMP_MIN_INTERVAL_CLKS_EXACT : STEPRAMP_MIN_INTERVAL_CLKS;
+    return c0_ticks * c0_ticks * 256.0 < TWO_POW_48 - 0.5;
+}
+
+uint32_t stepramp_priv_min_interval_clks(uint32_t ramp, double c0_a, double c0_d)
+{
+    if (ramp != STEPRAMP_RAMP_EXACT) {
+        return STEPRAMP_MIN_INTERVAL_CLKS;
+    }
+    return (exact_narrow(c0_a) && exact_narrow(c0_d)) ? STEPRAMP_MIN_INTERVAL_CLKS_EXACT
+                                                      : STEPRAMP_MIN_INTERVAL_CLKS_EXACT_WIDE;
 }
 
 /* plan._exact_plan: the exact intervals without the recurrence deficit, the ramp constants of c0 and cd0 in the
@@ -267,7 +292,8 @@ static stepramp_err_t exact_fields(stepramp_plan_t *out, stepramp_info_t *inf, c
 }
 
 /* plan.register_doubles and the Plan of an AVR446 move: exact intervals and seeds with the recurrences' time deficits
- * put back (half into each seed, the accel ramp's other half into interval 1), the same doubles in the same order;
+ * put back (half into each seed, the accel ramp's other half into interval 1) and the accel seed without the accel
+ * recurrence's mean truncation (plan.accel_truncation), the same doubles in the same order;
  * then the fields in the order Python evaluates them (the first overflow wins; all are EOVERFLOW) */
 static stepramp_err_t avr446_fields(stepramp_plan_t *out, stepramp_info_t *inf, const ramp_t *ramp, int64_t sa,
                                     int64_t sd, int64_t m0)
@@ -282,7 +308,7 @@ static stepramp_err_t avr446_fields(stepramp_plan_t *out, stepramp_info_t *inf, 
         double unit_a = 2.0 * ((double)n_a + 0.75) * stepramp_decel_product(n_a) - 1.5;
         double half_a = (ramp->k_a * (sqrt((double)n_a + 1.0) - 1.0) - seed_a * unit_a) / 2.0;
         first_extra = half_a;
-        seed_a = seed_a + half_a / unit_a;
+        seed_a = seed_a + half_a / unit_a - stepramp_priv_accel_truncation(n_a) / unit_a / TWO_POW_16;
     }
     inf->t_first = ramp_interval(ramp, 1) + first_extra;
     inf->t_last = ramp_interval(ramp, ramp->length);
@@ -379,7 +405,7 @@ stepramp_err_t stepramp_plan_move_info_ramp(stepramp_plan_t *plan, stepramp_info
     }
     /* Python multiplies the exact integers; the double product is exact below 2^53 and rounds monotonically
      * above, so the comparison with 64 (exact mode: 256) has the same outcome. */
-    if (floor(min_interval) * (double)prescale < (double)stepramp_priv_min_interval_clks(ramp)) {
+    if (floor(min_interval) * (double)prescale < (double)stepramp_priv_min_interval_clks(ramp, curve.k_a, curve.k_d)) {
         return STEPRAMP_ETOOFAST;
     }
 
@@ -460,12 +486,13 @@ const char *stepramp_strerror(stepramp_err_t err)
     case STEPRAMP_EOVERFLOW:
         return "a delay overflows its register (integer part >= 2^32 ticks): delay too long; "
                "use a larger accel/decel/speed, a lower f_clk or a larger prescale; or, in exact mode, c0 or cd0 "
-               "gives a ramp constant outside 1 .. 2^48 - 1 (c0 must be below 2^20 ticks)";
+               "gives a ramp constant outside 1 .. 2^72 - 2^36 (c0 must be below 2^32 ticks)";
     case STEPRAMP_ETICK:
         return "interval shorter than 1 tick at the peak speed: lower the speed or raise f_clk / lower the prescale";
     case STEPRAMP_ETOOFAST:
         return "speed too high for the hardware to compute the next delay in time: "
-               "shortest interval in ticks * prescale < 64 clocks (exact mode: 256 clocks)";
+               "shortest interval in ticks * prescale < 64 clocks (exact mode: 256 clocks, 304 with a ramp "
+               "constant of 2^48 or more)";
     case STEPRAMP_EACCEL_UNITS:
         return "accel in steps units is out of range; check spr and the units";
     case STEPRAMP_EDECEL_UNITS:

@@ -31,15 +31,21 @@ extern "C" {
 #define STEPRAMP_FRAC_CRUISE 32
 /** Shortest interval, in clocks, that leaves the engine time to compute the next value. */
 #define STEPRAMP_MIN_INTERVAL_CLKS 64
-/** The same in exact mode (G_RAMP = 1): a ramp value there takes one or two square roots (plan.py's
- * MIN_INTERVAL_CLKS_EXACT). */
+/** The same in exact mode (G_RAMP = 1) for a move whose ramp constants are below 2^48 (c0 and cd0 below 2^20 ticks):
+ * a ramp value there takes one or two square roots (plan.py's MIN_INTERVAL_CLKS_EXACT). */
 #define STEPRAMP_MIN_INTERVAL_CLKS_EXACT 256
+/** The same for a move with a ramp constant of 2^48 or more (plan.py's MIN_INTERVAL_CLKS_EXACT_WIDE). */
+#define STEPRAMP_MIN_INTERVAL_CLKS_EXACT_WIDE 304
 /** stepramp_plan_t.ramp: the AVR446 recurrence (the core's G_RAMP = 0, the default; plan.RAMP_AVR446). */
 #define STEPRAMP_RAMP_AVR446 0u
 /** stepramp_plan_t.ramp: the exact ramp, differences of rounded square roots (G_RAMP = 1; plan.RAMP_EXACT). */
 #define STEPRAMP_RAMP_EXACT 1u
 /** Fraction bits of the exact ramp's root (exact.FRAC_EXACT): a ramp constant is round(c0^2 * 2^(2 * 4)). */
 #define STEPRAMP_FRAC_EXACT 4
+/** The largest scale e of an exact-mode seed word (exact.SCALE_MAX): C = m * 4^e, m in bits 59:0, e in 63:60. */
+#define STEPRAMP_EXACT_SCALE_MAX 6
+/** The largest ramp constant (exact.C_MAX = 2^72 - 2^36): c0 below 2^32 ticks. */
+#define STEPRAMP_EXACT_C_MAX 4722366482800925736960.0
 /** Largest |steps| of one move (the steps register is 31 bits wide). */
 #define STEPRAMP_MAX_STEPS INT64_C(2147483647)
 /** Largest PRESCALE (the prescale register is 16 bits wide). */
@@ -93,8 +99,9 @@ typedef struct {
     double t_last;       /**< exact interval L */
     double t_sa;         /**< exact interval sa */
     double t_sd;         /**< exact interval sd */
-    double t_accel_seed; /**< SEED_FACTOR * c0, plus half the accel deficit spread over A_1 .. A_(sa-2); exact mode:
-                              c0, whose ramp constant the seed is */
+    double t_accel_seed; /**< SEED_FACTOR * c0, plus half the accel deficit spread over A_1 .. A_(sa-2), less the
+                              recurrence's mean truncation (plan.accel_truncation); exact mode: c0, whose ramp
+                              constant the seed is */
     double t_decel_seed; /**< SEED_FACTOR * cd0 * decel_product(m0) plus half the decel deficit; 0 when m0 < 1;
                               exact mode: cd0, whose ramp constant the seed is */
     double t_cruise;     /**< f_tick / v */
@@ -114,8 +121,8 @@ typedef enum {
     STEPRAMP_EPRESCALE,    /**< "prescale must be an integer in 1 .. 65535" */
     STEPRAMP_ESTEPS,       /**< "|steps| must be <= 2^31 - 1" */
     STEPRAMP_EOVERFLOW,    /**< "<field> = ... ticks overflows its register": a delay >= 2^32 ticks; in exact mode
-                                also "exact ramp: c0 = ... gives a ramp constant outside 1 .. 2^48 - 1" (c0 or cd0
-                                of 2^20 ticks or more, or below 1/32 tick: stepramp_ramp_constant) */
+                                also "exact ramp: c0 = ... gives a ramp constant outside 1 .. 2^72 - 2^36" (c0 or cd0
+                                of 2^32 ticks or more, or below 1/32 tick: stepramp_ramp_constant) */
     STEPRAMP_ETICK,        /**< "interval shorter than 1 tick" at the peak speed */
     STEPRAMP_ETOOFAST,     /**< "speed too high for the hardware to compute the next delay in time" */
     STEPRAMP_EACCEL_UNITS, /**< "accel in steps units is out of range" (0 or inf after / (2 pi / spr)) */
@@ -179,7 +186,8 @@ stepramp_err_t stepramp_plan_move_info(stepramp_plan_t *plan, stepramp_info_t *i
  *
  * In exact mode (STEPRAMP_RAMP_EXACT) c_first, c_last, c_sa and c_sd are the exact intervals without the recurrence
  * deficit, accel_seed and decel_seed the ramp constants of c0 and cd0 (stepramp_ramp_constant; decel_seed also when
- * m0 < 1), cruise and stop_ratio as in AVR446 mode, and the speed limit is STEPRAMP_MIN_INTERVAL_CLKS_EXACT clocks.
+ * m0 < 1), cruise and stop_ratio as in AVR446 mode, and the speed limit is STEPRAMP_MIN_INTERVAL_CLKS_EXACT clocks
+ * (STEPRAMP_MIN_INTERVAL_CLKS_EXACT_WIDE when a ramp constant is 2^48 or more).
  *
  * @param ramp STEPRAMP_RAMP_AVR446 or STEPRAMP_RAMP_EXACT: the core's G_RAMP; plan->ramp holds it
  * @return as stepramp_plan_move; STEPRAMP_ERAMP (checked first, after plan's NULL check) for another ramp;
@@ -199,12 +207,14 @@ stepramp_err_t stepramp_plan_move_info_ramp(stepramp_plan_t *plan, stepramp_info
 
 /**
  * The exact ramp's constant C = round(c0^2 * 2^(2 * STEPRAMP_FRAC_EXACT)) of a ramp whose first interval from rest is
- * c0 ticks (Python's stepramp.models.exact.ramp_constant: the same double c0 * c0 * 256, rounded half to even).
+ * c0 ticks, as its seed word: C = m * 4^e, the mantissa m in bits 59:0 and the scale e (0 .. 6, the smallest whose m
+ * is below 2^60) in bits 63:60 (Python's stepramp.models.exact.ramp_constant: the same double c0 * c0 * 256, rounded
+ * half to even, and divided by 4^e).
  *
  * @param constant output, written only on success
- * @return STEPRAMP_OK; STEPRAMP_EOVERFLOW when C is not in 1 .. 2^48 - 1 (c0 of 2^20 ticks or more: raise the
- *         prescale; or below about 0.044 ticks), also for a c0 whose square is not finite (where Python's round()
- *         raises OverflowError) or NaN; STEPRAMP_ENULL for a NULL constant
+ * @return STEPRAMP_OK; STEPRAMP_EOVERFLOW when C is not in 1 .. 2^72 - 2^36 (c0 of 2^32 ticks or more: raise the
+ *         prescale; or below about 0.044 ticks), also for a c0 whose square is not finite or NaN; STEPRAMP_ENULL for
+ *         a NULL constant
  */
 stepramp_err_t stepramp_ramp_constant(double c0_ticks, uint64_t *constant);
 

@@ -17,6 +17,7 @@
 #define TWO_POW_16 65536.0
 #define TWO_POW_32 4294967296.0
 #define TWO_POW_48 281474976710656.0
+#define TWO_POW_60 1152921504606846976.0
 #define TWO_POW_64 18446744073709551616.0
 
 /* Python's max(a, b): a unless b > a (keeps a NaN or a -0.0 in a, unlike fmax). */
@@ -53,8 +54,10 @@ stepramp_err_t stepramp_priv_to_fixed(double ticks, double scale, double limit, 
 /* plan._cruise: round(f_tick / v * 2^32) below 2^64 into *out, else STEPRAMP_EOVERFLOW. */
 stepramp_err_t stepramp_priv_cruise(double f_tick, double v, uint64_t *out);
 
-/* plan.min_interval_clks: STEPRAMP_MIN_INTERVAL_CLKS_EXACT for STEPRAMP_RAMP_EXACT, else STEPRAMP_MIN_INTERVAL_CLKS. */
-uint32_t stepramp_priv_min_interval_clks(uint32_t ramp);
+/* plan.min_interval_clks: for STEPRAMP_RAMP_EXACT STEPRAMP_MIN_INTERVAL_CLKS_EXACT when the ramp constants of both
+ * first intervals c0_a and c0_d are below 2^48, else STEPRAMP_MIN_INTERVAL_CLKS_EXACT_WIDE; else
+ * STEPRAMP_MIN_INTERVAL_CLKS. */
+uint32_t stepramp_priv_min_interval_clks(uint32_t ramp, double c0_a, double c0_d);
 
 /* plan._stop_ratio: round(accel / decel * 2^16), saturated at 2^32 - 1. */
 uint32_t stepramp_priv_stop_ratio(double accel, double decel);
@@ -64,6 +67,12 @@ uint32_t stepramp_priv_stop_ratio(double accel, double decel);
  * exceed int64_t), the same value as stepramp_decel_product for every m that fits it. 1.0 for m <= 0.
  */
 double stepramp_priv_decel_product(double m);
+
+/*
+ * plan.accel_truncation: the accel recurrence's mean truncation over A_1 .. A_n, n - (2 (n + 3/4) P(n) - 3/2) Q32.16
+ * LSB (shared with stepramp_coord.c's time_before_last).
+ */
+double stepramp_priv_accel_truncation(int64_t n);
 
 /*
  * The final decel ramp's seed D_m0 = SEED_FACTOR cd0 decel_product(m0), with half its recurrence deficit put back

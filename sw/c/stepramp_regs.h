@@ -3,7 +3,7 @@
 #ifndef STEPRAMP_REGS_H
 #define STEPRAMP_REGS_H
 
-#define STEPRAMP_ID_VALUE 0x53520007u
+#define STEPRAMP_ID_VALUE 0x53520008u
 #define STEPRAMP_ADDR_BITS 8u
 
 /* Byte offsets. */

@@ -1287,8 +1287,15 @@ static void test_events_and_estop(void)
     CHECK_EQ(bus->log[bus->writes - 1u].be, 0x2u);
     stepramp_enable_input_irq(&dev, 0, 1, STEPRAMP_INPUT_LIMIT_NEG | STEPRAMP_INPUT_LIMIT_POS, 0);
     CHECK_EQ(reg(O_CTRL), 0x10000u | 0x200u | 0x400u | 0x800u);
-    stepramp_enable_irq(&dev, 1, 1); /* the old call: the input enables off */
-    CHECK_EQ(reg(O_CTRL), 0x10300u);
+    /* enable_irq sets DONE / ERROR in byte 1 and keeps the input enables there (bits 10 .. 14), a byte-1 write */
+    stepramp_fakebus_clear_log();
+    stepramp_enable_irq(&dev, 1, 1);
+    CHECK_EQ(reg(O_CTRL), 0x10000u | 0x300u | 0x400u | 0x800u);
+    CHECK(bus->writes == 1u && bus->log[0].offset == O_CTRL && bus->log[0].be == 0x2u);
+    stepramp_enable_irq(&dev, 0, 0);
+    CHECK_EQ(reg(O_CTRL), 0x10000u | 0x400u | 0x800u);
+    stepramp_enable_input_irq(&dev, 0, 0, 0u, 0);
+    CHECK_EQ(reg(O_CTRL), 0x10000u);
     /* decoding: levels bits 19:16, events 23:20, LATCHED 24, DIR_FAULT 6 */
     bus->regs[O_STATUS / 4u] = 0x015A0040u;
     (void)stepramp_status(&dev, &st);
@@ -1351,7 +1358,7 @@ static void test_error_texts(void)
     CHECK(strcmp(stepramp_strcoreerror(STEPRAMP_ERR_NONE), "no error") == 0);
     CHECK(strcmp(stepramp_strcoreerror(STEPRAMP_ERR_PRESCALE), "PRESCALE is 0") == 0);
     CHECK(strcmp(stepramp_strcoreerror(STEPRAMP_ERR_POS_BUSY),
-                 "POSITION written while a move runs (the write was ignored)") == 0);
+                 "POSITION written while STATUS.BUSY (the write was ignored)") == 0);
     CHECK(strcmp(stepramp_corename(STEPRAMP_ERR_LATE), "LATE") == 0);
     CHECK(strcmp(stepramp_corename(STEPRAMP_ERR_ZERO_TICKS), "ZERO_TICKS") == 0);
     for (a = 0; a <= STEPRAMP_ERR_ESTOP; a++) {

@@ -39,6 +39,7 @@ enum {
     G_SYNC_START = 0x004,
     G_AXES_STATUS = 0x008,
     G_IRQ_MASK = 0x00C,
+    G_SYNC_SOFT_STOP = 0x010,
     WINDOW = 0x100,
     A_ID = 0x00,
     A_STATUS = 0x08,
@@ -106,7 +107,7 @@ static void store(uint32_t off, uint32_t value)
 {
     uint32_t word = off / 4u;
 
-    if (off == G_SYNC_START || off == G_ID || off == G_AXES_STATUS) {
+    if (off == G_SYNC_START || off == G_SYNC_SOFT_STOP || off == G_ID || off == G_AXES_STATUS) {
         return; /* strobe / read only */
     }
     if (off == G_IRQ_MASK) {
@@ -237,6 +238,16 @@ static void test_global_registers(void)
     CHECK_EQ(stepramp_multi_status(&m, NULL), 0x00050603u);
     CHECK_EQ(stepramp_multi_sync_start(NULL, 1u), STEPRAMP_ENULL);
     CHECK_EQ(stepramp_multi_set_irq_mask(NULL, 1u), STEPRAMP_ENULL);
+
+    /* SYNC_SOFT_STOP: one whole-word write of the mask; a bit past the axes writes nothing. */
+    CHECK_EQ(stepramp_multi_sync_soft_stop(&m, 0x6u), STEPRAMP_OK);
+    CHECK_EQ(fake.writes, 3u);
+    CHECK_EQ(fake.log[2].offset, G_SYNC_SOFT_STOP);
+    CHECK_EQ(fake.log[2].value, 0x6u);
+    CHECK_EQ(fake.log[2].be, 0xFu);
+    CHECK_EQ(stepramp_multi_sync_soft_stop(&m, 0x9u), STEPRAMP_EMULTI_AXES);
+    CHECK_EQ(fake.writes, 3u);
+    CHECK_EQ(stepramp_multi_sync_soft_stop(NULL, 1u), STEPRAMP_ENULL);
 }
 
 /* The path of the tests: the lead's accel, decel and speed, spr 200, 1 MHz, prescale 2. */

@@ -125,7 +125,9 @@ static void test_long_symmetric_trapezoid(void)
     CHECK(near((double)plan.c_first, (p.c0 + deficit / 2.0) * Q16, 1.0));
     CHECK(near((double)plan.c_last, p.c0 * Q16, 1.0)); /* interval L stays the ideal one, cd0 = c0 */
     CHECK(near((double)plan.cruise, p.f_tick / p.v * Q32, 1.0));
-    CHECK(near((double)plan.accel_seed, (seed + deficit / 2.0 / unit) * Q16, 1.0));
+    /* less the integer recurrence's mean truncation, n - (P(1) + .. + P(n)) LSB over values summing to unit seeds */
+    CHECK(near((double)plan.accel_seed, (seed + deficit / 2.0 / unit) * Q16 - ((double)plan.sa - 2.0 - unit) / unit,
+               1.0));
     /* interval sa: the end of the ramp from sa-1 to n_a, then cruise from n_a to sa */
     CHECK(rel_near((double)plan.c_sa,
                    (p.c0 * (sqrt(n_a) - sqrt((double)plan.sa - 1.0)) + ((double)plan.sa - n_a) * p.f_tick / p.v) * Q16,
@@ -176,7 +178,9 @@ static void test_asymmetric_trapezoids(void)
         CHECK(near((double)plan.c_first, (p.c0 + deficit / 2.0) * Q16, 1.0));
         CHECK(near((double)plan.c_last, p.cd0 * Q16, 1.0));
         CHECK(near((double)plan.cruise, p.f_tick / p.v * Q32, 1.0));
-        CHECK(near((double)plan.accel_seed, (0.6759782400672847 * p.c0 + deficit / 2.0 / unit) * Q16, 1.0));
+        CHECK(near((double)plan.accel_seed,
+                   (0.6759782400672847 * p.c0 + deficit / 2.0 / unit) * Q16 - ((double)plan.sa - 2.0 - unit) / unit,
+                   1.0));
         /* ratio of the first and last ideal intervals: sqrt(decel / accel) */
         CHECK(rel_near_d((double)plan.c_last / ((double)plan.c_first - deficit / 2.0 * Q16), sqrt(accel / decel),
                          1e-6));
@@ -633,11 +637,17 @@ static void test_ramp_constant(void)
     CHECK(stepramp_ramp_constant(0.5, &c) == STEPRAMP_OK && c == 64u);
     CHECK(stepramp_ramp_constant(3.0 / 32.0, &c) == STEPRAMP_OK && c == 2u); /* 2.25 */
     CHECK(stepramp_ramp_constant(0.0625, &c) == STEPRAMP_OK && c == 1u);     /* the smallest: 1 */
-    /* (2^20 - 1)^2 * 2^8 is the largest square below 2^48; c0 = 2^20 gives 2^48, out of range */
+    /* (2^20 - 1)^2 * 2^8 is the largest square below 2^48, 2^48 itself still scale 0; 2^60 needs scale 1 */
     CHECK(stepramp_ramp_constant(1048575.0, &c) == STEPRAMP_OK);
     CHECK(c == (UINT64_C(1048575) * UINT64_C(1048575)) << 8);
+    CHECK(stepramp_ramp_constant(1048576.0, &c) == STEPRAMP_OK && c == UINT64_C(1) << 48);
+    CHECK(stepramp_ramp_constant(67108864.0, &c) == STEPRAMP_OK && c == ((UINT64_C(1) << 60) | (UINT64_C(1) << 58)));
+    /* 2^32 - 1 ticks: C = (2^32 - 1)^2 * 2^8 at scale 6, mantissa (2^32 - 1)^2 >> 4 (the double's 53 bits) */
+    CHECK(stepramp_ramp_constant(4294967295.0, &c) == STEPRAMP_OK && c >> 60 == 6u);
+    CHECK((c & ((UINT64_C(1) << 60) - 1u)) == (uint64_t)ldexp(rint(4294967295.0 * 4294967295.0 * 256.0), -12));
     before = c;
-    CHECK(stepramp_ramp_constant(1048576.0, &c) == STEPRAMP_EOVERFLOW && c == before);
+    /* 2^32 ticks: C = 2^72, above 2^72 - 2^36 */
+    CHECK(stepramp_ramp_constant(4294967296.0, &c) == STEPRAMP_EOVERFLOW && c == before);
     /* below sqrt(1/512) ticks it rounds to 0: out of range too; so are inf, NaN and a square that overflows */
     CHECK(stepramp_ramp_constant(0.044, &c) == STEPRAMP_EOVERFLOW);
     CHECK(stepramp_ramp_constant(0.0, &c) == STEPRAMP_EOVERFLOW);
@@ -722,6 +732,7 @@ static void test_exact_move_errors(void)
     /* the speed limit: STEPRAMP_MIN_INTERVAL_CLKS_EXACT clocks (f_tick / v = 256.5 ticks passes, 255.5 does not,
      * which AVR446 mode takes) */
     CHECK(STEPRAMP_MIN_INTERVAL_CLKS_EXACT == 256);
+    CHECK(STEPRAMP_MIN_INTERVAL_CLKS_EXACT_WIDE == 304);
     CHECK(stepramp_plan_move_ramp(&plan, 1000, 1e6, 1e6, alpha * 1e6 / 256.5, 200.0, 1e6, 1, EXACT) == STEPRAMP_OK);
     CHECK(stepramp_plan_move_ramp(&plan, 1000, 1e6, 1e6, alpha * 1e6 / 255.5, 200.0, 1e6, 1, EXACT) ==
           STEPRAMP_ETOOFAST);
@@ -731,17 +742,30 @@ static void test_exact_move_errors(void)
     CHECK(stepramp_plan_move_ramp(&plan, 1000, 1e6, 1e6, alpha * 5e5 / 127.5, 200.0, 1e6, 2, EXACT) ==
           STEPRAMP_ETOOFAST);
     memcpy(&before, &plan, sizeof plan);
-    /* c0 = 1e6 sqrt(2 / (0.01 * 200 / 2 pi)) = 2.5e6 ticks: its ramp constant passes 2^48 (c0 >= 2^20 ticks), while
-     * the AVR446 plan fits */
-    CHECK(stepramp_plan_move_ramp(&plan, 1000, 0.01, 0.01, 0.3, 200.0, 1e6, 1, EXACT) == STEPRAMP_EOVERFLOW);
-    CHECK(stepramp_plan_move(&plan, 1000, 0.01, 0.01, 0.3, 200.0, 1e6, 1) == STEPRAMP_OK);
+    /* c0 = 1e6 sqrt(2 / (0.01 * 200 / 2 pi)) = 2.5e6 ticks: its ramp constant passes 2^48 (c0 >= 2^20 ticks): the
+     * speed limit becomes STEPRAMP_MIN_INTERVAL_CLKS_EXACT_WIDE (f_tick / v = 304.5 ticks passes, 303.5 does not) */
+    CHECK(stepramp_plan_move_ramp(&plan, 50000000, 0.01, 0.01, alpha * 1e6 / 304.5, 200.0, 1e6, 1, EXACT) ==
+          STEPRAMP_OK);
+    CHECK(plan.accel_seed >= UINT64_C(1) << 48);
+    CHECK(stepramp_plan_move_ramp(&plan, 50000000, 0.01, 0.01, alpha * 1e6 / 303.5, 200.0, 1e6, 1, EXACT) ==
+          STEPRAMP_ETOOFAST);
+    CHECK(stepramp_plan_move(&plan, 50000000, 0.01, 0.01, alpha * 1e6 / 303.5, 200.0, 1e6, 1) == STEPRAMP_OK);
     /* the decel's alone: cd0 = 2.5e6 ticks */
-    CHECK(stepramp_plan_move_ramp(&plan, 1000, 1.0, 0.01, 0.3, 200.0, 1e6, 1, EXACT) == STEPRAMP_EOVERFLOW);
+    CHECK(stepramp_plan_move_ramp(&plan, 50000000, 1.0, 0.01, alpha * 1e6 / 303.5, 200.0, 1e6, 1, EXACT) ==
+          STEPRAMP_ETOOFAST);
+    CHECK(stepramp_plan_move_ramp(&plan, 50000000, 1.0, 1.0, alpha * 1e6 / 303.5, 200.0, 1e6, 1, EXACT) ==
+          STEPRAMP_OK);
+    /* c0 = 1e6 sqrt(2 / (1e-8 * 200 / 2 pi)) = 2.5e9 ticks: the AVR446 plan and the exact one fit; c0 = 5e9 ticks
+     * (c_first of 2^32 ticks or more in both modes) fits neither */
+    CHECK(stepramp_plan_move_ramp(&plan, 3, 1e-8, 1e-8, 0.3, 200.0, 1e6, 1, EXACT) == STEPRAMP_OK);
+    CHECK(plan.accel_seed >> 60 == 6u);
+    CHECK(stepramp_plan_move(&plan, 3, 1e-8, 1e-8, 0.3, 200.0, 1e6, 1) == STEPRAMP_OK);
+    CHECK(stepramp_plan_move_ramp(&plan, 3, 2.5e-9, 2.5e-9, 0.3, 200.0, 1e6, 1, EXACT) == STEPRAMP_EOVERFLOW);
     /* c0 = 0.025 ticks (a = 3.2e15 steps/s^2): the constant rounds to 0 */
     CHECK(stepramp_plan_move_ramp(&plan, 1000, 1e14, 1e14, 100.0, 200.0, 1e6, 1, EXACT) == STEPRAMP_EOVERFLOW);
     CHECK(stepramp_plan_move(&plan, 1000, 1e14, 1e14, 100.0, 200.0, 1e6, 1) == STEPRAMP_OK);
     memcpy(&plan, &before, sizeof plan);
-    CHECK(stepramp_plan_move_ramp(&plan, 1000, 0.01, 0.01, 0.3, 200.0, 1e6, 1, EXACT) == STEPRAMP_EOVERFLOW);
+    CHECK(stepramp_plan_move_ramp(&plan, 3, 2.5e-9, 2.5e-9, 0.3, 200.0, 1e6, 1, EXACT) == STEPRAMP_EOVERFLOW);
     CHECK(memcmp(&plan, &before, sizeof plan) == 0); /* never written on error */
     CHECK(strstr(stepramp_strerror(STEPRAMP_EOVERFLOW), "ramp constant") != NULL);
     CHECK(strstr(stepramp_strerror(STEPRAMP_ERAMP), "ramp must be 0 (avr446) or 1 (exact)") != NULL);
@@ -810,16 +834,18 @@ static void test_exact_changes(void)
     CHECK(plan.steps == move.steps && plan.c_first == move.c_first && plan.accel_seed == move.accel_seed);
     CHECK(plan.c_sd == move.c_sd && plan.decel_seed == move.decel_seed && plan.cruise == move.cruise);
 
-    /* errors: the ramp first; the exact speed limit (256 clocks); a head constant out of range */
+    /* errors: the ramp first; the exact speed limit (256 clocks); a head constant out of range (c0 = 5e9 ticks; 2.5e6
+     * ticks is in range since the scaled constant) */
     memset(&ch, 0x5A, sizeof ch);
     before = ch;
     CHECK(stepramp_plan_change_ramp(&ch, -1.0, -2, 0.0, 1.0, 1.0, 400.0, 1e6, 0, 5u) == STEPRAMP_ERAMP);
     CHECK(stepramp_plan_change_ramp(NULL, 0.0, 100, 1.0, 1.0, 1.0, 400.0, 1e6, 1, 5u) == STEPRAMP_ENULL);
     CHECK(stepramp_plan_change_ramp(&ch, 0.0, STEPRAMP_ENDLESS, 40.0, 30.0, 20.0, 400.0, 3e5, 1, EXACT) ==
           STEPRAMP_ETOOFAST);
-    CHECK(stepramp_plan_change_ramp(&ch, 0.0, STEPRAMP_ENDLESS, 0.01, 0.01, 0.3, 200.0, 1e6, 1, EXACT) ==
+    CHECK(stepramp_plan_change_ramp(&ch, 0.0, STEPRAMP_ENDLESS, 2.5e-9, 2.5e-9, 0.3, 200.0, 1e6, 1, EXACT) ==
           STEPRAMP_EOVERFLOW);
     CHECK(memcmp(&ch, &before, sizeof ch) == 0); /* never written on error */
+    CHECK(stepramp_plan_change_ramp(&ch, 0.0, STEPRAMP_ENDLESS, 0.01, 0.01, 0.3, 200.0, 1e6, 1, EXACT) == STEPRAMP_OK);
     CHECK(stepramp_plan_change_ramp(&ch, 0.0, STEPRAMP_ENDLESS, 40.0, 30.0, 20.0, 400.0, 3e5, 1,
                                     STEPRAMP_RAMP_AVR446) == STEPRAMP_OK);
     CHECK(stepramp_plan_change_ramp(&ch, 0.0, STEPRAMP_ENDLESS, 0.01, 0.01, 0.3, 200.0, 1e6, 1,
@@ -939,8 +965,8 @@ static void check_coordinated(const int64_t *steps, uint32_t count, double accel
         CHECK(stepramp_plan_move(&base, steps[i], accel * r, decel * r, speed * r, spr, fclk, prescale) ==
               STEPRAMP_OK);
         CHECK(plans[i].steps == base.steps && plans[i].direction == base.direction && plans[i].sa == base.sa &&
-              plans[i].sd == base.sd && plans[i].cruise == base.cruise && plans[i].decel_seed == base.decel_seed);
-        CHECK(plans[i].accel_seed <= base.accel_seed); /* less the recurrence's truncation */
+              plans[i].sd == base.sd && plans[i].cruise == base.cruise && plans[i].decel_seed == base.decel_seed &&
+              plans[i].accel_seed == base.accel_seed); /* plan_move's seed, its truncation already out */
         CHECK(near((double)plans[i].c_last, (double)base.c_last, 0.01 * (double)base.c_last + 2.0 * Q16));
         CHECK(engine_last_tick(&plans[i]) == (uint64_t)info.end_tick);
     }
@@ -999,7 +1025,6 @@ static void test_coordinated(void)
     CHECK(stepramp_plan_coordinated(plans, NULL, 3, 40.0, 40.0, 20.0, 400.0, 1e6, 1) == STEPRAMP_ENULL);
     CHECK(memcmp(plans, before, sizeof plans) == 0);
     CHECK(stepramp_time_before_last(NULL) == 0.0 && stepramp_ideal_end(NULL) == 0.0);
-    CHECK(stepramp_seed_without_truncation(NULL) == 0u);
 }
 
 int main(void)

@@ -6,9 +6,9 @@ ctypes, and compared with the Python driver field by field on many random moves,
 and on the invalid inputs of stepramp.sim.profiles: the same registers, or the same first error.
 
 The exact mode (ramp = RAMP_EXACT: stepramp_plan_move_ramp against plan_move(..., ramp=1)) likewise, on random moves
-designed around its limits (the ramp constants from 0 to past 2^48, the 256-clock speed limit) with a spoiled argument
-or ramp now and then, on EXACT_PROFILES, and exact.ramp_constant against stepramp_ramp_constant. Its random draws print
-their seed; STEPRAMP_SEED=<seed> replays them.
+designed around its limits (the ramp constants from 0 to past 2^72, the 256- and 304-clock speed limits) with a spoiled
+argument or ramp now and then, on EXACT_PROFILES, and exact.ramp_constant against stepramp_ramp_constant. Its random
+draws print their seed; STEPRAMP_SEED=<seed> replays them.
 """
 
 from __future__ import annotations
@@ -453,12 +453,12 @@ _BAD_RAMPS = (2, 3, 255, 2**32 - 1)
 
 def _exact_designed_move(rng: random.Random) -> Move:
     """A move designed for the exact mode: a cruise period from around its 256-clock limit up, and a first interval
-    c0 = 2 period sqrt(n_a) from below 0.044 ticks (a ramp constant of 0) to past 2^20 ticks (past 2^48), the decel
-    up to 1e4 times the accel either way."""
+    c0 = 2 period sqrt(n_a) from below 0.044 ticks (a ramp constant of 0) past 2^20 ticks (past 2^48: scaled seed
+    words and the 304-clock limit) to past 2^32 ticks (past 2^72), the decel up to 1e4 times the accel either way."""
     prescale = _random_prescale(rng)
     spr, fclk = _random_spr_fclk(rng)
     period = math.ceil(MIN_INTERVAL_CLKS_EXACT / prescale) * log_uniform(rng, 0.5, 1.0) + log_uniform(rng, 1e-3, 1e5)
-    c0 = log_uniform(rng, 0.02, 2.0**21)
+    c0 = log_uniform(rng, 0.02, 2.0**21) if rng.random() < 0.6 else log_uniform(rng, 2.0**19, 2.0**33)
     n_a = (c0 / (2.0 * period)) ** 2
     n_d = n_a * log_uniform(rng, 1e-4, 1e4)
     return design_args(_random_steps(rng), period, n_a, n_d, spr, fclk, prescale)
@@ -534,13 +534,18 @@ def test_exact_profiles_bit_for_bit(lib: ctypes.CDLL) -> None:
 
 
 def test_ramp_constant_bit_for_bit(lib: ctypes.CDLL) -> None:
-    """stepramp_ramp_constant against exact.ramp_constant: c0 from 0 to past 2^20 ticks, around both ends of the
-    range, and ties (c0 * c0 * 256 ending in .5 after the double rounding: half to even in both)."""
+    """stepramp_ramp_constant against exact.ramp_constant: c0 from 0 to past 2^32 ticks, around both ends of the
+    range and every change of scale, and ties (c0 * c0 * 256 ending in .5 after the double rounding: half to even in
+    both)."""
     rng = random.Random(EXACT_SEED)
     print(f"seed {EXACT_SEED} (STEPRAMP_SEED={EXACT_SEED} replays it)")
     values = [log_uniform(rng, 1e-3, 2.0**22) for _ in range(20_000)]
     values += [math.sqrt(k / 256.0) * (1.0 + rng.uniform(-1e-15, 1e-15)) for k in (0.5, 1.0, 1.5, 2.0**48 - 1.0)]
     values += [0.0, 0.0625, 2.0**20 - 1.0, 2.0**20, math.nextafter(2.0**20, 0.0)]
+    values += [log_uniform(rng, 2.0**20, 2.0**33) for _ in range(20_000)]
+    # each change of scale (C = 2^(60 + 2 e)) and the top of the range (C_MAX: c0 = 2^32 - 2^-5 about)
+    for c0 in [2.0 ** (26 + e) for e in range(7)] + [2.0**32 - 1.0, 2.0**32, math.sqrt(exact.C_MAX) / 16.0]:
+        values += [c0, math.nextafter(c0, 0.0), math.nextafter(c0, math.inf), c0 * (1.0 + 1e-12), c0 * (1.0 - 1e-12)]
     draws = (rng.uniform(2.0**19, 2.0**20 - 1.0) for _ in range(20_000))
     ties = [c0 for c0 in draws if (c0 * c0 * 256.0) % 1.0 == 0.5]
     assert len(ties) >= 100
@@ -557,6 +562,8 @@ def test_ramp_constant_bit_for_bit(lib: ctypes.CDLL) -> None:
             mismatches.append((c0.hex(), py, c))
     assert not mismatches, mismatches[:10]
     assert all(exact.ramp_constant(c0) % 2 == 0 for c0 in ties)  # half to even
+    scales = {exact.mantissa_scale(exact.ramp_constant(c0))[1] for c0 in values if 0.05 < c0 < 2.0**32 - 1.0}
+    assert scales == set(range(exact.SCALE_MAX + 1))
 
 
 def test_exact_mode_constants_match_python() -> None:
@@ -570,6 +577,9 @@ def test_exact_mode_constants_match_python() -> None:
         return int(match.group(1))
 
     assert define("STEPRAMP_MIN_INTERVAL_CLKS_EXACT") == MIN_INTERVAL_CLKS_EXACT
+    assert define("STEPRAMP_MIN_INTERVAL_CLKS_EXACT_WIDE") == pyplan.MIN_INTERVAL_CLKS_EXACT_WIDE
+    assert define("STEPRAMP_EXACT_SCALE_MAX") == exact.SCALE_MAX
+    assert float(re.findall(r"#define STEPRAMP_EXACT_C_MAX ([0-9.]+)", text)[0]) == exact.C_MAX
     assert define("STEPRAMP_RAMP_AVR446") == RAMP_AVR446
     assert define("STEPRAMP_RAMP_EXACT") == RAMP_EXACT
     assert define("STEPRAMP_FRAC_EXACT") == exact.FRAC_EXACT

@@ -375,3 +375,34 @@ def test_a_change_taken_over_at_a_pulse(profile) -> None:  # type: ignore[no-unt
                 assert err <= BOUND_C0 * c0_slow + BOUND_TICKS + 1.0, (profile.name, p, i, err / c0_slow)
             checked += 1
     assert checked >= 2, f"{profile.name}: only {checked} changes could be taken over"
+
+
+def test_a_long_up_head_keeps_the_bound() -> None:
+    # An up head runs the accel recurrence from index n0 with r = 0; its mean truncation (n - S(n) LSB from rest,
+    # about n - U / 2 from n0 > 0) is out of its seed as out of a move's (docs/algorithm.md, "Changes while moving").
+    # A jog from rest with a head of 1,500,000 steps to a cruise of 1 tick (left in: 22.9 ticks late, past the bound
+    # 21.6) and a head of 1,200,000 steps from n0 = 300,000 (left in: 12.7 ticks late): every pulse within the bound,
+    # and the head's last pulse (sa - 1) within 2 ticks of the ideal plus what the seed's rounding can put there, half
+    # an LSB times U, the head's values in seeds (U summed here plainly; 0.014 ticks from rest, 5.7 from n0).
+    spr, fclk, prescale = 400.0, 5e7, 64
+    alpha, f_tick = 2.0 * math.pi / spr, fclk / prescale
+    v = f_tick  # steps/s: a cruise of 1 tick
+    a = v * v / (2.0 * 1_500_000)
+    for n0 in (0, 300_000):
+        u = math.sqrt(2.0 * a * n0)
+        change = plan_change(u, None, a * alpha, a * alpha, v * alpha, spr, fclk, prescale)
+        seg = change.segment
+        assert seg.head == UP and seg.head_index == n0 and seg.sa - 2 > 1_100_000
+        count = seg.sa + 10
+        ticks = segment_ticks(seg, count)
+        judge = ideal.IdealSegment(change.start_speed, a, a, v, None, f_tick).pulse_times(count)
+        bound = BOUND_C0 * f_tick * math.sqrt(2.0 / a) + BOUND_TICKS
+        worst = max(abs(t - x) for t, x in zip(ticks, judge, strict=True))
+        assert worst <= bound, f"n0 = {n0}: worst pulse {worst:.3f} ticks from the ideal, bound {bound:.3f}"
+        p, unit = 1.0, 0.0
+        for j in range(n0 + 1, n0 + seg.sa - 1):  # A_j / A_n0 for the head's values A_(n0+1) .. A_(n0+sa-2)
+            p *= (4 * j - 1) / (4 * j + 1)
+            unit += p
+        tol = 2.0 + 0.5 * unit / 65536
+        at_end = ticks[seg.sa - 1] - judge[seg.sa - 1]
+        assert abs(at_end) <= tol, f"n0 = {n0}: pulse sa - 1 = {seg.sa - 1} is {at_end:.3f} ticks off (tol {tol:.3f})"

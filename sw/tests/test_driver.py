@@ -167,3 +167,44 @@ def test_mmap_access_on_a_file(tmp_path: Path) -> None:
     assert run(acc.read(0x10)) == 0x11BB33DD
     acc.close()
     assert f.read_bytes()[0x10:0x14] == bytes.fromhex("dd33bb11")
+
+
+class LaneBank(FakeBank):
+    """FakeBank with byte lanes as docs/registers.md gives them: a write changes only the bytes its strobe names, and
+    CTRL reads back its RW fields only (the WS command bits read 0)."""
+
+    async def read(self, addr: int) -> int:
+        value = await super().read(addr)
+        if addr == offset("CTRL"):
+            value &= sum(f.mask for f in REGISTERS_BY_NAME["CTRL"].fields if f.access == "RW")
+        return value
+
+    async def write(self, addr: int, value: int, strobe: int = 0xF) -> None:
+        self.log.append((addr, value, strobe))
+        lanes = sum(0xFF << (8 * b) for b in range(4) if strobe >> b & 1)
+        self.regs[addr] = (self.regs.get(addr, 0) & ~lanes | value & lanes) & 0xFFFF_FFFF
+
+
+def test_enable_irq_keeps_the_input_irq_enables() -> None:
+    # CTRL bits 10 .. 14 (the input interrupt enables) share byte 1 with IRQ_DONE_EN and IRQ_ERROR_EN (bits 8, 9):
+    # enable_irq sets DONE / ERROR and leaves the input enables that enable_input_irq set; nothing in byte 0 (no
+    # command) or byte 2 (ENABLE) is written
+    ctrl = REGISTERS_BY_NAME["CTRL"]
+    bank = LaneBank()
+    drv = StepRamp(bank, fclk=1e6, spr=200.0)
+    run(drv.set_enable(True))
+    run(drv.enable_input_irq(limit_neg=True, home=True, latch=True, done=False, error=False))
+    inputs = ctrl.field("IRQ_LIMIT_NEG_EN").mask | ctrl.field("IRQ_HOME_EN").mask | ctrl.field("IRQ_LATCH_EN").mask
+    enable = ctrl.field("ENABLE").mask
+    assert bank.regs[offset("CTRL")] == enable | inputs
+    bank.log.clear()
+    run(drv.enable_irq(done=True, error=False))
+    assert bank.regs[offset("CTRL")] == enable | inputs | ctrl.field("IRQ_DONE_EN").mask
+    run(drv.enable_irq(done=False, error=True))
+    assert bank.regs[offset("CTRL")] == enable | inputs | ctrl.field("IRQ_ERROR_EN").mask
+    run(drv.enable_irq(done=False, error=False))
+    assert bank.regs[offset("CTRL")] == enable | inputs
+    assert [strobe for addr, _, strobe in bank.log] == [0x2] * 3 and {a for a, _, _ in bank.log} == {offset("CTRL")}
+    # enable_input_irq still sets every enable of byte 1 as asked
+    run(drv.enable_input_irq(done=True))
+    assert bank.regs[offset("CTRL")] == enable | ctrl.field("IRQ_DONE_EN").mask | ctrl.field("IRQ_ERROR_EN").mask

@@ -13,7 +13,9 @@ import pytest
 from stepramp.models import exact
 from stepramp.models.exact_unit import (
     CONTINUED_WORST,
+    CONTINUED_WORST_NARROW,
     FRESH_WORST,
+    FRESH_WORST_NARROW,
     VALUE_Q4_BITS,
     ExactRequest,
     NextDelayExact,
@@ -22,10 +24,41 @@ from stepramp.models.exact_unit import (
     isqrt,
     isqrt_iterations,
     isqrt_latency,
+    unit_constant,
 )
 
-C_MAX = (1 << exact.C_WIDTH) - 1
 X_MAX = (1 << exact.INDEX_WIDTH) - 1
+SEED_TOP = exact.seed_word((1 << exact.MANT_WIDTH) - 1, exact.SCALE_MAX)
+"""The largest seed word the unit computes with: C = (2^60 - 1) 4^6, just below 2^72."""
+C_TOP = ((1 << exact.MANT_WIDTH) - 1) << (2 * exact.SCALE_MAX)
+C_NARROW_TOP = (1 << 48) - 1
+
+
+def random_seed(rng: random.Random) -> int:
+    """A seed word of a random constant below 2^72 (every bit length, encoded as the driver does: the smallest
+    scale), about one in eight a scale of 7 .. 15 (the unit takes 6)."""
+    c = rng.getrandbits(rng.randint(0, 72))
+    e = 0
+    while c >> (2 * e) >= 1 << exact.MANT_WIDTH:
+        e += 1
+    if rng.random() < 0.125:
+        return exact.seed_word(rng.getrandbits(60), rng.randint(7, 15))
+    return exact.seed_word(c >> (2 * e), e)
+
+
+def test_extra_pairs_root_the_scaled_radicand() -> None:
+    """isqrt with e zero pairs appended is root(R 4^e) (capped at max_extra), its latency floor(msb(R 4^e) / 2) + 5;
+    the unit's constant of a seed word is m 4^min(e, 6)."""
+    rng = random.Random(6)
+    for _ in range(3000):
+        r, e = rng.getrandbits(rng.randint(0, 92)), rng.randint(0, 15)
+        got = isqrt(r, 92, e, 6)
+        used = min(e, 6)
+        assert got.root == exact.root(r << (2 * used))
+        assert got.latency == (1 if r == 0 else isqrt_latency(r << (2 * used)))
+    assert isqrt(1, 4, 3, 6).latency == 0 // 2 + 3 + 5
+    assert unit_constant(exact.seed_word(5, 3)) == 5 * 4**3
+    assert unit_constant(exact.seed_word(5, 9)) == 5 * 4**6
 
 
 def test_root_rounds_to_nearest_on_the_edges() -> None:
@@ -100,31 +133,45 @@ def test_next_delay_latency_by_hand() -> None:
 
 
 def test_worst_cases_fit_the_budget() -> None:
-    """The worst cases (C < 2^48, x < 2^31) are at the top corner: 30 + 44 + 44 + 3 and 44 + 2."""
-    assert FRESH_WORST == 121
-    assert CONTINUED_WORST == 46
-    assert FRESH_WORST < 140 and CONTINUED_WORST < 50
+    """The worst cases (C < 2^72, x < 2^31) are at the top corner: 30 + 56 + 56 + 3 and 56 + 2; for C < 2^48
+    30 + 44 + 44 + 3 and 44 + 2."""
+    assert FRESH_WORST == 145
+    assert CONTINUED_WORST == 58
+    assert FRESH_WORST_NARROW == 121
+    assert CONTINUED_WORST_NARROW == 46
     rng = random.Random(4)
     for _ in range(3000):
-        c, x = rng.getrandbits(rng.randint(0, 48)), rng.getrandbits(rng.randint(0, 31))
+        c, x = unit_constant(random_seed(rng)), rng.getrandbits(rng.randint(0, 31))
+        decel = rng.random() < 0.5
         assert fresh_latency(c, x) <= FRESH_WORST
-        assert continued_latency(c, x, rng.random() < 0.5) <= CONTINUED_WORST
+        assert continued_latency(c, x, decel) <= CONTINUED_WORST
+        if c < 1 << 48:
+            assert fresh_latency(c, x) <= FRESH_WORST_NARROW
+            assert continued_latency(c, x, decel) <= CONTINUED_WORST_NARROW
 
 
-def test_values_fit_25_bits_and_telescope() -> None:
-    """Every answer is below 2^25 in Q.4 (the largest, 2^24, at x = 0 with the largest C), and a run of answers
-    sums to the difference of two roots."""
-    assert exact.value_q4(C_MAX, 0) == 1 << 24
-    assert exact.value_q4(C_MAX, 0) < 1 << VALUE_Q4_BITS
+def test_values_fit_37_bits_and_telescope() -> None:
+    """Every answer is below 2^37 in Q.4 (the largest, 2^36, at x = 0 with the largest C: ans_ovf, as it does not fit
+    Q32.16), at most 2^36 - 1 for C <= C_MAX, and a run of answers sums to the difference of two roots."""
+    assert exact.value_q4(C_TOP, 0) == 1 << 36
+    assert exact.value_q4(C_TOP, 0) < 1 << VALUE_Q4_BITS
+    assert NextDelayExact().request(ExactRequest(False, 0, SEED_TOP, 0)).ovf
+    assert not NextDelayExact().request(ExactRequest(False, 1, SEED_TOP, 0)).ovf
+    assert exact.value_q4(exact.C_MAX, 0) == (1 << 36) - 1
+    assert exact.value_q4(exact.C_MAX + 1, 0) == 1 << 36
+    assert exact.value_q4(C_NARROW_TOP, 0) == 1 << 24
     rng = random.Random(5)
     for _ in range(2000):
-        c, x = rng.getrandbits(rng.randint(0, 48)), rng.getrandbits(rng.randint(0, 31))
-        assert 0 <= exact.value_q4(c, x) <= math.isqrt(c) + 1 <= 1 << 24
-    for c in (1, 12345, C_MAX):
+        c, x = unit_constant(random_seed(rng)), rng.getrandbits(rng.randint(0, 31))
+        assert 0 <= exact.value_q4(c, x) <= math.isqrt(c) + 1 <= 1 << 36
+    for seed in (1, 12345, C_NARROW_TOP, exact.ramp_constant(3e9), exact.seed_word((1 << 60) - (1 << 24), 6)):
+        c = exact.constant_of(seed)
         lo = rng.randrange(1000)
         unit = NextDelayExact()
-        total = sum(unit.request(ExactRequest(False, x, c, 0)).value for x in range(lo, lo + 300))
-        assert total == exact.ramp_sum_q16(c, lo, lo + 300) == (exact.root(c * (lo + 300)) - exact.root(c * lo)) << 12
+        total = sum(unit.request(ExactRequest(False, x, seed, 0)).value for x in range(lo, lo + 300))
+        assert (
+            total == exact.ramp_sum_q16(seed, lo, lo + 300) == (exact.root(c * (lo + 300)) - exact.root(c * lo)) << 12
+        )
 
 
 def test_continuation_rule() -> None:
@@ -174,7 +221,7 @@ def test_contract_violations_are_refused() -> None:
         unit.request(ExactRequest(False, 6, 101, 0))
     with pytest.raises(ValueError, match="ramp index"):
         unit.request(ExactRequest(False, 1 << 31, 100, 0))
-    with pytest.raises(ValueError, match="48 bits"):
-        unit.request(ExactRequest(False, 1, 1 << 48, 0))
-    with pytest.raises(ValueError, match="48 bits"):
-        unit.request(ExactRequest(False, 1, 1, 1 << 48))
+    with pytest.raises(ValueError, match="64 bits"):
+        unit.request(ExactRequest(False, 1, 1 << 64, 0))
+    with pytest.raises(ValueError, match="64 bits"):
+        unit.request(ExactRequest(False, 1, 1, 1 << 64))

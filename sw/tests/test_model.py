@@ -24,6 +24,7 @@ from stepramp.models.engine import (
     edges,
     interval_values,
     phases,
+    tick_chunks,
     tick_times,
 )
 from stepramp.sim.profiles import (
@@ -155,6 +156,35 @@ def test_the_bound_is_tight_for_long_ramps() -> None:
     args = design_args(100_001, 70.0, 20_000.0, 20_000.0, 200.0, 1e6, 1)
     res = check_move(args)
     assert 0.0065 < abs(res.worst_c0) < 0.0075
+
+
+def test_a_long_accel_ramp_keeps_the_bound() -> None:
+    # The integer accel recurrence (remainder carried) runs about one Q32.16 LSB per value above the exact one; left
+    # in the seed, a ramp of 1,500,000 steps at a cruise of 1 tick would end 1.5e6 / 2^16 = 22.9 ticks late, past the
+    # bound 0.008 c0 + 2 = 21.6 ticks. plan_move takes that mean truncation out of accel_seed (docs/algorithm.md,
+    # "Recurrence deficit"): every pulse of the plain plan within the bound, and the ramp's last pulse (sa - 1, where
+    # the deficit's halves cancel) within 2 ticks of the ideal. Judged chunk by chunk against the ideal (the lazy
+    # model and IdealMove.time_chunk), so the 1.5 million pulses take a few seconds.
+    import numpy as np
+
+    n_a = 1_500_000
+    args = design_args(n_a + 2001, 1.0, float(n_a), 1000.0, spr=400.0, fclk=5e7, prescale=64)
+    plan = plan_move(**args)
+    move = ideal.ideal_move(**args)
+    _, c0_slow, _ = _physics(args)
+    bound = BOUND_C0 * c0_slow + BOUND_TICKS
+    assert plan.sa - 2 > 1_400_000 and bound < n_a / 65536  # the truncation alone would break the bound
+    worst, at_ramp_end, seen = 0.0, math.nan, 0
+    for ticks in tick_chunks(plan):
+        err = ticks.astype(np.float64) - move.time_chunk(seen, seen + len(ticks))
+        i = int(np.argmax(np.abs(err)))
+        worst = max(worst, abs(float(err[i])))
+        if seen <= plan.sa - 1 < seen + len(ticks):
+            at_ramp_end = float(err[plan.sa - 1 - seen])
+        seen += len(ticks)
+    assert seen == plan.steps
+    assert worst <= bound, f"worst pulse {worst:.3f} ticks from the ideal, bound {bound:.3f}"
+    assert abs(at_ramp_end) <= 2.0, f"pulse sa - 1 = {plan.sa - 1}: {at_ramp_end:.3f} ticks from the ideal"
 
 
 # --------------------------------------------------------------------------------------------------------

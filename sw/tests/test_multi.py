@@ -18,6 +18,7 @@ from stepramp.board.multi import (
     REG_AXES_STATUS,
     REG_ID,
     REG_IRQ_MASK,
+    REG_SYNC_SOFT_STOP,
     REG_SYNC_START,
     AxesStatus,
     MultiAxis,
@@ -70,7 +71,7 @@ class FakeTop:
             self.regs[addr] = value & ((1 << self.axes) - 1)
         elif addr >= AXIS_WINDOW and addr % AXIS_WINDOW == offset("STATUS"):
             self.regs[addr] = self.regs.get(addr, 0) & ~(value & (DONE | ERROR))
-        elif addr not in (REG_ID, REG_SYNC_START, REG_AXES_STATUS):
+        elif addr not in (REG_ID, REG_SYNC_START, REG_SYNC_SOFT_STOP, REG_AXES_STATUS):
             self.regs[addr] = value
 
 
@@ -135,6 +136,11 @@ def test_global_registers() -> None:
     assert len(top.log) == 2, "a bad mask wrote something"
     top.status_script = [0x00_01_01_06]
     assert run(m.status()) == AxesStatus(busy=0b110, done=0b001, irq=0b001)
+    run(m.sync_soft_stop([1, 2]))
+    assert top.log[-1] == (REG_SYNC_SOFT_STOP, 0b110, 0xF)
+    with pytest.raises(ValueError, match="axis must be"):
+        run(m.sync_soft_stop([0, 3]))
+    assert len(top.log) == 3, "a bad mask wrote something"
 
 
 def test_move_coordinated_programs_each_window_then_one_sync_start() -> None:
@@ -229,6 +235,7 @@ MAP = [
     ("C_MREG_SYNC_START", "REG_SYNC_START", "STEPRAMP_MULTI_REG_SYNC_START"),
     ("C_MREG_AXES_STATUS", "REG_AXES_STATUS", "STEPRAMP_MULTI_REG_AXES_STATUS"),
     ("C_MREG_IRQ_MASK", "REG_IRQ_MASK", "STEPRAMP_MULTI_REG_IRQ_MASK"),
+    ("C_MREG_SYNC_SOFT_STOP", "REG_SYNC_SOFT_STOP", "STEPRAMP_MULTI_REG_SYNC_SOFT_STOP"),
     ("C_AXES_STATUS_BUSY_LSB", "AXES_STATUS_BUSY_LSB", "STEPRAMP_MULTI_AXES_STATUS_BUSY_SHIFT"),
     ("C_AXES_STATUS_DONE_LSB", "AXES_STATUS_DONE_LSB", "STEPRAMP_MULTI_AXES_STATUS_DONE_SHIFT"),
     ("C_AXES_STATUS_IRQ_LSB", "AXES_STATUS_IRQ_LSB", "STEPRAMP_MULTI_AXES_STATUS_IRQ_SHIFT"),
@@ -253,4 +260,5 @@ def test_the_map_is_the_same_in_vhdl_python_c_and_docs() -> None:
         "SYNC_START": REG_SYNC_START,
         "AXES_STATUS": REG_AXES_STATUS,
         "IRQ_MASK": REG_IRQ_MASK,
+        "SYNC_SOFT_STOP": REG_SYNC_SOFT_STOP,
     }

@@ -29,7 +29,8 @@ from stepramp.sim.profiles import INVALID_INPUTS, PROFILES
 SPR = 200.0
 ALPHA = 2.0 * math.pi / SPR
 #: The plan table of docs/algorithm.md ("What the driver computes"): each field of Plan, in order, and its width in
-#: bits (uint31: 31, Q32.16: 48, Q32.32: 64, Q16.16: 32).
+#: bits (uint31: 31, Q32.16: 48, Q32.32: 64, Q16.16: 32; the seeds' registers are 64 bits: Q32.16 in AVR446 mode,
+#: a seed word in exact mode).
 TABLE: list[tuple[str, int]] = [
     ("steps", 31),
     ("direction", 1),
@@ -40,8 +41,8 @@ TABLE: list[tuple[str, int]] = [
     ("c_sa", 48),
     ("sd", 31),
     ("c_sd", 48),
-    ("accel_seed", 48),
-    ("decel_seed", 48),
+    ("accel_seed", 64),
+    ("decel_seed", 64),
     ("cruise", 64),
     ("stop_ratio", 32),
 ]
@@ -169,7 +170,8 @@ def _recurrence_by_sum(seed: float, n: int) -> list[float]:
 def test_exact_intervals_and_seeds() -> None:
     """c_last, c_sa, c_sd are the ideal intervals; c_first is the ideal interval 1 plus half the accel recurrence's
     time deficit (ideal time of intervals 2 .. sa-1 less the recurrence values there), and each seed carries half
-    its ramp's deficit spread over its recurrence values: recomputed here by plain summation, from ideal.py."""
+    its ramp's deficit spread over its recurrence values (the accel seed less the integer recurrence's mean
+    truncation): recomputed here by plain summation, from ideal.py."""
     for args in (_args(700, 40000.0, 25000.0, 3000.0), _args(-350, 1000.0, 90000.0, 800.0, 8e6, 3)):
         plan, info = plan_move_info(**args)
         move = ideal.ideal_move(**args)
@@ -190,7 +192,11 @@ def test_exact_intervals_and_seeds() -> None:
         ):
             assert getattr(plan, field) == pytest.approx((iv[i - 1] + extra) * 2**16, abs=2), field
         scale_a = 1 + deficit_a / 2 / sum(accel_values)
-        assert plan.accel_seed == pytest.approx(seed_a * scale_a * 2**16, abs=1)
+        # less the integer recurrence's mean truncation: 1 - P(j) LSB at index j, spread over values summing to
+        # sum(accel_values) / seed_a seeds (docs/algorithm.md, "Recurrence deficit")
+        unit_a = sum(accel_values) / seed_a
+        truncation = sum(1.0 - value / seed_a for value in accel_values)
+        assert plan.accel_seed == pytest.approx(seed_a * scale_a * 2**16 - truncation / unit_a, abs=1)
         f_tick = args["fclk"] / args["prescale"]
         assert plan.cruise == pytest.approx(f_tick * ALPHA / args["speed"] * 2**32, rel=1e-15, abs=1)
         # decel: intervals sd+1 .. L-1 take D_m0 .. D_1, the recurrence run forward from cd0' for m0 steps

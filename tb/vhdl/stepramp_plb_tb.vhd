@@ -30,7 +30,7 @@ architecture sim of stepramp_plb_tb is
   constant C_STEP_COUNT : natural := 16#60#;
   constant C_UNMAPPED   : natural := 16#AC#;
 
-  constant C_ID_VALUE : std_logic_vector(31 downto 0) := x"5352_0007";
+  constant C_ID_VALUE : std_logic_vector(31 downto 0) := x"5352_0008";
 
   type t_reg_write is record
     offset : natural;
@@ -61,7 +61,7 @@ architecture sim of stepramp_plb_tb is
     (16#30#, x"0000_000A"), -- SD = 10
     (16#34#, x"0517_40C5"), -- C_SD_LO     (c_sd = 85409989)
     (16#38#, x"0000_0000"), -- C_SD_HI
-    (16#3C#, x"1500_4DA2"), -- ACCEL_SEED_LO (accel_seed = 352341410)
+    (16#3C#, x"1500_4DA0"), -- ACCEL_SEED_LO (accel_seed = 352341408)
     (16#40#, x"0000_0000"), -- ACCEL_SEED_HI
     (16#44#, x"0553_B26A"), -- DECEL_SEED_LO (decel_seed = 89371242)
     (16#48#, x"0000_0000"), -- DECEL_SEED_HI

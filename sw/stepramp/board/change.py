@@ -243,7 +243,7 @@ def plan_change(
     if positioning:
         profile.add(x_c, end, cap2, -2.0 * d)
     v_peak = math.sqrt(peak2)
-    _check_speed(f_tick, max(v_peak, math.sqrt(start2)), prescale, ramp)
+    _check_speed(f_tick, max(v_peak, math.sqrt(start2)), prescale, ramp, a, d)
     if v_peak == 0.0:
         raise ValueError("cruise overflows its register: the cruise speed is 0 in doubles; use a larger accel or decel")
 
@@ -266,7 +266,9 @@ def plan_change(
         if n >= 1:  # A_{n0+1} .. A_{n0+n} against the ideal from virtual position n0 + 1 to n0 + n + 1
             unit = _sum_products(index, index + n) / decel_product(index)
             half = (c0 * (math.sqrt(index + n + 1.0) - math.sqrt(index + 1.0)) - seed * unit) / 2.0
-            t_first, seed = t_first + half, seed + half / unit
+            # the integer recurrence's mean truncation from index n0 with r = 0 (plan.accel_truncation for n0 = 0)
+            trunc = n - (2.0 * index + 3.0) / (4.0 * index + 3.0) * unit
+            t_first, seed = t_first + half, seed + half / unit - trunc / unit / (1 << FRAC_RAMP)
     else:
         cd0 = f_tick * math.sqrt(2.0 / d)
         seed = SEED_FACTOR * cd0 * decel_product(max(index - 2, 0))
@@ -282,7 +284,7 @@ def plan_change(
             sd=sd,
             accel_seed=head_constant
             if ramp == RAMP_EXACT
-            else _to_fixed("accel_seed", seed, FRAC_RAMP, REG_WIDTHS["accel_seed"]),
+            else _to_fixed("accel_seed", seed, FRAC_RAMP, REG_WIDTHS["c_first"]),
             cruise=_cruise(f_tick, v_peak),
             stop_ratio=ratio,
             head=head,
@@ -375,11 +377,13 @@ def _steps(what: str, x: float, up: bool = False) -> int:
     return math.ceil(x) if up else math.floor(x)
 
 
-def _check_speed(f_tick: float, fastest: float, prescale: int, ramp: int = RAMP_AVR446) -> None:
+def _check_speed(
+    f_tick: float, fastest: float, prescale: int, ramp: int = RAMP_AVR446, a: float = 1.0, d: float = 1.0
+) -> None:
     """The segment's shortest interval must leave the engine its MIN_INTERVAL_CLKS (MIN_INTERVAL_CLKS_EXACT in exact
-    mode), as plan.py checks a move."""
+    mode, _WIDE when the ramp constant of a or d is 2^48 or more), as plan.py checks a move."""
     shortest = f_tick / fastest if fastest > 0.0 else math.inf
-    least = min_interval_clks(ramp)
+    least = min_interval_clks(ramp, f_tick * math.sqrt(2.0 / a), f_tick * math.sqrt(2.0 / d))
     if not shortest >= 1.0 or (math.isfinite(shortest) and math.floor(shortest) * prescale < least):
         raise ValueError(
             f"speed too high for the hardware to compute the next delay in time: shortest interval "

@@ -5,13 +5,10 @@ docs/algorithm.md, "Coordinated moves". The path's accel, decel and speed are gi
 the most steps). Axis i covers L_i = |N_i| - 1 steps (an N-step move covers N - 1 steps: pulse k at position k,
 pulse 0 at t = 0), so with r_i = L_i / L_lead and the accel, decel and speed scaled by r_i its ideal trajectory is
 r_i times the lead's: the same trapezoid (or triangle) in time, every phase boundary and the end at the same
-instant. Each axis is planned by plan_move with the scaled values (its checks and errors unchanged); then two of its
-registers change so that its quantized last pulse lands on the tick nearest the ideal end, the same tick for every
-axis:
+instant. Each axis is planned by plan_move with the scaled values (its checks and errors unchanged; its accel_seed
+already without the accel recurrence's mean truncation, plan.accel_truncation); then one of its registers changes so
+that its quantized last pulse lands on the tick nearest the ideal end, the same tick for every axis:
 
-* accel_seed loses the accel recurrence's mean truncation: the integer recurrence (remainder carried) runs about one
-  Q32.16 LSB per value above the exact one (n - (P(1) + .. + P(n)) LSB over n values, _accel_bias), 2^-16 tick per
-  step, which plan_move leaves (30 ticks after a ramp of 2,000,000 steps); spread over the values like the deficit;
 * interval L (c_last, and c_first, c_sa, c_sd where they are interval L) is the time from the predicted pulse L - 1
   to the middle of that tick (0 to 1 tick after t_end; later only if an axis's last interval would otherwise be
   shorter than the move's shortest). The prediction (time_before_last) sums the plan's exact values and, in closed
@@ -26,10 +23,12 @@ bit (sw/c/stepramp_coord.c, sw/tests/test_c_coord.py).
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
+from stepramp.board.change import Change, plan_change, speed_at_pulse
 from stepramp.board.plan import (
     FRAC_CRUISE,
     FRAC_RAMP,
@@ -39,6 +38,7 @@ from stepramp.board.plan import (
     Plan,
     _check_int,
     _to_fixed,
+    accel_truncation,
     check_motion_args,
     decel_product,
     plan_move_info,
@@ -77,16 +77,6 @@ class CoordInfo:
     of fewer than 2 steps."""
 
 
-def _accel_bias(n: int) -> float:
-    """Mean amount (Q32.16 LSB) by which the accel recurrence's n values A_1 .. A_n exceed A_0 (P(1) + .. + P(n)).
-
-    A_j = A_(j-1) - q_j, (4j + 1) q_j + r_j = 2 A_(j-1) + r_(j-1): A_j is the exact recurrence plus E_j with
-    E_j = E_(j-1) (4j - 1) / (4j + 1) + (r_j - r_(j-1)) / (4j + 1). With the remainders uniform (mean 2 j, r_0 = 0)
-    the mean of E_j is 1 - P(j), and the sum over j = 1 .. n is n - (P(1) + .. + P(n)): about one LSB per value.
-    """
-    return n - (2.0 * (n + 0.75) * decel_product(n) - 1.5)
-
-
 def _decel_bias(m0: int) -> float:
     """Mean amount (Q32.16 LSB) by which the decel recurrence's values D_(m0-1) .. D_1 exceed D_m0 P(m) / P(m0).
 
@@ -106,7 +96,7 @@ def time_before_last(plan: Plan) -> float:
     (docs/algorithm.md, "Which value each interval gets"); 0.0 for fewer than 3 steps.
 
     c_first, c_sa, c_sd and the cruise intervals exactly (in doubles); the accel recurrence's values from accel_seed
-    as A_0 (P(1) + .. + P(n)) plus _accel_bias(n), n = sa - 2, and the decel recurrence's from decel_seed as
+    as A_0 (P(1) + .. + P(n)) plus accel_truncation(n), n = sa - 2, and the decel recurrence's from decel_seed as
     D_m0 (D_1 + .. + D_m0) / D_m0 plus _decel_bias(m0), m0 = L - sd - 1: closed forms, no recurrence is run. The
     engine's time of pulse N - 2 is the floor of the exact sum; this prediction is within a small fraction of a
     tick of it for ramps up to millions of steps (sw/tests/test_coord.py::test_time_before_last_predicts_the_model).
@@ -123,7 +113,7 @@ def time_before_last(plan: Plan) -> float:
     n = sa - 2
     if n >= 1:  # intervals 2 .. sa - 1: A_1 .. A_n
         unit_a = 2.0 * (n + 0.75) * decel_product(n) - 1.5
-        t += (plan.accel_seed * unit_a + _accel_bias(n)) / _Q16
+        t += (plan.accel_seed * unit_a + accel_truncation(n)) / _Q16
     m0 = length - sd - 1
     if m0 >= 1:  # intervals sd + 1 .. L - 1: D_m0 .. D_1
         unit_d = 2.0 * (m0 + 0.75) - 1.5 / decel_product(m0)
@@ -144,22 +134,11 @@ def ideal_end(info: MoveInfo) -> float:
     return (t_d + info.v_peak / info.d) * info.f_tick
 
 
-def seed_without_truncation(plan: Plan) -> int:
-    """accel_seed less the accel recurrence's mean truncation spread over its n = sa - 2 values (Q32.16, rounded):
-    round(_accel_bias(n) / (P(1) + .. + P(n))), about 0.68 sqrt(n) LSB, far below the seed (it is 0.676 c0 and
-    c0 >= 2 sqrt(n) ticks); the seed itself without an accel recurrence (n < 1)."""
-    n = plan.sa - 2
-    if n < 1:
-        return plan.accel_seed
-    unit_a = 2.0 * (n + 0.75) * decel_product(n) - 1.5
-    return plan.accel_seed - round(_accel_bias(n) / unit_a)
-
-
 def _end_on(plan: Plan, info: MoveInfo, rest: float, target: float) -> tuple[Plan, float]:
-    """The plan (2 steps or more, its seed already without the truncation) with its last interval set so that pulse
-    N - 1 lies at `target` ticks (`rest`: its time_before_last), and that interval's value before rounding. Every
-    register that holds interval L gets it (c_last; c_first when L = 1; c_sa, c_sd when sa, sd = L), as a plan's
-    coinciding registers all hold the same value."""
+    """The plan (2 steps or more) with its last interval set so that pulse N - 1 lies at `target` ticks (`rest`: its
+    time_before_last), and that interval's value before rounding. Every register that holds interval L gets it
+    (c_last; c_first when L = 1; c_sa, c_sd when sa, sd = L), as a plan's coinciding registers all hold the same
+    value."""
     length = plan.steps - 1
     last = target - rest
     if not last >= math.floor(info.min_interval):  # not expected: the end tick leaves 1/4 tick (doubles err 1/16)
@@ -227,8 +206,7 @@ def plan_coordinated_info(
         infos.append(info)
         ratios.append(ratio)
 
-    # the accel recurrence's truncation out of each seed, then the time each axis needs before its last interval
-    plans = [replace(plan, accel_seed=seed_without_truncation(plan)) if plan.steps >= 2 else plan for plan in plans]
+    # the time each axis needs before its last interval (plan_move's seeds are already without the truncation)
     rests = [time_before_last(plan) if plan.steps >= 2 else 0.0 for plan in plans]
     # The end tick: the one nearest t_end, whose middle is 0 to 1 tick after it (every axis's floor lands on that tick
     # unless its prediction errs by 1/2 tick, and no last interval is shortened for it), or later when an axis's last
@@ -274,9 +252,159 @@ def plan_coordinated(
     axes. Every axis of 2 steps or more accelerates, cruises and decelerates with the lead (its accel, decel and
     speed are the path's times L_i / L_lead) and puts its last pulse on the same tick, the one nearest the ideal end;
     an axis of 1 step pulses once at the start, one of 0 steps not at all. Each plan is plan_move's of its scaled
-    values but for accel_seed (less the recurrence's mean truncation) and interval L (ending on that tick).
+    values but for interval L (ending on that tick).
 
     Raises ValueError with the reason for bad input (no axes, more than MAX_AXES, all 0 steps, a step count that is
     not an integer or too large, plan_move's reasons for an axis, naming the axis, a path of MAX_END_TICKS or more).
     """
     return plan_coordinated_info(steps, accel, decel, speed, spr, fclk, prescale)[0]
+
+
+STOP_MARGIN = 2
+"""Clocks after a commit within which pulse P - 1 must not fall (the script planner's MARGIN): the take-over pulse
+moves one on when it would."""
+
+
+@dataclass(frozen=True)
+class AxisStop:
+    """One axis of a coordinated stop on the line (plan_coordinated_stop). pulse: the take-over pulse P_i (0: the axis
+    takes no CHANGE, it ends on its target or is not moving); speed: u_i (steps/s) at P_i; natural: N_i, its nearest
+    rest decelerating at its coordinated decel from P_i (its target when it cannot take over); target: T_i, the pulse
+    it rests on; change: the segment taken over at P_i (None: no CHANGE)."""
+
+    pulse: int
+    speed: float
+    natural: int
+    target: int
+    change: Change | None
+
+
+@dataclass(frozen=True)
+class CoordStop:
+    """A coordinated stop on the line: the lead's rest R_L (a pulse of the lead), each axis's AxisStop, and the
+    fallback's reason when the stop cannot be made by take-overs (then SYNC_SOFT_STOP of the moving axes is the
+    driver's stop; None otherwise)."""
+
+    rest: int
+    axes: tuple[AxisStop, ...]
+    fallback: str | None = None
+
+    @property
+    def changes(self) -> list[int]:
+        """The axes that take a CHANGE."""
+        return [i for i, axis in enumerate(self.axes) if axis.change is not None]
+
+
+def _take_over_pulse(edges: Sequence[int], commit: int) -> int | None:
+    """change_pulse's pulse for a commit at `commit` (None when the motion ends first), one later when pulse P - 1
+    would fall within STOP_MARGIN clocks of the commit."""
+    emitted = bisect.bisect_right(edges, commit)
+    k = max(emitted + 1, bisect.bisect_left(edges, commit + 400))
+    if k < len(edges) and edges[k - 1] <= commit + STOP_MARGIN:
+        k += 1
+    return k if k < len(edges) else None
+
+
+def coordinated_stop_pulses(
+    plans: Sequence[Plan], edges: Sequence[Sequence[int]], commits: int | Sequence[int]
+) -> list[int]:
+    """Each axis's take-over pulse for a coordinated stop: change_pulse(edges[i], W_i) (one later when pulse P - 1
+    would fall within STOP_MARGIN clocks of W_i), 0 for an axis that takes none (fewer than 2 steps, or its motion
+    ends within the lead). edges[i]: axis i's STEP edges, all of its plan's, on the clock axis of the commits;
+    commits: W_i, one edge for all or one per axis."""
+    n = len(plans)
+    at = [commits] * n if isinstance(commits, int) else list(commits)
+    if len(edges) != n or len(at) != n:
+        raise ValueError(f"{n} plans, {len(edges)} edge lists and {len(at)} commit edges")
+    return [_take_over_pulse(edges[i], at[i]) or 0 if plans[i].steps >= 2 else 0 for i in range(n)]
+
+
+def plan_coordinated_stop(
+    plans: Sequence[Plan],
+    info: CoordInfo,
+    edges: Sequence[Sequence[int]],
+    commits: int | Sequence[int],
+    accel: float,
+    decel: float,
+    speed: float,
+    spr: float,
+    fclk: float,
+    prescale: int = 1,
+) -> CoordStop:
+    """The take-overs that stop a running coordinated move on the line (docs/algorithm.md, "Coordinated moves": the
+    coordinated stop on the line): coordinated_stop_pulses, then plan_coordinated_stop_at. plans, info:
+    plan_coordinated_info's for accel, decel, speed (the path's, rad/s^2 and rad/s), spr, fclk, prescale; edges[i]:
+    axis i's STEP edges (all of its plan's, on the clock axis of the commits); commits: the edge W_i at which axis
+    i's CTRL.CHANGE is committed (one for all, or one per axis)."""
+    pulses = coordinated_stop_pulses(plans, edges, commits)
+    return plan_coordinated_stop_at(plans, info, pulses, accel, decel, speed, spr, fclk, prescale)
+
+
+def plan_coordinated_stop_at(
+    plans: Sequence[Plan],
+    info: CoordInfo,
+    pulses: Sequence[int],
+    accel: float,
+    decel: float,
+    speed: float,
+    spr: float,
+    fclk: float,
+    prescale: int = 1,
+) -> CoordStop:
+    """The coordinated stop on the line from each axis's take-over pulse P_i (0: none; stepramp_plan_coordinated_stop
+    in C, bit-identical). u_i = speed_at_pulse of its move at P_i; N_i = P_i + ceil(u_i^2 / (2 d_i));
+    R_L = min(L_lead, max_i ceil(N_i L_lead / L_i)); T_i = floor((2 L_i R_L + L_lead) / (2 L_lead)) (round halves
+    up); the segment is plan_change(u_i, T_i - P_i, a_i, d_i, v_i). An axis that takes no CHANGE (P_i = 0, or
+    P_i >= L_i) ends on its target L_i, which R_L then respects (R_L >= ceil((2 L_i - 1) L_lead / (2 L_i))). No
+    CHANGE where T_i = L_i. A plan_change that raises: CoordStop.fallback names the axis and its reason."""
+    n = len(plans)
+    if len(pulses) != n or len(info.ratios) != n:
+        raise ValueError(f"{n} plans, {len(pulses)} pulses, {len(info.ratios)} ratios")
+    lead_len = plans[info.lead].steps - 1
+    moving = [i for i in range(n) if plans[i].steps >= 2 and lead_len >= 1]
+    speeds = [0.0] * n
+    naturals = [0] * n
+    need = 0
+    for i in moving:
+        length = plans[i].steps - 1
+        pulse = pulses[i]
+        if pulse <= 0 or pulse >= length:
+            naturals[i] = length
+            need = max(need, -(-((2 * length - 1) * lead_len) // (2 * length)))
+            continue
+        move = info.infos[i]
+        u = speed_at_pulse(move, pulse)
+        stop = min(math.ceil(u * u / (2.0 * move.d)), 1 << 40)
+        speeds[i], naturals[i] = u, pulse + stop
+        need = max(need, -(-(naturals[i] * lead_len) // length))
+    rest = min(lead_len, need)
+    out: list[AxisStop] = []
+    for i in range(n):
+        if i not in moving:
+            out.append(AxisStop(0, 0.0, 0, max(plans[i].steps - 1, 0), None))
+            continue
+        length = plans[i].steps - 1
+        target = (2 * length * rest + lead_len) // (2 * lead_len)
+        pulse = pulses[i] if 0 < pulses[i] < length else 0
+        if pulse == 0 or target >= length:
+            out.append(AxisStop(pulse, speeds[i], naturals[i], length, None))
+            continue
+        ratio = info.ratios[i]
+        try:
+            change = plan_change(
+                speeds[i],
+                target - pulse,
+                accel * ratio,
+                decel * ratio,
+                speed * ratio,
+                spr,
+                fclk,
+                prescale,
+                plans[i].ramp,
+            )
+        except ValueError as err:
+            return CoordStop(rest, tuple(out), f"axis {i}: {err}")
+        if change.back is not None:  # (T_i >= N_i: not expected)
+            return CoordStop(rest, tuple(out), f"axis {i}: its take-over would need a move back")
+        out.append(AxisStop(pulse, speeds[i], naturals[i], target, change))
+    return CoordStop(rest, tuple(out))

@@ -100,6 +100,12 @@ def _bit(register: str, field: str) -> int:
     return 1 << REGISTERS_BY_NAME[register].field(field).lsb
 
 
+_INPUT_IRQ_ENABLES = sum(
+    _bit("CTRL", f"IRQ_{name}_EN") for name in ("LIMIT_NEG", "LIMIT_POS", "HOME", "ESTOP", "LATCH")
+)
+"""CTRL bits 10 .. 14, the input interrupt enables (enable_input_irq), which enable_irq keeps."""
+
+
 def _strobe(mask: int) -> int:
     """The byte enables that cover the set bits of a 32-bit mask."""
     return sum(1 << b for b in range(4) if mask >> (8 * b) & 0xFF)
@@ -114,7 +120,7 @@ def plan_writes(plan: Plan) -> list[tuple[int, int]]:
     signed = (-plan.steps if plan.direction else plan.steps) & 0xFFFF_FFFF
     writes = [(offset("STEPS"), signed), (offset("PRESCALE"), plan.prescale)]
     for name in _WIDE:
-        lo, hi = split_wide(getattr(plan, name), 64 if name == "cruise" else 48)
+        lo, hi = split_wide(getattr(plan, name), 64 if name in ("cruise", "accel_seed", "decel_seed") else 48)
         writes += [(offset(f"{name.upper()}_LO"), lo), (offset(f"{name.upper()}_HI"), hi)]
     writes += [(offset("SA"), plan.sa), (offset("SD"), plan.sd)]
     ratio = getattr(plan, "stop_ratio", None)
@@ -387,10 +393,12 @@ class StepRamp:
         await self.access.write(offset("CTRL"), _bit("CTRL", "HARD_STOP"), strobe=0x1)
 
     async def enable_irq(self, done: bool = True, error: bool = True) -> None:
-        """CTRL.IRQ_DONE_EN and IRQ_ERROR_EN (byte 1 of CTRL, so the input interrupt enables there are cleared:
-        enable_input_irq sets them all)."""
+        """CTRL.IRQ_DONE_EN and IRQ_ERROR_EN. They share byte 1 of CTRL with the input interrupt enables (bits 10 ..
+        14, enable_input_irq), so CTRL is read and byte 1 written back with those as read: they are kept, no command
+        is written (byte 0) and ENABLE is left alone (byte 2)."""
+        keep = await self.access.read(offset("CTRL")) & _INPUT_IRQ_ENABLES
         value = (_bit("CTRL", "IRQ_DONE_EN") if done else 0) | (_bit("CTRL", "IRQ_ERROR_EN") if error else 0)
-        await self.access.write(offset("CTRL"), value, strobe=0x2)
+        await self.access.write(offset("CTRL"), keep | value, strobe=0x2)
 
     async def status(self) -> Status:
         return Status.decode(await self.access.read(offset("STATUS")))

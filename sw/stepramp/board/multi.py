@@ -2,11 +2,12 @@
 """Driver of the multi-axis top (stepramp_multi_plb, stepramp_multi_axil; docs/stepramp_multi.md).
 
 The top holds G_AXES stepramp cores behind one slave with a 12-bit address: a global window at byte offset 0x000
-(ID / AXES, SYNC_START, AXES_STATUS, IRQ_MASK) and axis i's register window at 0x100 * (i + 1). Each axis is an
-ordinary stepramp core, driven by stepramp.board.driver.StepRamp through an OffsetAccess (the register access shifted
-to its window); MultiAxis adds what needs the global window: the axis count, SYNC_START (the selected axes start on
-the same clock edge), the status word, the interrupt mask, and coordinated linear moves planned by
-stepramp.board.coord.plan_coordinated and started together. The global registers are written as whole words, as the
+(ID / AXES, SYNC_START, AXES_STATUS, IRQ_MASK, SYNC_SOFT_STOP) and axis i's register window at 0x100 * (i + 1). Each
+axis is an ordinary stepramp core, driven by stepramp.board.driver.StepRamp through an OffsetAccess (the register
+access shifted to its window); MultiAxis adds what needs the global window: the axis count, SYNC_START (the selected
+axes' pulse 0 on one clock edge), SYNC_SOFT_STOP (a soft stop of the selected axes on one clock edge), the status
+word, the interrupt mask, and coordinated linear moves planned by stepramp.board.coord.plan_coordinated and started
+together. The global registers are written as whole words, as the
 C driver (sw/c/stepramp_multi.c) writes them.
 
     multi = await MultiAxis.probe(access, fclk=50e6, spr=400 * 16)
@@ -19,7 +20,7 @@ from __future__ import annotations
 from collections.abc import Awaitable, Callable, Iterable, Sequence
 from dataclasses import dataclass
 
-from stepramp.board.coord import plan_coordinated_info
+from stepramp.board.coord import CoordStop, plan_coordinated_info
 from stepramp.board.driver import Outputs, RegisterAccess, StepRamp, StepRampError
 from stepramp.board.plan import Plan
 
@@ -39,10 +40,28 @@ REG_ID = 0x000
 REG_SYNC_START = 0x004
 REG_AXES_STATUS = 0x008
 REG_IRQ_MASK = 0x00C
+REG_SYNC_SOFT_STOP = 0x010
 #: Bits 7:0 of AXES_STATUS: BUSY of each axis; 15:8 DONE; 23:16 the axis's irq line (before IRQ_MASK).
 AXES_STATUS_BUSY_LSB = 0
 AXES_STATUS_DONE_LSB = 8
 AXES_STATUS_IRQ_LSB = 16
+
+
+def soft_stop_line_bound(lead: Plan, p: int | None) -> float:
+    """How far (steps) an axis of a coordinated move may rest from the line after a SYNC_SOFT_STOP: from L_i / L_lead
+    times the lead's rest position (docs/algorithm.md, "Coordinated moves": the coordinated soft stop). `lead` is the
+    lead axis's plan and `p` the pulse at which its stop is decided (stepramp.models.engine.soft_stop_pulse).
+
+    Every axis decides its stop at its own first pulse after the request, so it accelerates up to one of its own
+    intervals longer (p_i - r_i p_lead in (-r_i, 1)), and its ACCEL stop, floor(p_i * STOP_RATIO / 2^16) steps,
+    carries that on scaled by the ratio s = accel / decel: less than 2 + s steps when the lead decides in ACCEL;
+    in RUN (stop = its own decel ramp, ceil(r_i n_d) against r_i ceil(n_d)) less than 2; 0 when the lead's stop is
+    ignored (DECEL, or p + m >= L: every axis ends on its own target, on the line)."""
+    if p is None or p >= lead.steps - 1 or p >= lead.sd:
+        return 0.0 if p is None or p >= lead.steps - 1 else 2.0
+    if p >= lead.sa:
+        return 2.0
+    return 2.0 + lead.stop_ratio / 65536.0
 
 
 def axis_base(axis: int) -> int:
@@ -154,6 +173,29 @@ class MultiAxis:
         DONE and ERROR)."""
         await self.access.write(REG_SYNC_START, self.mask(axes))
 
+    async def sync_soft_stop(self, axes: Iterable[int]) -> None:
+        """SOFT_STOP the selected axes on one clock edge (one write of their mask to SYNC_SOFT_STOP): each as if
+        CTRL.SOFT_STOP were written to it at that edge (each decides its stop at its own next pulse with its plan's
+        decel; a queued move is dropped). On a coordinated move every axis comes to rest near the line
+        (docs/algorithm.md, "Coordinated moves": the coordinated soft stop)."""
+        await self.access.write(REG_SYNC_SOFT_STOP, self.mask(axes))
+
+    async def stop_coordinated(self, stop: CoordStop, plans: Sequence[Plan]) -> list[int]:
+        """Commit a coordinated stop on the line (stepramp.board.coord.plan_coordinated_stop of the running
+        coordinated move `plans`): each axis's CHANGE in axis order (its segment and CHANGE_AT staged, then
+        CTRL.CHANGE), each commit no later than the edge its take-over pulse was named for. When the stop fell back
+        (stop.fallback), one SYNC_SOFT_STOP of the moving axes instead (within soft_stop_line_bound of the line, not
+        on it). Returns the axes written to."""
+        if stop.fallback is not None:
+            axes = [i for i, plan in enumerate(plans) if plan.steps >= 2]
+            await self.sync_soft_stop(axes)
+            return axes
+        for i in stop.changes:
+            axis = stop.axes[i]
+            assert axis.change is not None
+            await self.drivers[i].change(axis.change.segment, plans[i].direction, axis.pulse)
+        return stop.changes
+
     async def status(self) -> AxesStatus:
         return AxesStatus.decode(await self.access.read(REG_AXES_STATUS))
 
@@ -255,6 +297,7 @@ __all__ = [
     "REG_AXES_STATUS",
     "REG_ID",
     "REG_IRQ_MASK",
+    "REG_SYNC_SOFT_STOP",
     "REG_SYNC_START",
     "AxesStatus",
     "MultiAxis",
@@ -262,4 +305,5 @@ __all__ = [
     "OffsetAccess",
     "axis_base",
     "mask_of",
+    "soft_stop_line_bound",
 ]

@@ -22,8 +22,10 @@ FRAC_CRUISE = 32
 MIN_INTERVAL_CLKS = 64
 """Shortest interval, in clocks, that leaves the engine time to compute the next value."""
 MIN_INTERVAL_CLKS_EXACT = 256
-"""The same in exact mode (G_RAMP = 1): a ramp value there takes one or two square roots (docs/stepramp_engine.md,
-"Latency budget in exact mode")."""
+"""The same in exact mode (G_RAMP = 1), for a move whose ramp constants are below 2^48 (c0 and cd0 below 2^20 ticks):
+a ramp value there takes one or two square roots (docs/stepramp_engine.md, "Latency budget in exact mode")."""
+MIN_INTERVAL_CLKS_EXACT_WIDE = 304
+"""The same for a move with a ramp constant of 2^48 or more (wider square roots)."""
 RAMP_AVR446 = 0
 """Plan.ramp: the AVR446 recurrence (the core's G_RAMP = 0, the default)."""
 RAMP_EXACT = 1
@@ -46,8 +48,8 @@ REG_WIDTHS: dict[str, int] = {
     "c_sa": 48,
     "sd": 31,
     "c_sd": 48,
-    "accel_seed": 48,
-    "decel_seed": 48,
+    "accel_seed": 64,
+    "decel_seed": 64,
     "cruise": 64,
     "stop_ratio": 32,
 }
@@ -103,9 +105,19 @@ def check_ramp(ramp: int) -> int:
     return ramp
 
 
-def min_interval_clks(ramp: int) -> int:
-    """The shortest interval in clocks the core built with G_RAMP = ramp computes the next value in time for."""
-    return MIN_INTERVAL_CLKS_EXACT if ramp == RAMP_EXACT else MIN_INTERVAL_CLKS
+def exact_narrow(c0_ticks: float) -> bool:
+    """Whether the ramp constant of c0 (exact.ramp_constant) is below 2^48: round(c0^2 * 2^8) < 2^48, without
+    rounding (and False for a square that is not finite)."""
+    return c0_ticks * c0_ticks * 256.0 < 2.0**48 - 0.5
+
+
+def min_interval_clks(ramp: int, *c0_ticks: float) -> int:
+    """The shortest interval in clocks the core built with G_RAMP = ramp computes the next value in time for; in exact
+    mode for a move whose ramps have the first intervals c0_ticks (MIN_INTERVAL_CLKS_EXACT when all their ramp
+    constants are below 2^48, else MIN_INTERVAL_CLKS_EXACT_WIDE)."""
+    if ramp != RAMP_EXACT:
+        return MIN_INTERVAL_CLKS
+    return MIN_INTERVAL_CLKS_EXACT if all(exact_narrow(c) for c in c0_ticks) else MIN_INTERVAL_CLKS_EXACT_WIDE
 
 
 @dataclass(frozen=True)
@@ -221,6 +233,17 @@ class _Ramp:
         return t
 
 
+def accel_truncation(n: int) -> float:
+    """The accel recurrence's mean truncation (Q32.16 LSB): by how much its integer values A_1 .. A_n (remainder
+    carried) exceed the continuous ones A_0 P(j) in sum, n - (P(1) + .. + P(n)) = n - (2 (n + 3/4) P(n) - 3/2).
+
+    A_j = A_(j-1) - q_j, (4j + 1) q_j + r_j = 2 A_(j-1) + r_(j-1): A_j is the continuous value plus E_j with
+    E_j = E_(j-1) (4j - 1) / (4j + 1) + (r_j - r_(j-1)) / (4j + 1). With the remainders uniform (mean 2 j, r_0 = 0)
+    the mean of E_j is 1 - P(j): about one LSB per value (docs/algorithm.md, "Recurrence deficit").
+    """
+    return n - (2.0 * (n + 0.75) * decel_product(n) - 1.5)
+
+
 def register_doubles(ramp: _Ramp, sa: int, sd: int, m0: int) -> dict[str, float]:
     """The unrounded values (ticks) of the ramp registers: the exact intervals and the seeds, with the recurrences'
     time deficits put back (docs/algorithm.md, "Recurrence deficit"). The C driver computes the same doubles.
@@ -231,6 +254,8 @@ def register_doubles(ramp: _Ramp, sa: int, sd: int, m0: int) -> dict[str, float]
     c0 (sqrt(n + 1) - 1). Half of each deficit (about 0.007 c0 on a long ramp) goes into the ramp's seed, spread over
     its recurrence values; the other half into interval 1 for the accel ramp (c_first) and nowhere for the decel ramp
     (c_last stays exact), which halves the largest error again. c_sa and c_sd stay exact: a soft stop starts from c_sa.
+    The accel seed also loses the integer recurrence's mean truncation, accel_truncation(n) LSB over its n values
+    (docs/algorithm.md, "Recurrence deficit"), which would otherwise make a long ramp n / 2^16 ticks late.
     """
     c0 = ramp.k_a
     cd0 = ramp.k_d
@@ -242,7 +267,7 @@ def register_doubles(ramp: _Ramp, sa: int, sd: int, m0: int) -> dict[str, float]
         unit_a = 2.0 * (n_a + 0.75) * decel_product(n_a) - 1.5  # (A_1 + .. + A_n) / A_0
         half_a = (c0 * (math.sqrt(n_a + 1.0) - 1.0) - seed_a * unit_a) / 2.0
         first_extra = half_a
-        seed_a = seed_a + half_a / unit_a
+        seed_a = seed_a + half_a / unit_a - accel_truncation(n_a) / unit_a / (1 << FRAC_RAMP)
     if m0 >= 1:  # intervals sd+1 .. L-1 take the decel recurrence values D_m0 .. D_1
         unit_d = 2.0 * (m0 + 0.75) - 1.5 / decel_product(m0)  # (D_1 + .. + D_m0) / D_m0
         half_d = (cd0 * (math.sqrt(m0 + 1.0) - 1.0) - seed_d * unit_d) / 2.0
@@ -349,10 +374,11 @@ def plan_move_info(
             f"interval shorter than 1 tick ({min_interval:.6g} ticks at the peak speed): "
             "lower the speed or raise f_clk / lower the prescale"
         )
-    if math.floor(min_interval) * prescale < min_interval_clks(ramp):
+    least = min_interval_clks(ramp, curve.k_a, curve.k_d)
+    if math.floor(min_interval) * prescale < least:
         raise ValueError(
             f"speed too high for the hardware to compute the next delay in time: shortest interval "
-            f"floor({min_interval:.6g}) ticks * prescale {prescale} < {min_interval_clks(ramp)} clocks"
+            f"floor({min_interval:.6g}) ticks * prescale {prescale} < {least} clocks"
         )
 
     sa = curve.boundary(curve.x_a)
@@ -400,7 +426,8 @@ def _exact_plan(
     v: float,
 ) -> Plan:
     """The registers of an exact-mode move (docs/algorithm.md, "Exact step times"): the exact intervals as in the
-    AVR446 mode but without the recurrence deficit, and the ramp constants C = round(c0^2 * 2^8) in the seeds."""
+    AVR446 mode but without the recurrence deficit, and the ramp constants C = round(c0^2 * 2^8) in the seeds (seed
+    words: exact.ramp_constant)."""
     q16 = FRAC_RAMP
     w48 = REG_WIDTHS["c_first"]
     return Plan(

@@ -315,6 +315,18 @@ def gate_timing(
     return GateTiming(request, d, s, s + START_TO_FIRST_STEP)
 
 
+def sync_gate_timing(gates: Sequence[GateTiming]) -> list[GateTiming]:
+    """The start gates of the axes one SYNC_START starts (each axis's own gate_timing of the same request): every
+    axis's eng_start after the latest start edge among them, so that pulse 0 of every axis comes on one clock edge
+    (docs/algorithm.md, "Coordinated moves": the common start). DIR of an axis that changes direction still changes at
+    its own edge (its setup is then longer than it needs). An axis that refuses the start (busy, ESTOP, bad STEPS, a
+    limit) is not one of `gates`."""
+    if not gates:
+        return []
+    s = max(g.start_edge for g in gates)
+    return [GateTiming(g.request, g.dir_edge, s, s + START_TO_FIRST_STEP) for g in gates]
+
+
 def check_step_widths(
     rises: Sequence[float], falls: Sequence[float], step_width: int, exact: bool = False
 ) -> list[str]:
@@ -411,6 +423,7 @@ __all__ = [
     "sign",
     "step_positions",
     "step_pulse_width",
+    "sync_gate_timing",
     "winding_currents",
     "winding_latency",
     "winding_levels",

@@ -15,7 +15,7 @@ from collections.abc import AsyncIterator
 from typing import Any
 
 from cocotb.clock import Clock
-from cocotb.triggers import ClockCycles, FallingEdge
+from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge, Timer
 from cocotb.utils import get_sim_time
 
 #: The benches' clock period (100 MHz); the session and the demo run the clock the driver is given instead.
@@ -61,7 +61,7 @@ async def start_clock_and_reset(
 
 #: The machine inputs of the tops and of stepramp_core (and the core's multi-axis start), held at 0 unless a test
 #: drives them: an undriven top-level input would read 'U'.
-QUIET_INPUTS = ("limit_neg", "limit_pos", "home", "estop", "sync_start")
+QUIET_INPUTS = ("limit_neg", "limit_pos", "home", "estop", "sync_start", "sync_soft_stop", "sync_hold")
 
 
 def quiet_inputs(dut: Any) -> None:
@@ -72,6 +72,31 @@ def quiet_inputs(dut: Any) -> None:
         except AttributeError:
             continue
         handle.value = 0
+
+
+async def cycles(clk: Any, n: int, period_ps: int = CLK_PERIOD_PS) -> None:
+    """Return just after the n-th rising edge of clk from now, as `await ClockCycles(clk, n)` does, but waking the
+    simulation's Python three times instead of n: the first edge, a Timer to the middle of the cycle before the n-th,
+    then the n-th edge. For a clock of period period_ps that keeps running (start_clock's)."""
+    if n <= 3:
+        await ClockCycles(clk, n)
+        return
+    await RisingEdge(clk)
+    await Timer((n - 2) * period_ps + period_ps // 2, unit="ps")
+    await RisingEdge(clk)
+
+
+class Cycles(ClockCycles):
+    """ClockCycles(clk, n) (rising edges) that waits as `cycles` does: a Trigger-like awaitable that First() takes too.
+    For a clock of period period_ps that keeps running (start_clock's)."""
+
+    def __init__(self, clk: Any, n: int, period_ps: int = CLK_PERIOD_PS) -> None:
+        super().__init__(clk, n)
+        self.period_ps = period_ps
+
+    async def _wait(self) -> Cycles:
+        await cycles(self.signal, self.num_cycles, self.period_ps)
+        return self
 
 
 def now_periods(period_ps: float = CLK_PERIOD_PS) -> float:
@@ -90,7 +115,9 @@ __all__ = [
     "CLK_PERIOD_PS",
     "QUIET_INPUTS",
     "RESET_CYCLES",
+    "Cycles",
     "apply_reset",
+    "cycles",
     "now_cycles",
     "now_periods",
     "quiet_inputs",

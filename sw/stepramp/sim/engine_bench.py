@@ -47,12 +47,13 @@ from pathlib import Path
 from typing import Any
 
 import cocotb
-from cocotb.triggers import ClockCycles, FallingEdge, First, ReadOnly, RisingEdge, SimTimeoutError, Timer, with_timeout
+from cocotb.triggers import ClockCycles, FallingEdge, First, RisingEdge, SimTimeoutError, Timer, with_timeout
 from cocotb.utils import get_sim_time
 
 from stepramp.board.plan import REG_WIDTHS, Plan
 from stepramp.sim import coverage
 from stepramp.sim.clocking import CLK_PERIOD_NS, now_cycles, start_clock_and_reset
+from stepramp.sim.wake import Wakeup
 from stepramp.sim.waves import LAYOUTS, missing_in, signal_paths
 
 #: Engine inputs driven from a move's register values: the Plan's fields are the engine's port names.
@@ -253,23 +254,28 @@ async def _observe(
     deadline = int(get_sim_time("ns")) + int(move["timeout_cycles"]) * CLK_PERIOD_NS
     reset_ns = None if reset_edge is None else (start_edge + reset_edge) * CLK_PERIOD_NS
     offset = 0
-    # done may already be high here: a hard stop at the start edge ends the move at edge 0
-    while int(dut.done.value) != 1:
-        now = int(get_sim_time("ns"))
-        if reset_ns is not None and now >= reset_ns:
-            break
-        remaining = (deadline if reset_ns is None else min(deadline, reset_ns)) - now
-        if remaining <= 0:
-            return {"edges": edges, "states": states, "done": False}
-        await First(RisingEdge(dut.step), RisingEdge(dut.done), Timer(remaining, unit="ns"))
-        await ReadOnly()
-        offset = now_cycles() - start_edge
-        if int(dut.step.value) == 1 and (not edges or edges[-1] != offset):
-            edges.append(offset)
-            states.append(int(dut.state.value))
-            if counters is not None:
-                counters["step_counts"].append(int(dut.step_count.value))
-                counters["cur_delays"].append(int(dut.cur_delay.value))
+    # Woken by STEP, done, or the deadline (the reset's edge, else the cycle budget): one watcher per signal and one
+    # Timer for the whole move (stepramp.sim.wake: a First() per pulse costs ten times the simulation of a clock).
+    now = get_sim_time("ns")
+    wake = Wakeup(dut.step, dut.done)
+    wake.set_deadline((deadline if reset_ns is None else min(deadline, reset_ns)) + now - int(now))
+    try:
+        # done may already be high here: a hard stop at the start edge ends the move at edge 0
+        while int(dut.done.value) != 1:
+            if reset_ns is not None and int(get_sim_time("ns")) >= reset_ns:
+                break
+            if wake.expired:
+                return {"edges": edges, "states": states, "done": False}
+            await wake.wait()
+            offset = now_cycles() - start_edge
+            if int(dut.step.value) == 1 and (not edges or edges[-1] != offset):
+                edges.append(offset)
+                states.append(int(dut.state.value))
+                if counters is not None:
+                    counters["step_counts"].append(int(dut.step_count.value))
+                    counters["cur_delays"].append(int(dut.cur_delay.value))
+    finally:
+        wake.stop()
     common: dict[str, Any] = {"origin": start_edge, "before": before, "after_start": after_start, **(counters or {})}
     if reset_ns is not None and int(dut.done.value) != 1:
         reset = await _watch_after_reset(dut, move, start_edge)

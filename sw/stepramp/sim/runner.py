@@ -3,8 +3,15 @@
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
+import functools
+import hashlib
 import os
-from collections.abc import Mapping, Sequence
+import shutil
+import subprocess
+import tempfile
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 
 #: The repository's hdl/ folder (override with STEPRAMP_HDL_DIR).
@@ -68,6 +75,129 @@ def hdl_sources(upto: str | None = None) -> list[Path]:
     return files
 
 
+#: Format of the shared builds' folders: bump it when what a build folder holds changes.
+_BUILD_FORMAT = 1
+#: Where build_once keeps the shared builds (one folder per content hash), unless STEPRAMP_SIM_LIB says elsewhere.
+_REPO = Path(__file__).resolve().parents[3]
+
+
+def ghdl_backend() -> str:
+    """The GHDL back end a `ghdl` command runs, as Debian's /usr/bin/ghdl wrapper picks it: $GHDL_BACKEND when
+    ghdl-$GHDL_BACKEND is installed beside it, else mcode, gcc, llvm (the first installed); "" for another ghdl."""
+    ghdl = shutil.which("ghdl")
+    if ghdl is None:
+        return ""
+    here = Path(ghdl).resolve().parent
+    wanted = os.environ.get("GHDL_BACKEND", "")
+    for name in (wanted, "mcode", "gcc", "llvm"):
+        if name and (here / f"ghdl-{name}").exists():
+            return name
+    return ""
+
+
+@functools.lru_cache(maxsize=8)
+def _ghdl_version(backend: str) -> str:
+    """`ghdl --version` of a back end (once per process and back end)."""
+    env = {**os.environ, "GHDL_BACKEND": backend} if backend else None
+    try:
+        out = subprocess.run(["ghdl", "--version"], capture_output=True, text=True, check=False, env=env).stdout
+    except OSError:
+        return ""
+    return out
+
+
+def lib_root() -> Path:
+    """The folder of the shared builds: $STEPRAMP_SIM_LIB; else _lib under $STEPRAMP_SIM_BUILD (make mutate: each
+    mutant's suite has its own); else build/sim_lib in the repository (a temporary folder if that is read-only)."""
+    if os.environ.get("STEPRAMP_SIM_LIB"):
+        return Path(os.environ["STEPRAMP_SIM_LIB"])
+    if os.environ.get("STEPRAMP_SIM_BUILD"):
+        return Path(os.environ["STEPRAMP_SIM_BUILD"]) / "_lib"
+    root = _REPO / "build" / "sim_lib"
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        root = Path(tempfile.gettempdir()) / "stepramp-sim-lib"
+    return root
+
+
+def build_key(toplevel: str, sources: Sequence[Path], build_args: Sequence[str], backend: str) -> str:
+    """The content hash a build is kept under: the sources' names and contents in order, the toplevel, the build
+    arguments, the GHDL back end and its version. Generics are not in it: they are given at run time (-g)."""
+    h = hashlib.sha256()
+    for part in (f"format {_BUILD_FORMAT}", toplevel, *build_args, backend, _ghdl_version(backend)):
+        h.update(part.encode() + b"\0")
+    for src in sources:
+        h.update(src.name.encode() + b"\0")
+        h.update(hashlib.sha256(src.read_bytes()).digest())
+    return h.hexdigest()[:20]
+
+
+@contextlib.contextmanager
+def _locked(lock_file: Path) -> Iterator[None]:
+    """An exclusive flock on lock_file (created if need be) for the body: one builder at a time, across processes."""
+    lock_file.parent.mkdir(parents=True, exist_ok=True)
+    with lock_file.open("a") as fh:
+        fcntl.flock(fh, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(fh, fcntl.LOCK_UN)
+
+
+def build_once(
+    toplevel: str,
+    sources: Sequence[Path] | None = None,
+    build_args: Sequence[str] = ("--std=08",),
+    log_file: Path | None = None,
+) -> Path:
+    """Analyse and elaborate toplevel from sources (default: hdl_sources(toplevel)) with GHDL once, and return the
+    folder that holds the build (its work library and, with the LLVM or GCC back end, the executable).
+
+    The folder is lib_root()/<toplevel>-<build_key>: every simulation of the same top, sources, build arguments and
+    back end shares it, whatever its generics; a changed source gives another key, so another build. Safe under
+    pytest -n: the build runs under an flock of <folder>.lock, and a folder counts as built only once its `.done`
+    marker is written (a build that died half-way is redone)."""
+    from cocotb_tools.runner import get_runner  # imported late: the model does not need cocotb
+
+    srcs = [Path(s).resolve() for s in (sources if sources is not None else hdl_sources(toplevel))]
+    backend = ghdl_backend()
+    key = build_key(toplevel, srcs, build_args, backend)
+    lib = lib_root().resolve() / f"{toplevel}-{key}"
+    done = lib / ".done"
+    if done.exists():
+        return lib
+    with _locked(lib.with_name(lib.name + ".lock")):
+        if done.exists():  # another process built it while this one waited for the lock
+            return lib
+        shutil.rmtree(lib, ignore_errors=True)
+        runner = get_runner("ghdl")
+        runner.build(
+            sources=srcs,
+            hdl_toplevel=toplevel,
+            build_args=list(build_args),
+            build_dir=lib,
+            always=True,
+            log_file=log_file,
+        )
+        done.write_text(f"{toplevel}\n{backend}\n" + "".join(f"{s}\n" for s in srcs))
+    return lib
+
+
+def _link_executable(lib: Path, toplevel: str, test_dir: Path) -> None:
+    """Where the back end elaborates to an executable (LLVM, GCC), `ghdl -r` runs ./<toplevel> of the folder it runs
+    in: point test_dir/<toplevel> at the shared build's (replacing whatever an older run left there)."""
+    exe = lib / toplevel
+    if not exe.exists():  # mcode: ghdl -r elaborates from the work library (--workdir) in memory
+        return
+    link = test_dir / toplevel
+    tmp = test_dir / f".{toplevel}.link-{os.getpid()}"
+    with contextlib.suppress(FileNotFoundError):
+        tmp.unlink()
+    tmp.symlink_to(exe)
+    os.replace(tmp, link)
+
+
 def _sim_stop_s(results_xml: Path) -> float | None:
     """The simulated time at which the last test of a cocotb results file stopped (None if it holds none)."""
     import xml.etree.ElementTree as ET
@@ -94,9 +224,11 @@ def run_cocotb(
     log_file: Path | None = None,
     netlist: bool = False,
 ) -> Path:
-    """Build the RTL up to toplevel and run a cocotb test module against it with GHDL.
+    """Run a cocotb test module against the RTL up to toplevel with GHDL (built once: build_once).
 
-    One build directory per call, so that tests can run in parallel. waves: a .ghw or .fst path to write; for a
+    build_dir is this call's own folder (results, waveforms, logs), so that tests can run in parallel; the analysed
+    and elaborated RTL is shared with every call for the same top and sources (build_once), generics given at run
+    time. waves: a .ghw or .fst path to write; for a
     .ghw of a top with a layout in stepramp.sim.waves, a GTKWave save file (.gtkw) is written beside it. With WAVES=1 in
     the environment every call writes build_dir/<toplevel>.ghw.
     log_file: send the build and simulation output there instead of stdout.
@@ -128,15 +260,11 @@ def run_cocotb(
             testcase=testcase,
             log_file=log_file,
         )
+    # One build per (top, sources, back end) for the whole regression, shared; this call's results in build_dir.
+    build_dir.mkdir(parents=True, exist_ok=True)
+    lib = build_once(toplevel, log_file=log_file)
+    _link_executable(lib, toplevel, build_dir)
     runner = get_runner("ghdl")
-    runner.build(
-        sources=hdl_sources(toplevel),
-        hdl_toplevel=toplevel,
-        build_args=["--std=08"],
-        build_dir=build_dir,
-        always=True,
-        log_file=log_file,
-    )
     if waves is None and os.environ.get("WAVES", "0") not in ("", "0"):
         waves = build_dir / f"{toplevel}.ghw"  # WAVES=1 pytest ...: every simulation writes its waveform
     plusargs = ["--ieee-asserts=disable-at-0"]
@@ -145,11 +273,12 @@ def run_cocotb(
         plusargs.append(f"--{kind}={waves.resolve()}")
     results = runner.test(
         hdl_toplevel=toplevel,
+        hdl_toplevel_lang="vhdl",  # (this runner did not build: it cannot tell from its sources)
         test_module=test_module,
-        test_args=["--std=08"],
+        test_args=["--std=08", f"--workdir={lib}"],
         plusargs=plusargs,
         parameters=dict(parameters or {}),
-        build_dir=build_dir,
+        build_dir=lib,
         test_dir=build_dir,
         extra_env=dict(extra_env or {}),
         testcase=testcase,

@@ -382,7 +382,8 @@ async def _play_multi(dut: Any, top: str, script: dict[str, Any]) -> dict[str, A
         assert get_sim_time("ps") < issue * CLK_PERIOD_PS, f"the writes of the commit at {action['at']} ran late"
         await _at_edge(clk, issue)
         seen = len(rec.writes)
-        ctrl = 0x100 * (int(action["axis"]) + 1) + CTRL
+        # the axis's CTRL, or the global window's SYNC_SOFT_STOP (a coordinated soft stop)
+        ctrl = int(action.get("commit", 0x100 * (int(action["axis"]) + 1) + CTRL))
         await bus.write(ctrl, int(action["ctrl"]), strobe=0x1)
         await Timer(2 * CLK_PERIOD_NS, unit="ns")
         committed = next((e for e, a in rec.writes[seen:] if a == ctrl), None)

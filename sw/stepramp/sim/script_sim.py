@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from stepramp.board.multi_script import MultiResult, action_writes
+from stepramp.board.multi_script import MultiResult, played_actions
 from stepramp.board.script import PREP_CLOCKS, ScriptResult, core_rejections, load_script, plan_script
 from stepramp.sim.runner import run_cocotb
 
@@ -86,14 +86,7 @@ def simulate_multi(planned: Sequence[MultiResult], build: Path, top: str = "plb"
     result.unlink(missing_ok=True)
     scripts = []
     for p in planned:
-        actions = sorted(
-            (
-                {"at": a.at, "axis": axis, "writes": [list(w) for w in action_writes(axis, a.writes)], "ctrl": a.ctrl}
-                for axis, r in enumerate(p.results)
-                for a in r.actions
-            ),
-            key=lambda a: a["at"],
-        )
+        actions = played_actions(p)
         pins = sorted(
             [[a, name, axis, level] for axis, r in enumerate(p.results) for a, name, level in r.pins if name != "estop"]
             + [[a, "estop", 0, level] for a, level in p.estop],

@@ -121,6 +121,15 @@ EQUIVALENT: dict[str, str] = {
         "it loads on a second START, which the engine ignores while busy (start_while_busy_is_ignored stages another "
         "plan before such STARTs and sees the running move unchanged)"
     ),
+    **{
+        f'regs_pkg: {w}     => x"00000000", @11 bit -> "00000001"': (
+            f"word {w} (LATCH_POS .. TIME_HI) is a live word, outside the storage words (mem is STEPS .. INPUT_CFG): "
+            "neither its RW mask nor its reset value is read (storage_mask and reset_value serve storage words only, "
+            "the read-back RAM is written for storage words only); tb/test_regfile.py time_and_latch_registers "
+            "writes these words and reads their inputs back"
+        )
+        for w in range(38, 43)
+    },
     "prio_enc: if (n < width) then @6 rel -> <=": (
         "n <= width also fills slot n = width of the level, from slots 2 width and 2 width + 1; the next level reads "
         "slots 2 n and 2 n + 1 with n < width / 2, so at most slot width - 1, and the result is slot 0: the extra "
