@@ -12,10 +12,11 @@ VHDL  := $(wildcard hdl/*.vhd)
 BACKEND = GHDL_BACKEND=$${GHDL_BACKEND:-$$(test -x /usr/bin/ghdl-llvm && echo llvm || echo mcode)}
 
 .DEFAULT_GOAL := test
-.PHONY: setup test coverage mutate soak lint synth-check bench synth demo shell waves clean help
+.PHONY: setup test check coverage mutate soak lint synth-check bench synth demo shell waves clean help
 
 help:
 	@echo "make test         lint, synthesis check and the whole regression (pytest -n $(JOBS))"
+	@echo "make check        the quick tier for inner loops (about 2 min): lint, the model and driver tests, the unit benches"
 	@echo "make coverage     the regression, then its functional coverage report (build/coverage/report.md)"
 	@echo "make mutate       mutation check of the RTL (MUTANTS=80 SEED=1): killed / valid / total and the survivors"
 	@echo "make soak         random soak on both tops (SECONDS=60 SEED=1; OPS=K replays the first K operations)"
@@ -24,7 +25,7 @@ help:
 	@echo "make shell        the AVR446 demo's command shell on the simulated core (type ? for help)"
 	@echo "make lint         ruff check, ruff format --check, vsg"
 	@echo "make synth-check  every RTL file under --std=93c and --std=08, ghdl synth of each top, no latch"
-	@echo "make bench        the change latency of CTRL.CHANGE per ramp phase (the driver's planner, no simulator)"
+	@echo "make bench        the change latency of CTRL.CHANGE per ramp phase, and the simulation speed (clocks/s)"
 	@echo "make synth        size and fmax: yosys iCE40 / xc7, nextpnr HX8K / UP5K -> build/synth/report.json"
 	@echo "make clean        remove build/ (keeps .venv)"
 
@@ -40,12 +41,20 @@ synth-check: setup
 	$(PY) -m stepramp.tools.rtlcheck --out build/synth_check
 
 # Every simulation of the regression writes its functional coverage to build/coverage (stepramp.sim.coverage); the
-# regression fails when a bin stays empty.
+# regression fails when a bin stays empty. The workers take the tests longest first, each sw/tests module as one unit
+# (tb/conftest.py), so that they end together.
 COVERAGE := build/coverage
+DIST     := --dist loadgroup --no-loadscope-reorder
 test: lint
 	rm -rf $(COVERAGE)
-	STEPRAMP_COVERAGE_DIR=$(CURDIR)/$(COVERAGE) $(BACKEND) $(PY) -m pytest -n $(JOBS) -rA --durations=5
+	STEPRAMP_COVERAGE_DIR=$(CURDIR)/$(COVERAGE) $(BACKEND) $(PY) -m pytest -n $(JOBS) $(DIST) -rA --durations=25
 	$(PY) -m stepramp.tools.coverage $(COVERAGE) --check
+
+# The quick tier for inner loops, never instead of `make test`: lint, every sw/tests test (the model, the planner, the
+# drivers, the tools) and the RTL's unit benches (prio_enc, timer, divider, next_delay: seconds each).
+CHECK := sw/tests tb/test_prio_enc.py tb/test_timer.py tb/test_divider.py tb/test_next_delay.py
+check: lint
+	$(BACKEND) $(PY) -m pytest -n $(JOBS) $(DIST) -q -p no:cacheprovider --durations=5 $(CHECK)
 
 coverage: test
 	@cat $(COVERAGE)/report.md
@@ -63,9 +72,11 @@ soak: setup
 	SOAK_SEED=$(SEED) SOAK_SECONDS=$(if $(filter 0,$(OPS)),$(SECONDS),0) SOAK_OPS=$(OPS) \
 	  $(BACKEND) $(PY) -m pytest -n 2 -q -rA -p no:cacheprovider tb/test_soak.py | grep -E "^soak|passed|failed|Error|replay"; test $${PIPESTATUS[0]} = 0
 
-# Figures no test asserts: the change latency of CTRL.CHANGE per phase (from the driver's planner).
+# Figures no test asserts: the change latency of CTRL.CHANGE per phase (from the driver's planner), then the
+# simulation speed in clocks/s during a move on the engine bench, each bus top and each multi-axis top.
 bench: setup
 	$(PY) -m stepramp.tools.changebench
+	$(BACKEND) $(PY) -m stepramp.tools.simbench
 
 synth:
 	@scripts/bootstrap.sh $(VENV) synth

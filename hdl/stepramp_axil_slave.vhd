@@ -1,15 +1,16 @@
 -- SPDX-License-Identifier: MIT
 -- stepramp_axil_slave: an AXI4-Lite slave (ports s_axil_*) turned into the bus-agnostic register port of
--- stepramp_core and stepramp_multi, with the channel behaviour of stepramp_axil: address and data held until both are
--- there, one access per clock (on a tie the kind that did not go last goes first), responses held under
--- backpressure, SLVERR when the port answers err. waddr is the held write address. docs/stepramp_multi.md.
+-- stepramp_core and stepramp_multi (the bus side of stepramp_axil and stepramp_multi_axil): address and data held
+-- until both are there, one access per clock (on a tie the kind that did not go last goes first), responses held
+-- under backpressure, SLVERR when the port answers err. waddr is the held write address. Channel behaviour:
+-- docs/stepramp_plb.md.
 
 library ieee;
   use ieee.std_logic_1164.all;
 
 entity stepramp_axil_slave is
   generic (
-    G_ADDR_BITS : positive := 8
+    G_ADDR_BITS : positive := 8 -- address bits of the AXI4-Lite address channels and of the register port
   );
   port (
     clk : in    std_logic;
@@ -90,6 +91,10 @@ architecture rtl of stepramp_axil_slave is
   signal rdata_r : std_logic_vector(31 downto 0);
 
 begin
+
+  assert G_ADDR_BITS >= 2 and G_ADDR_BITS <= 32
+    report "stepramp_axil_slave: G_ADDR_BITS must be in 2 .. 32"
+    severity failure;
 
   -- A write may go when its address and data are held and its response channel is free; a read likewise.
   wr_ready <= aw_full and w_full and not bvalid and not wr_pending;

@@ -1,10 +1,10 @@
 -- SPDX-License-Identifier: MIT
--- stepramp_plb: the stepramp core with a native PLB-like slave interface (Xilinx IPIF signal names) that answers
--- every access in two clocks. Ports, bus timing and registers: docs/stepramp_plb.md, docs/registers.md.
+-- stepramp_plb: the stepramp core with a native PLB-like slave interface (Xilinx IPIF signal names, the handshake of
+-- stepramp_plb_slave) that answers every access in two clocks. Ports, bus timing and registers: docs/stepramp_plb.md,
+-- docs/registers.md.
 
 library ieee;
   use ieee.std_logic_1164.all;
-  use ieee.numeric_std.all;
 
 library work;
   use work.stepramp_regs_pkg.all;
@@ -48,13 +48,14 @@ end entity stepramp_plb;
 
 architecture rtl of stepramp_plb is
 
-  signal access_r : std_logic; -- the access now on the bus has been passed on
-  signal rd_r     : std_logic; -- the regfile answers a read (else a write) in this cycle
-  signal wr       : std_logic;
-  signal rd       : std_logic;
-  signal ack      : std_logic;
-  signal err      : std_logic;
-  signal rdata    : std_logic_vector(31 downto 0);
+  signal wr    : std_logic;
+  signal rd    : std_logic;
+  signal addr  : std_logic_vector(C_ADDR_BITS - 1 downto 0);
+  signal wdata : std_logic_vector(31 downto 0);
+  signal be    : std_logic_vector(3 downto 0);
+  signal rdata : std_logic_vector(31 downto 0);
+  signal ack   : std_logic;
+  signal err   : std_logic;
 
 begin
 
@@ -62,30 +63,31 @@ begin
     report "stepramp_plb: G_RAMP must be 0 (AVR446) or 1 (exact)"
     severity failure;
 
-  -- One strobe per access: CS is still high in the cycle of the ack, so the strobe cycle blocks the next one.
-  wr <= bus2ip_cs and not bus2ip_rnw and not access_r;
-  rd <= bus2ip_cs and bus2ip_rnw and not access_r;
-
-  handshake_proc : process (clk) is
-  begin
-
-    if rising_edge(clk) then
-      access_r <= wr or rd;
-      rd_r     <= rd;
-
-      if (rst = '1') then
-        access_r <= '0';
-        rd_r     <= '0';
-      end if;
-    end if;
-
-  end process handshake_proc;
-
-  ip2bus_rdack <= ack and rd_r;
-  ip2bus_wrack <= ack and not rd_r;
-  ip2bus_error <= err;
-  ip2bus_data  <= rdata when rd_r = '1' else
-                  (others => '0');
+  slave_inst : entity work.stepramp_plb_slave
+    generic map (
+      G_ADDR_BITS => C_ADDR_BITS
+    )
+    port map (
+      clk          => clk,
+      rst          => rst,
+      bus2ip_addr  => bus2ip_addr,
+      bus2ip_data  => bus2ip_data,
+      bus2ip_be    => bus2ip_be,
+      bus2ip_cs    => bus2ip_cs,
+      bus2ip_rnw   => bus2ip_rnw,
+      ip2bus_data  => ip2bus_data,
+      ip2bus_rdack => ip2bus_rdack,
+      ip2bus_wrack => ip2bus_wrack,
+      ip2bus_error => ip2bus_error,
+      wr           => wr,
+      rd           => rd,
+      addr         => addr,
+      wdata        => wdata,
+      be           => be,
+      rdata        => rdata,
+      ack          => ack,
+      err          => err
+    );
 
   core_inst : entity work.stepramp_core
     generic map (
@@ -97,10 +99,10 @@ begin
       rst            => rst,
       wr             => wr,
       rd             => rd,
-      addr           => bus2ip_addr(C_ADDR_BITS - 1 downto 0),
-      waddr          => bus2ip_addr(C_ADDR_BITS - 1 downto 0),
-      wdata          => bus2ip_data,
-      be             => bus2ip_be,
+      addr           => addr,
+      waddr          => addr,
+      wdata          => wdata,
+      be             => be,
       rdata          => rdata,
       ack            => ack,
       err            => err,

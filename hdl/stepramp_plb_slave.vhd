@@ -1,7 +1,8 @@
 -- SPDX-License-Identifier: MIT
 -- stepramp_plb_slave: a native PLB-like slave (Xilinx IPIF signal names) turned into the bus-agnostic register port
 -- of stepramp_core and stepramp_multi: one wr or rd strobe per access, the answer (ack, err, rdata) one clock later
--- becomes the one-cycle IP2Bus_RdAck / WrAck. The same handshake as stepramp_plb. docs/stepramp_multi.md.
+-- becomes the one-cycle IP2Bus_RdAck / WrAck. The bus side of stepramp_plb and stepramp_multi_plb; bus timing:
+-- docs/stepramp_plb.md.
 
 library ieee;
   use ieee.std_logic_1164.all;

@@ -319,6 +319,19 @@ architecture rtl of stepramp_regfile is
 
   end function gate;
 
+  -- '1' when the limits are enabled (INPUT_CFG.LIMIT_EN) and the one a motion in direction dir runs into is active
+  -- (dir 1: position counting down, towards LIMIT_NEG, level bit 0; dir 0: towards LIMIT_POS, level bit 1).
+  function against_limit (
+    cfg   : std_logic_vector(31 downto 0);
+    level : std_logic_vector(3 downto 0);
+    dir   : std_logic
+  ) return std_logic is
+  begin
+
+    return cfg(C_INPUT_CFG_LIMIT_EN_LSB) and ((level(0) and dir) or (level(1) and not dir));
+
+  end function against_limit;
+
 begin
 
   assert G_RAMP <= 1
@@ -535,8 +548,7 @@ begin
       -- during an ESTOP fault, or towards an active limit; it then ends at once (DONE and ERROR), nothing moves.
       start_v  := start_v or ext_start;
       cfg_v    := mem(word(C_REG_INPUT_CFG));
-      toward_v := cfg_v(C_INPUT_CFG_LIMIT_EN_LSB) and
-                  ((in_level(0) and direction_i) or (in_level(1) and not direction_i));
+      toward_v := against_limit(cfg_v, in_level, direction_i);
 
       if (start_v = '1') then
         start_r <= '1';
@@ -587,8 +599,7 @@ begin
       -- move; the move's own direction counts, mv_dir (1: position counting down, towards LIMIT_NEG).
       if (eng_busy = '0') then
         lim_hit <= '0';
-      elsif (lim_hit = '0' and cfg_v(C_INPUT_CFG_LIMIT_EN_LSB) = '1' and
-             ((in_level(0) and mv_dir) or (in_level(1) and not mv_dir)) = '1') then
+      elsif (lim_hit = '0' and against_limit(cfg_v, in_level, mv_dir) = '1') then
         lim_hit    <= '1';
         q_pend     <= '0';
         error_flag <= '1';

@@ -24,11 +24,11 @@ from collections.abc import Coroutine, Iterable, Sequence
 from typing import TYPE_CHECKING, Any, ClassVar, TypedDict
 
 import cocotb
-from cocotb.triggers import ClockCycles, ReadOnly, RisingEdge
+from cocotb.triggers import ReadOnly, RisingEdge
 from cocotb.utils import get_sim_time
 
 from stepramp.models import stepping as sm
-from stepramp.sim.clocking import CLK_PERIOD_NS, now_periods
+from stepramp.sim.clocking import CLK_PERIOD_NS, cycles, now_periods
 
 if TYPE_CHECKING:  # (typing.Unpack from Python 3.11 on)
     from typing_extensions import Unpack
@@ -284,7 +284,7 @@ class ElectricalMonitor(Monitor):
         """settle clocks after a STEP rising edge (at once for the initial check): compare, unless a newer STEP
         came meanwhile (then that one's check covers it; counted in `superseded`)."""
         if self.settle and not initial:
-            await ClockCycles(self.clk, self.settle)
+            await cycles(self.clk, self.settle, round(self.clk_period_ns * 1000))
         await ReadOnly()
         if self.steps != steps:
             self.superseded += 1

@@ -32,11 +32,15 @@ from stepramp.board.driver import Outputs
 from stepramp.board.plan import plan_move
 from stepramp.models.engine import edges as model_edges
 from stepramp.sim.clocking import CLK_PERIOD_NS
-from stepramp.sim.profiles import PROFILES_BY_NAME
+from stepramp.sim.profiles import EXACT_PROFILES, PROFILES_BY_NAME
 from tbutil import edges_differ
 
 #: The move every bench plays (about 90,000 clocks: 1,200 steps with a long cruise).
 PROFILE = os.environ.get("SPEED_PROFILE", "trap_long_cruise")
+#: The ramp arithmetic (G_RAMP of the engine and the bus tops: 0 AVR446, 1 exact: the move of EXACT_PROFILES, the same
+#: ticks at 4 times the clock and PRESCALE, as the exact tests play it).
+RAMP = int(os.environ.get("SPEED_RAMP", "0"))
+MOVE = {p.name: p for p in EXACT_PROFILES}[PROFILE] if RAMP else PROFILES_BY_NAME[PROFILE]
 
 
 class _Clock:
@@ -63,7 +67,7 @@ async def _engine(dut: Any) -> None:
     from stepramp.sim.engine_bench import INPUTS, SEGMENT_INPUTS, _play
     from stepramp.sim.engine_sim import timeout_cycles
 
-    plan = plan_move(**PROFILES_BY_NAME[PROFILE].args())
+    plan = plan_move(**MOVE.args(), ramp=RAMP)
     for name in ("start", "load", "soft_stop", "hard_stop", "change", "change_at", "pos_load", "pos_value"):
         getattr(dut, name).value = 0
     for name in (*INPUTS, *SEGMENT_INPUTS):
@@ -80,11 +84,11 @@ async def _engine(dut: Any) -> None:
 async def _bus_top(dut: Any) -> None:
     from peripheral_tb import PeripheralTb
 
-    prof = PROFILES_BY_NAME[PROFILE]
+    prof = MOVE
     tb = await PeripheralTb.started(dut)
     await tb.configure(Outputs(mode="half", step_width=5, dir_setup=20, dir_hold=10), enable=True)
     await tb.driver().enable_irq(done=True, error=True)
-    drv = tb.driver(prof.args())
+    drv = tb.driver(prof.args(), ramp=RAMP)
     plan = drv.plan(prof.steps, prof.accel, prof.decel, prof.speed)
     clock = _Clock()
     edges, status = await tb.run_plan(drv, plan)
@@ -97,7 +101,7 @@ async def _bus_top(dut: Any) -> None:
 async def _multi_top(dut: Any) -> None:
     from test_multi_rtl import MultiTb
 
-    prof = PROFILES_BY_NAME[PROFILE]
+    prof = MOVE
     tb = await MultiTb.started(dut, fclk=prof.fclk, prescale=prof.prescale)
     await tb.configure()
     plans = [plan_move(**prof.args()) for _ in range(tb.axes)]

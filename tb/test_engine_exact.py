@@ -89,9 +89,14 @@ def budget_cases() -> list[tuple[str, Plan, dict[str, int], list[Stop], list[int
                 cases.append(
                     (f"first accel value, C = {c_acc:#x}: {c1} clocks", plan, fields, [], edges[:2], ERR["LATE"])
                 )
-            else:
+            elif exact.narrow(c_acc):
                 hard = Stop("hard", edges[2] + 1)
                 cases.append((f"first accel value, C = {c_acc:#x}: {c1} clocks", plan, fields, [hard], edges, 0))
+            else:
+                # the value itself is 0.41 c0 ticks (1.8e9 at C = 2^72 - 2^36): a hard stop right after pulse 1,
+                # which would have ended the move with LATE had the value not been ready
+                hard = Stop("hard", edges[1] + 1)
+                cases.append((f"first accel value, C = {c_acc:#x}: {c1} clocks", plan, fields, [hard], edges[:2], 0))
 
     # 2. A soft stop decided at pulse 1 of an up head (sampled at edge 2): the normal value of interval 2 (index n0 + 1)
     # and then the alternative (index m - 1, m = floor((n0 + 1) stop_ratio / 2^16)), both fresh requests, ready at
@@ -120,7 +125,13 @@ def budget_cases() -> list[tuple[str, Plan, dict[str, int], list[Stop], list[int
                 # In time, pulse 2 ends the alternative's interval. The stop's next value is a fresh request far
                 # longer than these hand-made intervals (11 ticks at the worst case; the driver's limit keeps
                 # every interval at 256 clocks or more): the move then ends with LATE at pulse 2, a pulse later.
-                cases.append((label, plan, fields, [soft], edges[:3], ERR["LATE"]))
+                if exact.narrow(c_dec):
+                    cases.append((label, plan, fields, [soft], edges[:3], ERR["LATE"]))
+                else:
+                    # at C = 2^72 - 2^36 the stop's values are 46,000 ticks: the next one is in time, and a hard
+                    # stop after pulse 2 ends the move (the stop would run 2^31 steps)
+                    hard = Stop("hard", edges[2] + 1)
+                    cases.append((label, plan, fields, [soft, hard], edges[:3], 0))
     return cases
 
 
@@ -198,7 +209,8 @@ def test_exact_engine_segments() -> None:
             )
         )
     # slow ramps: wide constants at large head indices, where their intervals are short enough to simulate; a hard
-    # stop after pulse 40 ends each (the rest of such a segment, its decel to rest, takes about c0 ticks and more)
+    # stop after pulse 40 (12 at c0 = 2^31: 23,000 ticks a step) ends each (the rest of such a segment, its decel to
+    # rest, takes about c0 ticks and more)
     slow = (
         # (label, head, c0 in ticks, head index, cruise ticks)
         ("scale 0, c0 = 2^22: up head from 2^26", UP, 2.0**22, 1 << 26, 250),
@@ -223,7 +235,7 @@ def test_exact_engine_segments() -> None:
             c_sd=cruise * Q16,
             c_last=cruise * 3 * Q16,
         )
-        hard = ("hard", segment_edges(seg, 1)[40] + 1)
+        hard = ("hard", segment_edges(seg, 1)[12 if head == UP and c0 > 2**30 else 40] + 1)
         runs.append((label, plan, fields, Stop(*hard), segment_edges(seg, 1, stop=hard)))
     move = plan_move(**EXACT_PROFILES[0].args(), ramp=RAMP_EXACT)
     edges = model_edges(move)

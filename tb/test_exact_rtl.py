@@ -30,13 +30,14 @@ from peripheral_tb import TOPS, PeripheralTb, check_stopped, stop_cases
 from stepramp.board.driver import Outputs, StepRampError
 from stepramp.board.plan import RAMP_EXACT, plan_move
 from stepramp.board.regmap import ID_RAMP_BIT, ID_VALUE, offset
-from stepramp.board.script import NAMED_SCRIPTS, load_script, plan_script
+from stepramp.board.script import load_script, plan_script
 from stepramp.models.engine import edges as model_edges
 from stepramp.models.engine import last_edge, segment_edges
 from stepramp.sim.clocking import CLK_PERIOD_NS
 from stepramp.sim.profiles import EXACT_CLOCK_FACTOR, EXACT_PROFILES
 from stepramp.sim.runner import run_cocotb
 from stepramp.sim.script_sim import simulate_planned
+from stepramp.sim.scripts import NAMED_SCRIPTS
 from tbutil import build_dir, cocotb, edges_differ, env_int
 
 EXACT = {"G_RAMP": RAMP_EXACT}

@@ -40,7 +40,7 @@ from peripheral_tb import TOPS, PeripheralTb
 from stepramp.board.driver import Inputs, Latch, StepRamp
 from stepramp.board.homing import LATCH_MARGIN, Homing, home
 from stepramp.sim.cdriver import CDriver, c_struct
-from stepramp.sim.clocking import CLK_PERIOD_PS
+from stepramp.sim.clocking import CLK_PERIOD_PS, Cycles
 from stepramp.sim.mechanics import Bounce, Carriage, Crossing, Switch
 from stepramp.sim.runner import run_cocotb
 from stepramp.tools import clib
@@ -266,7 +266,7 @@ async def python_homing(dut) -> None:
         await drv.set_position(run.position0)
         first, run.clocks = len(carriage.crossings), now_cycles()
         shift0 = carriage.position - run.position0  # carriage step = POSITION + shift0 before homing
-        result = await home(drv, CFG, idle=lambda: ClockCycles(tb.clk, POLL_IDLE))
+        result = await home(drv, CFG, idle=lambda: Cycles(tb.clk, POLL_IDLE))
         position = await drv.position()
         run_checks(
             dut, run, carriage, first, shift0, result.left, result.seek, result.release, position, origins, problems
@@ -311,7 +311,7 @@ async def limit_homing(dut) -> None:
         await place(tb, carriage, run)
         await drv.set_position(run.position0)
         first, run.clocks = len(carriage.crossings), now_cycles()
-        result = await home(drv, cfg, idle=lambda: ClockCycles(tb.clk, POLL_IDLE))
+        result = await home(drv, cfg, idle=lambda: Cycles(tb.clk, POLL_IDLE))
         run_checks(
             dut,
             run,
@@ -361,7 +361,7 @@ async def c_homing(dut) -> None:
     """C_HOMING_RUNS runs of the C driver's stepramp_home (sw/c/stepramp_homing.c) on the same core and mechanics:
     the same physics as python_homing."""
     tb = await PeripheralTb.started(dut)
-    cdrv = CDriver(Path(os.environ["STEPRAMP_C_CB_LIB"]), tb.bus, idle=lambda: ClockCycles(tb.clk, POLL_IDLE))
+    cdrv = CDriver(Path(os.environ["STEPRAMP_C_CB_LIB"]), tb.bus, idle=lambda: Cycles(tb.clk, POLL_IDLE))
     inputs_t, homing_t, result_t = c_types(cdrv)
     assert await cdrv.dev_call("stepramp_init", cdrv.base, FCLK, SPR, PRESCALE) == 0
     rc = await cdrv.dev_call("stepramp_configure_inputs", ctypes.byref(inputs_t(filter=FILTER, limit_enable=1)))

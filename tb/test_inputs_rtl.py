@@ -28,7 +28,7 @@ from stepramp.board.plan import Plan, plan_move
 from stepramp.board.regmap import ERROR_CODES, REGISTERS_BY_NAME, offset
 from stepramp.models.engine import edges as model_edges
 from stepramp.models.engine import edges_with_stop, segment_edges
-from stepramp.sim.clocking import CLK_PERIOD_PS, now_periods
+from stepramp.sim.clocking import CLK_PERIOD_PS, Cycles, now_periods
 from stepramp.sim.coverage import watch_coverage
 from stepramp.sim.profiles import PROFILES_BY_NAME
 from stepramp.sim.runner import run_cocotb
@@ -156,7 +156,7 @@ class InputsTb:
             if get(STATUS, "DONE", word):
                 await self.tb.bus.write(offset("STATUS"), field(STATUS, "DONE") | field(STATUS, "ERROR"))
                 return word
-            await ClockCycles(self.clk, 200)
+            await Cycles(self.clk, 200)
         raise AssertionError("no DONE")
 
 

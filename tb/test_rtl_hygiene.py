@@ -40,3 +40,30 @@ def test_port_names_follow_the_convention() -> None:
     assert len(ports) > 100, "the port pattern no longer matches the entity declarations"
     bad = sorted(f"{f}: {name}" for f, name in ports if marked.search(name))
     assert not bad, f"ports with a direction mark: {bad}"
+
+
+_ENTITY = re.compile(r"^\s*entity\s+(\w+)\s+is\b", re.MULTILINE | re.IGNORECASE)
+_INSTANCE = re.compile(r"\bentity\s+work\.(\w+)", re.IGNORECASE)
+
+
+def test_files_are_listed_in_compile_order() -> None:
+    """Every `entity work.X` a file instantiates is declared in a file listed before it in HDL_FILES (the order
+    hdl_sources, stepramp.core and the integration guide analyse the files in)."""
+    declared: set[str] = set()
+    late = []
+    for name in HDL_FILES:
+        text = (HDL_DIR / name).read_text()
+        late += [f"{name} instantiates {e} before its file" for e in _INSTANCE.findall(text) if e not in declared]
+        declared.update(e.lower() for e in _ENTITY.findall(text))
+    assert not late, late
+
+
+@pytest.mark.parametrize(
+    ("top", "slave"), [("stepramp_plb", "stepramp_plb_slave"), ("stepramp_axil", "stepramp_axil_slave")]
+)
+def test_single_tops_use_the_bus_slaves(top: str, slave: str) -> None:
+    """The bus logic exists once (issue 34): a single-axis top instantiates its bus slave and the core, and has no
+    process of its own."""
+    text = (HDL_DIR / f"{top}.vhd").read_text()
+    assert sorted(set(_INSTANCE.findall(text))) == sorted({slave, "stepramp_core"})
+    assert not re.search(r"^\s*\w+\s*:\s*process\b", text, re.MULTILINE), f"{top} has a process of its own"

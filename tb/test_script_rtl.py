@@ -8,18 +8,21 @@ does. Every edge and position must be equal, and the core must flag exactly the 
 from a commit: the planner never commits what the core would refuse; LIMIT and ESTOP from the machine inputs,
 issue 16), and no STEP edge may come more than 2 clocks after a filtered ESTOP edge.
 
-* test_named_scripts: stepramp.board.script.NAMED_SCRIPTS (speed up and slow down in RUN, a change in ACCEL and in
+* test_named_scripts: stepramp.sim.scripts.NAMED_SCRIPTS (speed up and slow down in RUN, a change in ACCEL and in
   DECEL, a retarget inside the stop distance and behind the motor, jog through zero, queued moves in the same and
   in the opposite direction, a soft and a hard stop during a jog), through each top;
-* test_random_scripts: SCRIPT_COUNT (50; 100 before the exact mode's RTL tests took their time) random scripts per
-  chunk and top (stepramp.board.script.random_script), two chunks per top: 100 scripts through each top.
+* test_random_scripts: SCRIPT_COUNT (100) random scripts per chunk and top (stepramp.sim.scripts.random_script),
+  two chunks per top: 200 scripts through each top.
   SCRIPT_SEED (printed; random unless set) seeds them: replay a failure with
   SCRIPT_SEED=<seed> .venv/bin/pytest tb/test_script_rtl.py -k random;
-* test_cli_sim_and_model_agree: `stepramp sim --script` and `stepramp model --script` on two named scripts print the
-  same edges and positions;
+* test_cli_sim_and_model_agree: `stepramp sim --script` and `stepramp model --script` on two named scripts and two
+  named multi-axis scripts (three_axes_limit_and_estop, coordinated_stop_on_the_line) print the same edges and
+  positions (and refusals);
 * test_multi_axis_scripts: scripts with "axis" on their commands on stepramp_multi_plb / _axil at 3 axes (the named
-  three_axes_limit_and_estop and MULTI_COUNT (10) random ones): every axis's edges and positions equal to the
-  model's, its final error too, and no STEP edge of any axis more than 2 clocks after the filtered ESTOP edge.
+  three_axes_limit_and_estop, sync_soft_stop, coordinated_stop_on_the_line: coordinated moves by SYNC_START and a
+  coordinated stop on the line by one CHANGE per axis, and MULTI_COUNT (10) random ones): every axis's edges and
+  positions equal to the model's, its final error too, and no STEP edge of any axis more than 2 clocks after the
+  filtered ESTOP edge.
 """
 
 from __future__ import annotations
@@ -32,10 +35,12 @@ from typing import Any
 
 import pytest
 
-from stepramp.board.multi_script import NAMED_MULTI_SCRIPTS, MultiResult, plan_multi_script, random_multi_script
-from stepramp.board.script import NAMED_SCRIPTS, PREP_CLOCKS, ScriptResult, load_script, plan_script, random_script
+from stepramp.board.multi_script import MultiResult, plan_multi_script
+from stepramp.board.script import PREP_CLOCKS, ScriptResult, load_script, plan_script
 from stepramp.models.inputs import filtered_edges
+from stepramp.sim.multi_scripts import NAMED_MULTI_SCRIPTS, random_multi_script
 from stepramp.sim.script_sim import simulate_multi, simulate_planned
+from stepramp.sim.scripts import NAMED_SCRIPTS, random_script
 from tbutil import build_dir, edges_differ, env_int
 
 TOPS = ("plb", "axil")
@@ -74,7 +79,7 @@ SEED = _seed()
 @pytest.mark.parametrize("chunk", range(CHUNKS))
 @pytest.mark.parametrize("top", TOPS)
 def test_random_scripts(top: str, chunk: int) -> None:
-    count = env_int("SCRIPT_COUNT", 50)
+    count = env_int("SCRIPT_COUNT", 100)
     print(f"SCRIPT_SEED={SEED} (replays this test)")  # shown with a failure, whatever fails
     rng = random.Random(f"{SEED}:{top}:{chunk}")
     scripts = [random_script(rng) for _ in range(count)]
@@ -106,20 +111,22 @@ def test_cli_sim_and_model_agree(tmp_path: Path) -> None:
         for key in ("edges", "positions"):
             assert out["sim"][key] == out["model"][key], f"{name}: {key} of sim and model differ"
         assert out["model"]["edges"], f"{name}: no edges"
-    # a multi-axis script: one list of edges and positions per axis, and the same refusals and final errors
-    name = "three_axes_limit_and_estop"
-    script = tmp_path / f"{name}.json"
-    script.write_text(json.dumps(NAMED_MULTI_SCRIPTS[name]))
-    out = {}
-    for tool in ("model", "sim"):
-        target = tmp_path / f"{name}_{tool}.json"
-        extra = ["--build", str(build_dir(f"script_cli_{name}"))] if tool == "sim" else []
-        assert main([tool, "--script", str(script), "--json", str(target), *extra]) == 0, f"{tool} {name}"
-        out[tool] = json.loads(target.read_text())
-    for key in ("edges", "positions", "rejected"):
-        assert out["sim"][key] == out["model"][key], f"{name}: {key} of sim and model differ"
-    assert len(out["model"]["edges"]) == 3 and all(out["model"]["edges"])
-    assert {r["reason"] for r in out["model"]["rejected"]} == {"the core flagged ESTOP"}
+    # multi-axis scripts: one list of edges and positions per axis, and the same refusals and final errors (a limit
+    # and ESTOP; a coordinated move stopped on the line)
+    for name in ("three_axes_limit_and_estop", "coordinated_stop_on_the_line"):
+        script = tmp_path / f"{name}.json"
+        script.write_text(json.dumps(NAMED_MULTI_SCRIPTS[name]))
+        out = {}
+        for tool in ("model", "sim"):
+            target = tmp_path / f"{name}_{tool}.json"
+            extra = ["--build", str(build_dir(f"script_cli_{name}"))] if tool == "sim" else []
+            assert main([tool, "--script", str(script), "--json", str(target), *extra]) == 0, f"{tool} {name}"
+            out[tool] = json.loads(target.read_text())
+        for key in ("edges", "positions", "rejected"):
+            assert out["sim"][key] == out["model"][key], f"{name}: {key} of sim and model differ"
+        assert len(out["model"]["edges"]) == 3 and all(out["model"]["edges"])
+        reasons = {r["reason"] for r in out["model"]["rejected"]}
+        assert reasons == ({"the core flagged ESTOP"} if name.startswith("three") else set()), f"{name}: {reasons}"
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -153,8 +160,9 @@ def _check_multi(name: str, planned: MultiResult, rtl: dict[str, Any]) -> None:
 
 @pytest.mark.parametrize("top", TOPS)
 def test_multi_axis_scripts(top: str) -> None:
-    """The named three-axis script (a limit on one axis, ESTOP on all) and MULTI_COUNT random three-axis scripts
-    (a short random script per axis, staggered; SCRIPT_SEED) on the multi-axis top of each bus."""
+    """The named three-axis scripts (a limit on one axis, ESTOP on all; a SYNC_SOFT_STOP; coordinated moves and a
+    coordinated stop on the line) and MULTI_COUNT random three-axis scripts (a short random script per axis,
+    staggered; SCRIPT_SEED) on the multi-axis top of each bus."""
     print(f"SCRIPT_SEED={SEED} (replays this test)")
     rng = random.Random(f"{SEED}:multi:{top}")
     scripts = dict(NAMED_MULTI_SCRIPTS)
@@ -164,8 +172,11 @@ def test_multi_axis_scripts(top: str) -> None:
         if not p.conflicts and not p.unsure:
             scripts[f"random {len(scripts)}: {json.dumps(s)}"] = s
     planned = {name: plan_multi_script(s) for name, s in scripts.items()}
-    named = planned["three_axes_limit_and_estop"]
-    assert not named.conflicts and not named.unsure and all(r.edges for r in named.results)
+    for name in NAMED_MULTI_SCRIPTS:
+        named = planned[name]
+        assert not named.conflicts and not named.unsure and all(r.edges for r in named.results), name
+    line = planned["coordinated_stop_on_the_line"]
+    assert line.sync_starts and [s.fallback for s in line.line_stops] == [None], "not a coordinated stop on the line"
     results = simulate_multi(list(planned.values()), build_dir(f"script_multi_{top}"), top)
     for (name, p), r in zip(planned.items(), results, strict=True):
         _check_multi(f"SCRIPT_SEED={SEED} {top} {name}", p, r)

@@ -53,7 +53,8 @@ extern "C" {
 
 /**
  * The engine's inputs for one move: field by field Python's plan.Plan and the table of
- * docs/algorithm.md. c_* and the seeds are Q32.16 (< 2^48), cruise is Q32.32.
+ * docs/algorithm.md. c_* and the seeds are Q32.16 (< 2^48; in exact mode the seeds are 64-bit seed words), cruise is
+ * Q32.32.
  */
 typedef struct {
     uint32_t steps;      /**< N = |steps| (0 .. 2^31-1) */
@@ -65,10 +66,10 @@ typedef struct {
     uint64_t c_sa;       /**< exact interval sa, Q32.16 */
     uint32_t sd;         /**< decel-side boundary interval index, floor(x_d)+1 clamped to [1, L] */
     uint64_t c_sd;       /**< exact interval sd, Q32.16 */
-    uint64_t accel_seed; /**< accel recurrence value at index 0, Q32.16; exact mode: the accel's ramp constant
-                              round(c0^2 * 2^8) (stepramp_ramp_constant) */
+    uint64_t accel_seed; /**< accel recurrence value at index 0, Q32.16; exact mode: the seed word of the accel's
+                              ramp constant round(c0^2 * 2^8) (stepramp_ramp_constant) */
     uint64_t decel_seed; /**< decel recurrence value at index m0 = L-sd-1, Q32.16; 0 when m0 < 1; exact mode: the
-                              decel's ramp constant round(cd0^2 * 2^8), also when m0 < 1 */
+                              seed word of the decel's ramp constant round(cd0^2 * 2^8), also when m0 < 1 */
     uint64_t cruise;     /**< cruise period f_tick / v, Q32.32 */
     uint32_t stop_ratio; /**< accel / decel, Q16.16 (rounded, saturated): sizes a soft stop's decel ramp */
     uint32_t ramp;       /**< not a register: the ramp arithmetic the plan is for, STEPRAMP_RAMP_AVR446 or

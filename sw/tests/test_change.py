@@ -15,13 +15,12 @@ from dataclasses import dataclass
 
 import pytest
 
-from stepramp.board.change import DOWN, UP, Change, Segment, plan_change, speed_at_pulse
+from stepramp.board.change import DOWN, UP, Change, Segment, change_pulse, plan_change, speed_at_pulse
 from stepramp.board.plan import FRAC_CRUISE, MIN_INTERVAL_CLKS, plan_move, plan_move_info
 from stepramp.models import ideal
 from stepramp.models.engine import (
     accumulate,
     change_edges,
-    change_pulse,
     segment_stop_length,
     segment_stop_values,
     segment_ticks,

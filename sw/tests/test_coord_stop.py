@@ -21,12 +21,13 @@ import pytest
 
 from stepramp.board.change import Segment
 from stepramp.board.coord import CoordStop, plan_coordinated_info, plan_coordinated_stop
-from stepramp.board.multi import REG_SYNC_SOFT_STOP, soft_stop_line_bound
-from stepramp.board.multi_script import NAMED_MULTI_SCRIPTS, plan_multi_script, played_actions
+from stepramp.board.multi import REG_SYNC_SOFT_STOP, REG_SYNC_START, soft_stop_line_bound
+from stepramp.board.multi_script import MultiResult, plan_multi_script, played_actions
 from stepramp.board.plan import Plan
-from stepramp.board.script import load_script, plan_script
+from stepramp.board.script import CHANGE, PREP_CLOCKS, load_script, plan_script
 from stepramp.models import stepping as sm
 from stepramp.models.engine import change_edges, edges, edges_with_stop, phase_of, soft_stop_pulse
+from stepramp.sim.multi_scripts import NAMED_MULTI_SCRIPTS
 
 FCLK, SPR = 1e6, 400.0
 
@@ -162,12 +163,17 @@ def test_one_clock_soft_stops_are_not_within_one_step() -> None:
     print(f"worst offset from the line over ACCEL stops: {worst:.3f} steps")
 
 
-def test_a_script_soft_stop_with_axes_is_one_sync_write() -> None:
-    """`{"op": "soft_stop", "axes": [...]}` in a multi-axis script: the moving axes are stopped by one SYNC_SOFT_STOP
-    write of their mask at `at` (no CTRL write of theirs then), the idle one is left out, each axis's edges are its own
-    soft stop's; malformed `axes` are refused."""
-    script = NAMED_MULTI_SCRIPTS["coordinated_soft_stop"]
+@pytest.mark.parametrize("op", ["sync_soft_stop", "soft_stop"])
+def test_a_script_soft_stop_with_axes_is_one_sync_write(op: str) -> None:
+    """`{"op": "sync_soft_stop", "axes": [...]}` in a multi-axis script, and a `soft_stop` with `axes` that falls back
+    to it (the axes run no coordinated move): the moving axes are stopped by one SYNC_SOFT_STOP write of their mask at
+    `at` (no CTRL write of theirs then), the idle one is left out, each axis's edges are its own soft stop's;
+    malformed `axes` are refused."""
+    script = NAMED_MULTI_SCRIPTS["sync_soft_stop"]
+    script = {**script, "commands": [{**c, "op": op} if "axes" in c else c for c in script["commands"]]}
     planned = plan_multi_script(script)
+    if op == "soft_stop":
+        assert [s.fallback for s in planned.line_stops] == ["no coordinated move was started"]
     assert planned.conflicts == []
     assert planned.sync_stops == [(22_000, 0b011)]
     played = played_actions(planned)
@@ -194,8 +200,13 @@ def test_a_script_soft_stop_with_axes_is_one_sync_write() -> None:
         {"at": 0, "op": "soft_stop", "axes": 1},
         {"at": 0, "op": "soft_stop", "axes": [0], "axis": 0},
         {"at": 0, "op": "hard_stop", "axes": [0]},
+        {"at": 0, "op": "sync_soft_stop", "axes": [0], "steps": [3]},
+        {"at": 0, "op": "move", "axes": [0, 1], "steps": [3], "accel": 1.0, "decel": 1.0, "speed": 1.0},
+        {"at": 0, "op": "move", "axes": [0, 1], "steps": [3, 2], "accel": 1.0, "decel": 1.0},
+        {"at": 0, "op": "move", "axes": [0, 1], "steps": [3, 2.0], "accel": 1.0, "decel": 1.0, "speed": 1.0},
+        {"at": 0, "op": "move", "axes": [0, 1], "steps": [3, 2], "accel": -1.0, "decel": 1.0, "speed": 1.0},
     ):
-        with pytest.raises(ValueError, match="axes"):
+        with pytest.raises(ValueError, match=r"axes|accel"):
             plan_multi_script({**base, "commands": [bad]})
 
 
@@ -258,3 +269,116 @@ def test_a_coordinated_stop_rests_on_the_line() -> None:
                 assert axis.target - axis.pulse >= axis.speed**2 / (2.0 * d) - 1e-9, f"axis {i} brakes too hard"
     assert stopped > 300, f"only {stopped} moves were stopped before their end"
     print(f"{stopped} stopped by take-overs {kinds}, worst distance to the line {worst:.3f} steps")
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# The script contract's coordinated move and coordinated stop on the line (issue 32)
+# ---------------------------------------------------------------------------------------------------------------
+
+
+def _line_script() -> dict:
+    return NAMED_MULTI_SCRIPTS["coordinated_stop_on_the_line"]
+
+
+def _moves(script: dict) -> list[dict]:
+    return [c for c in script["commands"] if c["op"] == "move" and "axes" in c]
+
+
+def _rests_after(planned: MultiResult, at: int) -> list[int]:
+    """Each axis's last pulse index of the motion started at `at`: its STEP edges after `at`, less one."""
+    return [sum(1 for e in r.edges if e > at) - 1 for r in planned.results]
+
+
+def _line_offsets_of(script: dict, rests: list[int]) -> tuple[int, list[float]]:
+    """The lead's rest and each axis's distance from the line L_i / L_lead times it, from the move's plans (not from
+    the planner's output)."""
+    move = _moves(script)[-1]
+    plans, info = plan_coordinated_info(
+        move["steps"], move["accel"], move["decel"], move["speed"], script["spr"], script["fclk"], script["prescale"]
+    )
+    lengths = [p.steps - 1 for p in plans]
+    lead = info.lead
+    return rests[lead], [rests[i] - lengths[i] / lengths[lead] * rests[lead] for i in range(len(plans))]
+
+
+def test_a_script_coordinated_stop_rests_on_the_line() -> None:
+    """The named `coordinated_stop_on_the_line`: its `soft_stop` with `axes` stops the coordinated move (in its ACCEL)
+    with every axis within one step of the line, L_i / L_lead times the lead's rest (the L_i from plan_coordinated of
+    the script's values), the lead short of its target. The same script with `sync_soft_stop` (one SYNC_SOFT_STOP, the
+    op `soft_stop` with `axes` was before issue 32) leaves an axis more than one step off it."""
+    script = _line_script()
+    start = _moves(script)[-1]["at"]
+    lead_target = max(abs(n) for n in _moves(script)[-1]["steps"]) - 1
+    for op, within in (("soft_stop", True), ("sync_soft_stop", False)):
+        s = {**script, "commands": [{**c, "op": op} if c["op"] == "soft_stop" else c for c in script["commands"]]}
+        planned = plan_multi_script(s)
+        assert not planned.conflicts and not planned.unsure and not any(r.rejected for r in planned.results)
+        lead_rest, offsets = _line_offsets_of(s, _rests_after(planned, start))
+        assert 0 < lead_rest < lead_target, f"{op}: the lead rests at {lead_rest} (target {lead_target})"
+        worst = max(abs(o) for o in offsets)
+        print(f"{op}: lead rests at {lead_rest}, offsets from the line {[round(o, 3) for o in offsets]}")
+        if within:
+            assert worst <= 1.0, f"{op}: an axis rests {worst:.3f} steps off the line"
+        else:
+            assert worst > 1.0, f"{op}: every axis within one step of the line (worst {worst:.3f}): update the docs"
+
+
+def test_a_script_coordinated_stop_is_one_change_per_axis() -> None:
+    """The coordinated stop on the line is plan_coordinated_stop's CHANGE on each moving axis, committed at `at`, then
+    PREP_CLOCKS apart in axis order (no SYNC_SOFT_STOP); each axis's edges are change_edges of its plan and CHANGE from
+    the common start."""
+    script = _line_script()
+    planned = plan_multi_script(script)
+    (line,) = planned.line_stops
+    assert line.fallback is None and line.stop is not None
+    stop_at = line.at
+    assert line.commits == {0: stop_at, 1: stop_at + PREP_CLOCKS, 2: stop_at + 2 * PREP_CLOCKS}
+    played = [a for a in played_actions(planned) if a["at"] >= stop_at]
+    assert [(a["at"], a["axis"], a["ctrl"]) for a in played] == [(w, axis, CHANGE) for axis, w in line.commits.items()]
+    assert planned.sync_stops == []
+    move = _moves(script)[-1]
+    plans, _ = plan_coordinated_info(move["steps"], move["accel"], move["decel"], move["speed"], 200.0, 1e6, 1)
+    first = [min(e for e in r.edges if e > move["at"]) for r in planned.results]
+    assert len(set(first)) == 1, f"pulse 0 of the axes on {first}"
+    for i, (plan, axis) in enumerate(zip(plans, line.stop.axes, strict=True)):
+        assert axis.change is not None
+        want = change_edges(Segment.of_move(plan), axis.pulse, axis.change.segment, 1)
+        got = [e for e in planned.results[i].edges if e > move["at"]]
+        assert got == [first[i] - want[0] + e for e in want], f"axis {i}"
+
+
+def test_a_script_coordinated_move_is_one_sync_start() -> None:
+    """`{"op": "move", "axes", "steps": [...]}`: plan_coordinated's plans, every axis's writes, then one SYNC_START of
+    the axes with steps at `at`; pulse 0 of every axis on the latest of their start gates (sync_gate_timing: here the
+    axes that change DIR), and the last pulses within max(2 ticks, 0.01 c0 of the slowest axis) (on one edge)."""
+    script = _line_script()
+    planned = plan_multi_script({**script, "commands": script["commands"][:1]})
+    move = _moves(script)[0]
+    plans, info = plan_coordinated_info(move["steps"], move["accel"], move["decel"], move["speed"], 200.0, 1e6, 1)
+    (start,) = [a for a in played_actions(planned) if a["commit"] == REG_SYNC_START]
+    assert (start["at"], start["ctrl"], start["prep"]) == (move["at"], 0b111, 3 * PREP_CLOCKS)
+    assert len([a for a in played_actions(planned)]) == 1
+    # the CTRL write's request at + 1, each gate with the driver's default outputs (DIR setup and hold 0, from reset)
+    gates = [sm.gate_timing(move["at"] + 1, p.direction != 0, None, 0, 0) for p in plans]
+    common = sm.sync_gate_timing(gates)[0]
+    assert common.start_edge > min(g.start_edge for g in gates), "no axis waits: the test shows nothing"
+    for i, (plan, r) in enumerate(zip(plans, planned.results, strict=True)):
+        ticks = edges(plan)  # (pulse k at edge 0 + prescale T_k of the engine)
+        assert r.edges == [common.first_step_edge + e - ticks[0] for e in ticks], f"axis {i}"
+    ends = [r.edges[-1] for r in planned.results]
+    bound = max(2.0, 0.01 * max(m.c0 for m in info.infos))
+    assert max(ends) - min(ends) <= bound, f"ends {ends}"
+
+
+def test_a_coordinated_move_an_axis_refuses_is_refused_on_every_axis() -> None:
+    """An axis that is moving refuses the coordinated move, so every axis does (nothing is written): one axis started
+    alone would leave the line."""
+    script = _line_script()
+    busy = {"at": 0, "op": "move", "axis": 2, "steps": 400, "speed": 300.0, "accel": 18_000.0, "decel": 18_000.0}
+    planned = plan_multi_script({**script, "commands": [busy, script["commands"][0]]})
+    for r in planned.results:
+        assert [x["op"] for x in r.rejected] == ["move"] and "axis 2: moving" in r.rejected[0]["reason"]
+    assert planned.sync_starts == [] and len(planned.results[0].edges) == 0
+    early = {**script["commands"][0], "at": 100}
+    planned = plan_multi_script({**script, "commands": [early]})
+    assert all("at must be at least 600" in r.rejected[0]["reason"] for r in planned.results)

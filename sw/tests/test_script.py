@@ -29,15 +29,20 @@ from typing import Any, cast
 
 import pytest
 
-from stepramp.board.change import Change, Segment, plan_change, speed_at_pulse, speed_at_segment_pulse
+from stepramp.board.change import (
+    Change,
+    Segment,
+    change_pulse,
+    plan_change,
+    speed_at_pulse,
+    speed_at_segment_pulse,
+)
 from stepramp.board.driver import plan_writes, segment_writes
 from stepramp.board.plan import plan_move, plan_move_info
 from stepramp.board.regmap import ERROR_CODES, offset
 from stepramp.board.script import (
     CHANGE,
     HARD_STOP,
-    NAMED_SCALE,
-    NAMED_SCRIPTS,
     PREP_CLOCKS,
     QUEUE,
     SOFT_STOP,
@@ -46,19 +51,18 @@ from stepramp.board.script import (
     ScriptResult,
     load_script,
     plan_script,
-    random_script,
 )
 from stepramp.models import ideal
 from stepramp.models.engine import (
     accumulate,
     change_edges,
-    change_pulse,
     edges_with_stop,
     segment_edges,
     segment_stop_values,
     segment_values,
 )
 from stepramp.models.engine import edges as model_edges
+from stepramp.sim.scripts import NAMED_SCALE, NAMED_SCRIPTS, random_script
 from stepramp.tools.cli import main
 
 SEED = int(os.environ.get("STEPRAMP_SEED", "20261201"))

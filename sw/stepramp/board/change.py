@@ -8,99 +8,25 @@ seeds, in doubles, each rounded once, as plan.py does for a move from rest).
 
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass
 
 from stepramp.board.plan import (
-    FRAC_RAMP,
-    MAX_STEPS,
-    RAMP_AVR446,
-    RAMP_EXACT,
-    REG_WIDTHS,
     SEED_FACTOR,
     MoveInfo,
-    Plan,
     _check_int,
     _cruise,
     _stop_ratio,
     _to_fixed,
     check_motion_args,
-    check_ramp,
-    check_widths,
     decel_product,
     min_interval_clks,
     plan_move,
     steps_units,
 )
 from stepramp.models.exact import ramp_constant
-
-UP = "up"
-DOWN = "down"
-
-#: The fields a segment shares with a move's Plan (all but steps and direction), and its own register widths.
-_SHARED = tuple(name for name in REG_WIDTHS if name not in ("steps", "direction"))
-_SEGMENT_WIDTHS = {**{name: REG_WIDTHS[name] for name in _SHARED}, "head_index": 31, "run_stop": 31}
-
-
-@dataclass(frozen=True)
-class Segment:
-    """The engine's inputs for a continuation: a plan over the segment's own intervals 1 .. length, with a head ramp
-    that may start at speed (up: accel recurrence from index head_index; down: decel recurrence towards a virtual
-    rest at the end of interval head_index). length None: endless (jog); run_stop is then the length of a soft
-    stop decided in its cruise (a positioning segment takes L - sd + 1, as a move does)."""
-
-    length: int | None
-    head: str
-    head_index: int
-    prescale: int
-    sa: int
-    sd: int
-    c_first: int
-    c_sa: int
-    c_sd: int
-    c_last: int
-    accel_seed: int
-    decel_seed: int
-    cruise: int
-    stop_ratio: int
-    run_stop: int = 0
-    ramp: int = RAMP_AVR446
-    """Not a register: the ramp arithmetic (plan.RAMP_AVR446 or RAMP_EXACT), as Plan.ramp."""
-
-    def __post_init__(self) -> None:
-        check_ramp(self.ramp)
-        if self.length is not None and not 0 <= self.length <= MAX_STEPS:
-            raise ValueError(f"Segment.length = {self.length!r} is not in 0 .. 2^31 - 1 (or None: endless)")
-        if self.head not in (UP, DOWN):
-            raise ValueError(f"Segment.head = {self.head!r} is neither {UP!r} nor {DOWN!r}")
-        check_widths(self, _SEGMENT_WIDTHS)
-
-    @property
-    def head_prod(self) -> int:
-        """HEAD_PROD: n0 * stop_ratio for an up head (Q31.16; 2^47 or more reads as bit 47 alone), 0 for a down one."""
-        if self.head == DOWN:
-            return 0
-        return min(self.head_index * self.stop_ratio, 1 << 47)
-
-    def registers(self, direction: int) -> tuple[Plan, dict[str, int]]:
-        """The registers: a Plan (STEPS = length + 1, or 1 for an endless segment: only its sign counts) and the
-        SEGMENT .. HEAD_PROD fields, as the engine's port names."""
-        steps = self.length + 1 if self.length is not None else 1
-        plan = Plan(steps=steps, direction=direction, ramp=self.ramp, **{name: getattr(self, name) for name in _SHARED})
-        segment = {
-            "head_down": int(self.head == DOWN),
-            "endless": int(self.length is None),
-            "head_index": self.head_index,
-            "run_stop": self.run_stop,
-            "head_prod": self.head_prod,
-        }
-        return plan, segment
-
-    @classmethod
-    def of_move(cls, plan: Plan) -> Segment:
-        """A move from rest as a segment (head up from index 0): its intervals 1 .. N - 1, the same values."""
-        shared = {name: getattr(plan, name) for name in _SHARED}
-        return cls(length=max(plan.steps - 1, 0), head=UP, head_index=0, ramp=plan.ramp, **shared)
+from stepramp.spec import DOWN, FRAC_RAMP, MAX_STEPS, RAMP_AVR446, RAMP_EXACT, REG_WIDTHS, UP, Plan, Segment, check_ramp
 
 
 @dataclass(frozen=True)
@@ -116,6 +42,17 @@ class Change:
     #: (x_start, x_end, s0, slope) in which the squared speed (steps/s)^2 is s0 + slope * x, x in steps from pulse P
     #: (speed_at_segment_pulse). The stop before a move back is one piece; empty for a segment of length 0.
     pieces: tuple[tuple[float, float, float, float], ...] = ()
+
+
+def change_pulse(edges_so_far: list[int], commit_edge: int, lead_pulses: int = 2, lead_clocks: int = 400) -> int:
+    """The pulse the driver names for a change committed at clock edge commit_edge (the issue's rule): the first
+    pulse at least lead_pulses after the pulses emitted by then and at least lead_clocks after the commit. The
+    running motion's edges must reach that far (edges_so_far)."""
+    emitted = bisect.bisect_right(edges_so_far, commit_edge)
+    k = max(emitted + lead_pulses - 1, bisect.bisect_left(edges_so_far, commit_edge + lead_clocks))
+    if k >= len(edges_so_far):
+        raise ValueError("the running motion ends before the change could take over")
+    return k
 
 
 def speed_at_pulse(info: MoveInfo, p: int) -> float:

@@ -371,7 +371,7 @@ class StepRamp:
         """Take `segment` over at pulse `pulse` of the running motion (docs/algorithm.md, "The take-over"): stage its
         registers, CHANGE_AT, then CTRL.CHANGE (byte 0). The core refuses it (STATUS.ERROR, code CHANGE) when pulse
         - 1 has been emitted, the core is idle or something is pending; the driver picks the pulse with
-        stepramp.models.engine.change_pulse and the segment with stepramp.board.change.plan_change."""
+        stepramp.board.change.change_pulse and the segment with stepramp.board.change.plan_change."""
         if isinstance(pulse, bool) or not isinstance(pulse, int) or not 1 <= pulse < 1 << 31:
             raise ValueError(f"the take-over pulse must be in 1 .. 2^31 - 1, got {pulse!r}")
         plan, regs = segment.registers(direction)

@@ -4,21 +4,29 @@
 Everything is computed in double precision and each register value is rounded once. The exact
 intervals are computed piecewise (accel / cruise / decel part of each one-step interval) with
 cancellation-free square-root differences, so they stay accurate for moves of up to 2^31 - 1 steps.
+Plan itself, the register widths and the ramp kinds are in stepramp.spec (imported here too).
 """
 
 from __future__ import annotations
 
 import math
 import operator
-from dataclasses import asdict, dataclass, fields
-from typing import Any
+from dataclasses import dataclass
 
 from stepramp.models.exact import ramp_constant
+from stepramp.spec import (
+    FRAC_CRUISE,
+    FRAC_RAMP,
+    MAX_PRESCALE,
+    MAX_STEPS,
+    RAMP_AVR446,
+    RAMP_EXACT,
+    REG_WIDTHS,
+    Plan,
+    check_ramp,
+)
+from stepramp.spec import check_widths as check_widths
 
-FRAC_RAMP = 16
-"""Fraction bits of the ramp values (Q32.16)."""
-FRAC_CRUISE = 32
-"""Fraction bits of the cruise period (Q32.32)."""
 MIN_INTERVAL_CLKS = 64
 """Shortest interval, in clocks, that leaves the engine time to compute the next value."""
 MIN_INTERVAL_CLKS_EXACT = 256
@@ -26,83 +34,12 @@ MIN_INTERVAL_CLKS_EXACT = 256
 a ramp value there takes one or two square roots (docs/stepramp_engine.md, "Latency budget in exact mode")."""
 MIN_INTERVAL_CLKS_EXACT_WIDE = 304
 """The same for a move with a ramp constant of 2^48 or more (wider square roots)."""
-RAMP_AVR446 = 0
-"""Plan.ramp: the AVR446 recurrence (the core's G_RAMP = 0, the default)."""
-RAMP_EXACT = 1
-"""Plan.ramp: the exact ramp, differences of rounded square roots (G_RAMP = 1; docs/algorithm.md, "Exact step
-times")."""
 RAMPS = {"avr446": RAMP_AVR446, "exact": RAMP_EXACT}
 """The ramp modes by name (the CLI's --ramp)."""
 SEED_FACTOR = math.gamma(0.75) / (2.0 * math.gamma(1.25))
 """Gamma(3/4) / (2 Gamma(5/4)) = 0.67597824...: recurrence value at index 0, in units of c0."""
-MAX_STEPS = 2**31 - 1
-MAX_PRESCALE = 2**16 - 1
-
-REG_WIDTHS: dict[str, int] = {
-    "steps": 31,
-    "direction": 1,
-    "prescale": 16,
-    "c_first": 48,
-    "c_last": 48,
-    "sa": 31,
-    "c_sa": 48,
-    "sd": 31,
-    "c_sd": 48,
-    "accel_seed": 64,
-    "decel_seed": 64,
-    "cruise": 64,
-    "stop_ratio": 32,
-}
-"""Width in bits of each register (field of Plan)."""
-
 _LGAMMA_RATIO_0 = math.lgamma(1.25) - math.lgamma(0.75)
 _PRODUCT_LOOP_MAX = 256
-
-
-def check_widths(obj: Any, widths: dict[str, int]) -> None:
-    """ValueError unless each field of a dataclass named in widths is an int that fits its unsigned register."""
-    for f in fields(obj):
-        if f.name in widths:
-            value, width = getattr(obj, f.name), widths[f.name]
-            if not isinstance(value, int) or isinstance(value, bool) or not 0 <= value < 1 << width:
-                name = f"{type(obj).__name__}.{f.name}"
-                raise ValueError(f"{name} = {value!r} does not fit an unsigned {width}-bit register")
-
-
-@dataclass(frozen=True)
-class Plan:
-    """The engine's inputs for one move (field by field the table of docs/algorithm.md)."""
-
-    steps: int
-    direction: int
-    prescale: int
-    c_first: int
-    c_last: int
-    sa: int
-    c_sa: int
-    sd: int
-    c_sd: int
-    accel_seed: int
-    decel_seed: int
-    cruise: int
-    stop_ratio: int
-    ramp: int = RAMP_AVR446
-    """Not a register: the ramp arithmetic the plan is for (RAMP_AVR446 or RAMP_EXACT, the core's G_RAMP)."""
-
-    def __post_init__(self) -> None:
-        check_widths(self, REG_WIDTHS)
-        check_ramp(self.ramp)
-
-    def to_dict(self) -> dict[str, int]:
-        """The registers as a plain dict (field name -> unsigned integer)."""
-        return {name: value for name, value in asdict(self).items() if name in REG_WIDTHS}
-
-
-def check_ramp(ramp: int) -> int:
-    """ValueError unless ramp is RAMP_AVR446 or RAMP_EXACT."""
-    if isinstance(ramp, bool) or ramp not in (RAMP_AVR446, RAMP_EXACT):
-        raise ValueError(f"ramp must be {RAMP_AVR446} (avr446) or {RAMP_EXACT} (exact), got {ramp!r}")
-    return ramp
 
 
 def exact_narrow(c0_ticks: float) -> bool:

@@ -134,8 +134,13 @@ def next_delay(seed: bool, decel: bool, index: int, value: int, remainder: int) 
     """
     if seed:
         return NextDelayAnswer(value, 0, False, 0)
-    numerator = 2 * value + remainder
-    denominator = 4 * index + (3 if decel else 1)
-    q, r = divmod(numerator, denominator)
-    result = value + q if decel else value - q
-    return NextDelayAnswer(result, r, not 0 <= result < RAMP_VALUE_LIMIT, 2 + recurrence_iterations(numerator))
+    result, r = recurrence_step(decel, index, value, remainder)
+    latency = 2 + recurrence_iterations(2 * value + remainder)
+    return NextDelayAnswer(result, r, not 0 <= result < RAMP_VALUE_LIMIT, latency)
+
+
+def recurrence_step(decel: bool, index: int, value: int, remainder: int) -> tuple[int, int]:
+    """The value and remainder of one recurrence step (next_delay's answer without its timing): A_n from A_(n-1)
+    (accel, n = index, den 4n + 1) or D_m from D_(m+1) (decel, m = index, den 4m + 3), the remainder carried."""
+    q, r = divmod(2 * value + remainder, 4 * index + (3 if decel else 1))
+    return (value + q if decel else value - q), r

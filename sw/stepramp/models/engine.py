@@ -13,14 +13,12 @@ import itertools
 from collections.abc import Iterable, Iterator
 from typing import TYPE_CHECKING
 
-from stepramp.board.plan import FRAC_CRUISE, FRAC_RAMP, RAMP_EXACT, Plan
-from stepramp.models import exact
+from stepramp.models.ramp import kind_of
+from stepramp.spec import DOWN, FRAC_CRUISE, FRAC_RAMP, RAMP_EXACT, Plan, Segment
 
 if TYPE_CHECKING:  # numpy is imported where the lazy functions need it (the list functions do not)
     import numpy as np
     from numpy.typing import NDArray
-
-    from stepramp.board.change import Segment
 
 FIRST_PULSE_LATENCY = 2
 """Clock edges from the edge sampling start = '1' to the edge after which pulse 0 is high."""
@@ -54,29 +52,27 @@ def value_runs(plan: Plan) -> Iterator[tuple[int, int]]:
     is a run of one, from the recurrences as the spec runs them. Time and memory are those of the ramps. (A move
     from rest is the segment with an up head at index 0: segment_runs.)
     """
-    from stepramp.board.change import Segment  # the board layer's Segment; nothing there imports the models
-
     return segment_runs(Segment.of_move(plan))
 
 
 def segment_runs(seg: Segment) -> Iterator[tuple[int, int]]:
     """A segment's interval values run-length coded, by the rules of docs/algorithm.md ("Which value each interval
     gets", and "Changes while moving" for the head and endless segments): c_first, c_last, c_sa, c_sd, the head (up:
-    A_(n0+i-1) from A_(n0) = accel_seed; down: D_(K-i) from D_(K-2) = accel_seed), the final decel D_(L-i), cruise.
-    An endless segment's cruise is one endless run of runs of 2^31 - 1. In exact mode the ramps are the differences
-    of rounded square roots instead (exact_segment_runs)."""
-    if seg.ramp == RAMP_EXACT:
-        yield from exact_segment_runs(seg)
-        return
+    the accel ramp from index n0 = head_index, interval i gets A_(n0+i-1); down: the decel ramp towards a virtual
+    rest at the end of interval K = head_index, interval i gets D_(K-i)), the final decel D_(L-i), cruise. The ramp
+    values come from the segment's ramp kind (stepramp.models.ramp: the AVR446 recurrences, or the exact ramp's
+    rounded square roots). An endless segment's cruise is one endless run of runs of 2^31 - 1."""
+    kind = kind_of(seg.ramp)
     endless = seg.length is None
     length = -1 if seg.length is None else seg.length  # -1: no interval is the last, none is past sd
     sa, sd = seg.sa, (-1 if endless else seg.sd)
-    head_down = seg.head == "down"
-    head_n, head_val, head_r = seg.head_index, seg.accel_seed, 0  # up: A_n; down: D_(K-head_i)
-    head_i = 2
-    # the final decel recurrence: dec_val = D_m (dec_m is None until the first decel value is emitted)
-    dec_m: int | None = None
-    dec_val, dec_r = seg.decel_seed, 0
+    if seg.head == DOWN:
+        head = kind.decel(kind.head_seed(seg), seg.head_index - 2)  # interval 2 gets D_(K-2)
+    else:
+        head = kind.accel(seg.accel_seed, seg.head_index)  # interval 2 gets A_(n0+1)
+    final: Iterator[int] | None = None  # the final decel from D_(m0), m0 = L - sd - 1, at interval sd + 1
+    head_taken = final_taken = 0  # values read from each ramp: interval i is the (i - 1)-th of the head's
+    value = 0
     i = 1
     while endless or i <= length:
         if i == 1:
@@ -87,26 +83,16 @@ def segment_runs(seg: Segment) -> Iterator[tuple[int, int]]:
             value = seg.c_sa
         elif i == sd:
             value = seg.c_sd
-        elif i < sa and not head_down:
-            while head_n < seg.head_index + i - 1:  # A_n from A_(n-1), den 4 n + 1 at the absolute index
-                head_n += 1
-                q, head_r = divmod(2 * head_val + head_r, 4 * head_n + 1)
-                head_val -= q
-            value = head_val
         elif i < sa:
-            while head_i < i:  # D_(m-1) from D_m, m = K - head_i
-                q, head_r = divmod(2 * head_val + head_r, 4 * (seg.head_index - head_i) - 1)
-                head_val += q
-                head_i += 1
-            value = head_val
+            while head_taken < i - 1:
+                value = next(head)
+                head_taken += 1
         elif not endless and i > sd:
-            if dec_m is None:  # first decel value: D_{m0} = decel_seed, r = 0
-                dec_m = length - sd - 1
-            while dec_m > length - i:  # D_{m-1} from D_m
-                q, dec_r = divmod(2 * dec_val + dec_r, 4 * dec_m - 1)
-                dec_val += q
-                dec_m -= 1
-            value = dec_val
+            if final is None:
+                final = kind.decel(seg.decel_seed, length - sd - 1)
+            while final_taken < i - sd:  # interval i gets D_(L-i), the (i - sd)-th of the final decel
+                value = next(final)
+                final_taken += 1
         else:  # rule 7 holds for i .. min(sd, L) - 1 (i > sa, i > 1, and no rule before it matches up to there)
             count = (1 << 31) - 1 if endless else min(sd, length) - i
             yield seg.cruise, count
@@ -114,53 +100,6 @@ def segment_runs(seg: Segment) -> Iterator[tuple[int, int]]:
             continue
         yield value << _SHIFT, 1
         i += 1
-
-
-def exact_segment_runs(seg: Segment) -> Iterator[tuple[int, int]]:
-    """segment_runs in exact mode (docs/algorithm.md, "Exact step times"): the same registers at the same intervals;
-    the up head's interval i is the ramp value of C_acc = accel_seed from virtual position n0 + i - 1 to n0 + i; every
-    decelerating ramp uses C_dec = decel_seed: the down head's interval i from K - i to K - i + 1 steps before its
-    rest, the final decel's from L - i to L - i + 1 steps before the end; the cruise as in the AVR446 mode."""
-    endless = seg.length is None
-    length = -1 if seg.length is None else seg.length
-    sa, sd = seg.sa, (-1 if endless else seg.sd)
-    head_down = seg.head == "down"
-    i = 1
-    while endless or i <= length:
-        if i == 1:
-            value = seg.c_first
-        elif i == length:
-            value = seg.c_last
-        elif i == sa:
-            value = seg.c_sa
-        elif i == sd:
-            value = seg.c_sd
-        elif i < sa and head_down:
-            value = exact.value(seg.decel_seed, seg.head_index - i)
-        elif i < sa:
-            value = exact.value(seg.accel_seed, seg.head_index + i - 1)
-        elif not endless and i > sd:
-            value = exact.value(seg.decel_seed, length - i)
-        else:
-            count = (1 << 31) - 1 if endless else min(sd, length) - i
-            yield seg.cruise, count
-            i += count
-            continue
-        yield value << _SHIFT, 1
-        i += 1
-
-
-def exact_stop_values(run: bool, m: int, c_sd: int, c_last: int, decel_seed: int) -> list[int]:
-    """Q32.32 values of the intervals p + 1 .. p + m of an exact-mode soft stop of m >= 1 steps decided at pulse p.
-
-    In the cruise (run) the motion's own decel from sd - 1 moves to pulse p: c_sd, then the ramp values of C_dec =
-    decel_seed from m - j to m - j + 1 steps before the rest, then c_last (c_sd alone when m = 1). Elsewhere (an
-    ACCEL phase or an up head) the decel ramp to rest m steps ahead: the ramp values for j = 1 .. m - 1, then c_last."""
-    out: list[int] = []
-    for j in range(1, m):
-        out.append((c_sd if run and j == 1 else exact.value(decel_seed, m - j)) << _SHIFT)
-    out.append((c_sd if run and m == 1 else c_last) << _SHIFT)
-    return out
 
 
 def accumulate(values: Iterable[int], acc: int = 0) -> list[int]:
@@ -257,31 +196,7 @@ def _first_pulse_from(plan: Plan, edge: int) -> int:
 
 def _soft_stop_runs(plan: Plan, p: int, m: int) -> Iterator[tuple[int, int]]:
     """soft_stop_values(plan, p) run-length coded, for the p and m of a soft stop that is not ignored."""
-    if m == 0:
-        yield from _take_runs(value_runs(plan), p)
-        return
-    if plan.ramp == RAMP_EXACT:
-        yield from _take_runs(value_runs(plan), p)
-        run = phase_of(plan, p) == RUN
-        for value in exact_stop_values(run, m, plan.c_sd, plan.c_last, plan.decel_seed):
-            yield value, 1
-        return
-    left, d_val = p, 0
-    for value, count in value_runs(plan):  # intervals 1 .. p, and D = the Q32.16 value of interval p + 1
-        if count <= left:
-            yield value, count
-            left -= count
-            continue
-        if left:
-            yield value, left
-        d_val = value >> _SHIFT
-        break
-    rem = 0
-    for j in range(m, 1, -1):  # D_{j-1} from D_j
-        q, rem = divmod(2 * d_val + rem, 4 * j - 1)
-        d_val += q
-        yield d_val << _SHIFT, 1
-    yield plan.c_last << _SHIFT, 1
+    return segment_stop_runs(Segment.of_move(plan), p, m)
 
 
 def move_runs(plan: Plan, stop: StopRequest | None = None) -> tuple[int, Iterator[tuple[int, int]]]:
@@ -420,19 +335,13 @@ def phase_of(plan: Plan, i: int) -> str:
 def soft_stop_length(plan: Plan, p: int) -> int | None:
     """m, the number of intervals after pulse p of a soft stop decided at pulse p; None when it is ignored.
 
-    0 means the move ends with pulse p. The new last pulse is p + m.
+    0 means the move ends with pulse p. The new last pulse is p + m. The move's segment's (segment_stop_length): at
+    or after the last pulse, or in DECEL (p >= sd), ignored; p = 0: 0; ACCEL: floor(p * stop_ratio / 2^16); RUN: the
+    plan's own decel ramp from cruise, L - sd + 1 (intervals sd .. L); ignored when p + m reaches L.
     """
-    length = plan.steps - 1
-    if p >= length:  # pulse p is the last one (or there is none): nothing to shorten
+    if p >= plan.steps - 1:  # pulse p is the last one (or there is none: the segment of N = 0 has L = 0, not -1)
         return None
-    phase = phase_of(plan, p)
-    if phase == DECEL:
-        return None
-    # ACCEL: v^2 / (2 d) = p * accel / decel; RUN: the plan's own decel ramp from cruise (intervals sd .. L)
-    m = p * plan.stop_ratio >> STOP_RATIO_FRAC if phase == ACCEL else length - plan.sd + 1
-    if p + m >= length:  # the plan's own deceleration ends no later
-        return None
-    return m
+    return segment_stop_length(Segment.of_move(plan), p)
 
 
 def soft_stop_values(plan: Plan, p: int) -> list[int] | None:
@@ -441,29 +350,12 @@ def soft_stop_values(plan: Plan, p: int) -> list[int] | None:
     Intervals 1 .. p are the plan's. D is the Q32.16 value of interval p + 1 in the plan (which exists: p + m < L
     with m >= 1): A_p (ACCEL, p + 1 < sa), c_sa (ACCEL, p + 1 = sa), cruise >> 16 (RUN; p + 1 < sd there). The
     reverse decel recurrence runs from D_m := D, remainder 0; interval p + j gets D_{m-j} (j = 1 .. m-1) and
-    interval p + m gets c_last.
+    interval p + m gets c_last. In exact mode the ramp values of decel_seed instead (segment_stop_runs).
     """
     m = soft_stop_length(plan, p)
     if m is None:
         return None
-    if plan.ramp == RAMP_EXACT:
-        values = list(itertools.islice(interval_values(plan), p))
-        if m:
-            run = phase_of(plan, p) == RUN
-            values += exact_stop_values(run, m, plan.c_sd, plan.c_last, plan.decel_seed)
-        return values
-    values = list(itertools.islice(interval_values(plan), p + 1))
-    # D: Q32.16 (c_sa and A_p are Q32.16, so the shift is exact; cruise is truncated)
-    d_val = values.pop() >> _SHIFT
-    if m == 0:
-        return values
-    rem = 0
-    for j in range(m, 1, -1):  # D_{j-1} from D_j
-        q, rem = divmod(2 * d_val + rem, 4 * j - 1)
-        d_val += q
-        values.append(d_val << _SHIFT)
-    values.append(plan.c_last << _SHIFT)
-    return values
+    return _expand(segment_stop_runs(Segment.of_move(plan), p, m))
 
 
 def _edges_of_values(plan: Plan, values: Iterable[int]) -> list[int]:
@@ -549,8 +441,11 @@ def segment_stop_length(seg: Segment, p: int) -> int | None:
     """m of a soft stop decided at the segment's pulse p (the intervals after it), None when it is ignored: at or
     after the last pulse, in the final decel, or when p + m reaches the segment's own end. In an up head
     m = floor((n0 + p) stop_ratio / 2^16) (the ACCEL rule at the virtual index); in a down head m = K - p (the head
-    goes on to its virtual rest); in the cruise L - sd + 1, or run_stop for an endless segment."""
+    goes on to its virtual rest); in the cruise L - sd + 1, or run_stop for an endless segment. ValueError for
+    p < 0 (not a pulse)."""
     length = seg.length
+    if p < 0:
+        raise ValueError(f"a soft stop is decided at a pulse p >= 0, not {p}")
     if length is not None and (p >= length or p >= seg.sd):
         return None
     if p == 0:  # a request before pulse 0 (a segment run from START): the move ends with pulse 0, as a move does
@@ -564,30 +459,47 @@ def segment_stop_length(seg: Segment, p: int) -> int | None:
     return m
 
 
-def segment_stop_values(seg: Segment, p: int) -> list[int] | None:
-    """Q32.32 values of the segment's intervals 1 .. p + m with a soft stop decided at its pulse p (None: ignored).
+def segment_stop_runs(seg: Segment, p: int, m: int) -> Iterator[tuple[int, int]]:
+    """The values of the segment's intervals 1 .. p + max(m, 1) (1 .. p when m = 0) with a soft stop of m steps
+    decided at its pulse p (m from segment_stop_length, not None), run-length coded: docs/algorithm.md, "Soft stop".
 
-    Down head: the head's recurrence goes on, interval K (= p + m) gets c_last. Otherwise as soft_stop_values: D
-    is the Q32.16 value of interval p + 1, and interval p + j gets D_(m-j) from D_m := D, remainder 0."""
+    Down head (p < sa): the head's decel ramp goes on to its virtual rest, interval K (= p + m) gets c_last.
+    Otherwise intervals 1 .. p are the segment's, then its ramp kind's stop (stepramp.models.ramp, RampKind.stop)
+    from D, the Q32.16 value of interval p + 1: AVR446: interval p + j gets D_(m-j) from D_m := D, remainder 0; exact:
+    the ramp values of decel_seed (c_sd first in the cruise); c_last last."""
+    if m == 0:
+        yield from _take_runs(segment_runs(seg), p)
+        return
+    if seg.head == DOWN and p < seg.sa:
+        end = p + m
+        yield from segment_runs(dataclasses.replace(seg, length=end, sa=end, sd=end))
+        return
+    left, following = p, 0
+    for value, count in segment_runs(seg):  # intervals 1 .. p, and D = the Q32.16 value of interval p + 1
+        if count <= left:
+            yield value, count
+            left -= count
+            continue
+        if left:
+            yield value, left
+        following = value >> _SHIFT
+        break
+    for value in kind_of(seg.ramp).stop(seg, following, p >= seg.sa, m):
+        yield value << _SHIFT, 1
+
+
+def segment_stop_values(seg: Segment, p: int) -> list[int] | None:
+    """Q32.32 values of the segment's intervals 1 .. p + m with a soft stop decided at its pulse p (None: ignored):
+    segment_stop_runs, expanded."""
     m = segment_stop_length(seg, p)
     if m is None:
         return None
-    if m == 0:
-        return segment_values(seg, p)
-    if seg.head == "down" and p < seg.sa:
-        end = p + m
-        return segment_values(dataclasses.replace(seg, length=end, sa=end, sd=end), end)
-    if seg.ramp == RAMP_EXACT:
-        return segment_values(seg, p) + exact_stop_values(p >= seg.sa, m, seg.c_sd, seg.c_last, seg.decel_seed)
-    values = segment_values(seg, p + 1)
-    d_val = values.pop() >> _SHIFT
-    rem = 0
-    for j in range(m, 1, -1):  # D_(j-1) from D_j
-        q, rem = divmod(2 * d_val + rem, 4 * j - 1)
-        d_val += q
-        values.append(d_val << _SHIFT)
-    values.append(seg.c_last << _SHIFT)
-    return values
+    return _expand(segment_stop_runs(seg, p, m))
+
+
+def _expand(runs: Iterable[tuple[int, int]]) -> list[int]:
+    """A run-length coded value sequence as a list."""
+    return [value for value, n in runs for _ in range(n)]
 
 
 def segment_edges(
@@ -637,14 +549,3 @@ def change_edges(running: Segment, p: int, seg: Segment, prescale: int) -> list[
 
 MAX_CHANGE_PULSE = (1 << 31) - 1
 """The largest pulse number a take-over can name (STEP_COUNT is 31 bits)."""
-
-
-def change_pulse(edges_so_far: list[int], commit_edge: int, lead_pulses: int = 2, lead_clocks: int = 400) -> int:
-    """The pulse the driver names for a change committed at clock edge commit_edge (the issue's rule): the first
-    pulse at least lead_pulses after the pulses emitted by then and at least lead_clocks after the commit. The
-    running motion's edges must reach that far (edges_so_far)."""
-    emitted = bisect.bisect_right(edges_so_far, commit_edge)
-    k = max(emitted + lead_pulses - 1, bisect.bisect_left(edges_so_far, commit_edge + lead_clocks))
-    if k >= len(edges_so_far):
-        raise ValueError("the running motion ends before the change could take over")
-    return k

@@ -58,7 +58,7 @@ from stepramp.sim.waves import LAYOUTS, missing_in, signal_paths
 
 #: Engine inputs driven from a move's register values: the Plan's fields are the engine's port names.
 INPUTS = tuple(field.name for field in dataclasses.fields(Plan) if field.name in REG_WIDTHS)
-#: The segment's inputs (stepramp.board.change.Segment.registers), from a move's "segment" (0 when it has none).
+#: The segment's inputs (stepramp.spec.Segment.registers), from a move's "segment" (0 when it has none).
 SEGMENT_INPUTS = ("head_down", "endless", "head_index", "run_stop", "head_prod")
 
 

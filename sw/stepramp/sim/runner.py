@@ -33,12 +33,12 @@ HDL_FILES: tuple[str, ...] = (
     "stepramp_regfile.vhd",
     "stepramp_inputs.vhd",
     "stepramp_core.vhd",
+    "stepramp_plb_slave.vhd",
+    "stepramp_axil_slave.vhd",
     "stepramp_plb.vhd",
     "stepramp_axil.vhd",
     "stepramp_multi_pkg.vhd",
     "stepramp_multi.vhd",
-    "stepramp_plb_slave.vhd",
-    "stepramp_axil_slave.vhd",
     "stepramp_multi_plb.vhd",
     "stepramp_multi_axil.vhd",
 )
@@ -181,7 +181,30 @@ def build_once(
             log_file=log_file,
         )
         done.write_text(f"{toplevel}\n{backend}\n" + "".join(f"{s}\n" for s in srcs))
+    _prune(lib.parent, toplevel)
     return lib
+
+
+#: Builds of one top kept in a lib_root() (the newest), and the age below which none is removed.
+KEEP_BUILDS, KEEP_BUILDS_S = 4, 3600.0
+
+
+def _prune(root: Path, toplevel: str) -> None:
+    """Remove the older builds of toplevel in root (each edit of the RTL makes a new one): all but the KEEP_BUILDS
+    newest, and none less than KEEP_BUILDS_S old (a simulation started before the edit may still be using it)."""
+    import time
+
+    builds = sorted(
+        (d for d in root.glob(f"{toplevel}-*") if d.is_dir() and (d / ".done").exists()),
+        key=lambda d: (d / ".done").stat().st_mtime,
+        reverse=True,
+    )
+    now = time.time()
+    for old in builds[KEEP_BUILDS:]:
+        with contextlib.suppress(OSError):
+            if now - (old / ".done").stat().st_mtime > KEEP_BUILDS_S:
+                shutil.rmtree(old, ignore_errors=True)
+                old.with_name(old.name + ".lock").unlink(missing_ok=True)
 
 
 def _link_executable(lib: Path, toplevel: str, test_dir: Path) -> None:

@@ -374,15 +374,15 @@ async def _play_multi(dut: Any, top: str, script: dict[str, Any]) -> dict[str, A
     commits = []
     for action in script["actions"]:
         at = origin + int(action["at"])
-        if action["writes"]:
-            await _at_edge(clk, at - int(script["prep_clocks"]), late_ok=True)
+        if action["writes"]:  # (a SYNC_START's "prep": the clocks its axes' writes take)
+            await _at_edge(clk, at - int(action.get("prep", script["prep_clocks"])), late_ok=True)
             for addr, value in action["writes"]:
                 await bus.write(int(addr), int(value))
         issue = at - latency
         assert get_sim_time("ps") < issue * CLK_PERIOD_PS, f"the writes of the commit at {action['at']} ran late"
         await _at_edge(clk, issue)
         seen = len(rec.writes)
-        # the axis's CTRL, or the global window's SYNC_SOFT_STOP (a coordinated soft stop)
+        # the axis's CTRL, or the global window's SYNC_SOFT_STOP or SYNC_START (a group of axes)
         ctrl = int(action.get("commit", 0x100 * (int(action["axis"]) + 1) + CTRL))
         await bus.write(ctrl, int(action["ctrl"]), strobe=0x1)
         await Timer(2 * CLK_PERIOD_NS, unit="ns")

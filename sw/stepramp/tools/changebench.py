@@ -1,10 +1,10 @@
 # SPDX-License-Identifier: MIT
 """`make bench`: the change latency of CTRL.CHANGE, from the driver's planner (no simulator).
 
-For random command scripts (stepramp.board.script.random_script, seed 1 unless given) every take-over the driver
+For random command scripts (stepramp.sim.scripts.random_script, seed 1 unless given) every take-over the driver
 commits: the clocks and pulses from the committing write (its edge W) to the STEP edge of pulse P, where the new
 segment takes over (its interval 1 follows pulse P), grouped by the ramp phase of interval P. The rule that picks P
-is the issue's: the first pulse at least 2 pulses and 400 clocks after W (stepramp.models.engine.change_pulse), so
+is the issue's: the first pulse at least 2 pulses and 400 clocks after W (stepramp.board.change.change_pulse), so
 the latency is max(2 pulses, 400 clocks) rounded up to the next pulse.
 
     python -m stepramp.tools.changebench [--scripts N] [--seed S]
@@ -20,7 +20,8 @@ import statistics
 from collections import defaultdict
 
 from stepramp.board.regmap import offset
-from stepramp.board.script import CHANGE, START, load_script, plan_script, random_script
+from stepramp.board.script import CHANGE, START, load_script, plan_script
+from stepramp.sim.scripts import random_script
 
 
 def _phase(intervals: list[int], p: int) -> str:

@@ -65,6 +65,10 @@ _PLB = [
     "tb/test_core.py::test_core",
     "tb/test_faults.py",
 ]
+_AXIL = [
+    "tb/test_peripheral.py::test_registers[stepramp_axil]",
+    "tb/test_peripheral.py::test_profiles[stepramp_axil-1]",
+]
 SUITES: dict[str, list[str]] = {
     "stepramp_pkg.vhd": [
         "tb/test_prio_enc.py",
@@ -86,10 +90,7 @@ SUITES: dict[str, list[str]] = {
     "stepramp_regfile.vhd": ["tb/test_regfile.py", "tb/test_readback.py", *_PLB],
     "stepramp_core.vhd": ["tb/test_core.py::test_core", *_PLB],
     "stepramp_plb.vhd": _PLB,
-    "stepramp_axil.vhd": [
-        "tb/test_peripheral.py::test_registers[stepramp_axil]",
-        "tb/test_peripheral.py::test_profiles[stepramp_axil-1]",
-    ],
+    "stepramp_axil.vhd": _AXIL,
     "stepramp_inputs.vhd": [
         "tb/test_inputs_rtl.py::test_inputs[stepramp_plb-filter_and_polarity]",
         "tb/test_inputs_rtl.py::test_inputs[stepramp_plb-position_latch]",
@@ -97,8 +98,9 @@ SUITES: dict[str, list[str]] = {
     ],
     "stepramp_multi_pkg.vhd": ["tb/test_multi_rtl.py"],
     "stepramp_multi.vhd": ["tb/test_multi_rtl.py"],
-    "stepramp_plb_slave.vhd": ["tb/test_multi_rtl.py::test_multi_rtl[stepramp_multi_plb]"],
-    "stepramp_axil_slave.vhd": ["tb/test_multi_rtl.py::test_multi_rtl[stepramp_multi_axil]"],
+    # the bus slaves serve the single-axis tops (their suites first) and the multi-axis tops
+    "stepramp_plb_slave.vhd": [*_PLB, "tb/test_multi_rtl.py::test_multi_rtl[stepramp_multi_plb]"],
+    "stepramp_axil_slave.vhd": [*_AXIL, "tb/test_multi_rtl.py::test_multi_rtl[stepramp_multi_axil]"],
     "stepramp_multi_plb.vhd": ["tb/test_multi_rtl.py::test_multi_rtl[stepramp_multi_plb]"],
     "stepramp_multi_axil.vhd": ["tb/test_multi_rtl.py::test_multi_rtl[stepramp_multi_axil]"],
 }

@@ -1,13 +1,14 @@
 # SPDX-License-Identifier: MIT
 """`make bench`: how fast the simulations run, in clocks per second during a move, per bench.
 
-One long move (stepramp.sim.profiles' trap_long_cruise, about 90,000 clocks) on the engine bench, each bus top and
-each multi-axis top (3 axes), with the regression's own benches (tb/speed_bench.py): the bus master, the driver,
-the monitors, coverage as in `make test`. Prints per bench the simulated clocks, the wall time and clocks/s, and the
-simulator's CPU time and clocks per CPU second (the figure that does not depend on what else the machine runs).
-The RTL is built once (stepramp.sim.runner.build_once) and the build is not timed.
+One long move (stepramp.sim.profiles' trap_long_cruise: about 90,000 clocks, 360,000 in exact mode) on the engine
+bench, each bus top and each multi-axis top (3 axes), and the engine bench and the PLB-like top again with the exact
+ramp (G_RAMP = 1), with the regression's own benches (tb/speed_bench.py): the bus master, the driver, the monitors
+(functional coverage only when STEPRAMP_COVERAGE_DIR names a folder). Prints per bench the simulated clocks, the
+wall time and clocks/s, and the simulator's CPU time and clocks per CPU second (the figure that does not depend on
+what else the machine runs). The RTL is built once (stepramp.sim.runner.build_once) and the build is not timed.
 
-    python -m stepramp.tools.simbench [--tops stepramp_plb ...] [--profile NAME] [--json FILE]
+    python -m stepramp.tools.simbench [--tops stepramp_plb ...] [--exact TOP ...] [--profile NAME] [--json FILE]
 """
 
 from __future__ import annotations
@@ -27,14 +28,22 @@ TOPS = ("stepramp_engine", "stepramp_plb", "stepramp_axil", "stepramp_multi_plb"
 AXES = 3
 
 
-def measure(top: str, out: Path, profile: str) -> dict[str, Any]:
-    """Run tb/speed_bench.py on one top; its result (clocks, wall_s, cpu_s, steps)."""
-    folder = out / top
+def measure(top: str, out: Path, profile: str, ramp: int = 0) -> dict[str, Any]:
+    """Run tb/speed_bench.py on one top (ramp: its G_RAMP, not for the multi-axis tops); its result (clocks, wall_s,
+    cpu_s, steps)."""
+    folder = out / (f"{top}_exact" if ramp else top)
     folder.mkdir(parents=True, exist_ok=True)
     result = folder / "speed.json"
     result.unlink(missing_ok=True)
     params: dict[str, object] = {"G_AXES": AXES} if top.startswith("stepramp_multi") else {}
-    env = {"STEPRAMP_SPEED_RESULT": str(result), "SPEED_PROFILE": profile, "MULTI_AXES": str(AXES)}
+    if ramp:
+        params["G_RAMP"] = ramp
+    env = {
+        "STEPRAMP_SPEED_RESULT": str(result),
+        "SPEED_PROFILE": profile,
+        "SPEED_RAMP": str(ramp),
+        "MULTI_AXES": str(AXES),
+    }
     build_once(top)  # (not timed: the build is shared with the regression's)
     run_cocotb(top, "speed_bench", folder, parameters=params, extra_env=env, log_file=folder / "sim.log")
     if not result.exists():
@@ -46,6 +55,12 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--tops", nargs="*", default=list(TOPS), help="benches to run (default: all)")
     ap.add_argument("--profile", default="trap_long_cruise", help="the move (a name of stepramp.sim.profiles)")
+    ap.add_argument(
+        "--exact",
+        nargs="*",
+        default=["stepramp_engine", "stepramp_plb"],
+        help="benches also run with the exact ramp (G_RAMP = 1)",
+    )
     ap.add_argument("--out", type=Path, default=REPO / "build" / "simbench")
     ap.add_argument("--json", type=Path, default=None, help="also write the figures here")
     args = ap.parse_args(argv)
@@ -54,13 +69,16 @@ def main(argv: list[str] | None = None) -> int:
     rows = []
     print(f"simulation speed during a move ({args.profile}; GHDL back end {ghdl_backend() or '?'})")
     print(f"{'bench':<22}{'clocks':>9}{'wall s':>9}{'clocks/s':>11}{'cpu s':>8}{'clocks/cpu-s':>14}")
-    for top in args.tops:
-        r = measure(top, args.out.resolve(), args.profile)
+    runs = [(top, 0) for top in args.tops] + [(top, 1) for top in args.exact if top in args.tops]
+    for top, ramp in runs:
+        r = measure(top, args.out.resolve(), args.profile, ramp)
+        r["ramp"] = ramp
         r["clocks_per_s"] = r["clocks"] / r["wall_s"]
         r["clocks_per_cpu_s"] = r["clocks"] / r["cpu_s"]
         rows.append(r)
+        name = f"{top} (exact)" if ramp else top
         print(
-            f"{top:<22}{r['clocks']:>9}{r['wall_s']:>9.2f}{r['clocks_per_s']:>11,.0f}{r['cpu_s']:>8.2f}"
+            f"{name:<22}{r['clocks']:>9}{r['wall_s']:>9.2f}{r['clocks_per_s']:>11,.0f}{r['cpu_s']:>8.2f}"
             f"{r['clocks_per_cpu_s']:>14,.0f}"
         )
     if args.json is not None:

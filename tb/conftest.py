@@ -1,0 +1,86 @@
+# SPDX-License-Identifier: MIT
+"""The regression's order on the workers (`make test`: pytest -n 2 --dist loadgroup --no-loadscope-reorder).
+
+Longest first: the tests run in the order of their measured durations, longest first, so that the two workers end
+together (a 5-minute simulation started last would leave one worker idle for 5 minutes). The durations are the
+committed tb/test_durations.json, updated with build/test_durations.json (which every run here updates with its
+own); a test in neither is taken as 60 s (a new test is most likely a simulation: run it early). Each sw/tests
+module stays one unit on one worker (xdist_group: its module fixtures are set up once, and ~1,000 quick tests do not
+cost a scheduling round each); so does each tb module with a module-scoped fixture (test_synth_size's yosys run).
+No test is left out or changed: this only orders and groups.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+#: The durations measured here (every passing run), and the committed ones (a fresh clone).
+MEASURED = REPO / "build" / "test_durations.json"
+COMMITTED = Path(__file__).with_name("test_durations.json")
+#: A test with no measured duration: a new simulation, run early.
+UNKNOWN_S = 60.0
+#: tb modules whose tests share a module-scoped fixture: one worker runs them all.
+GROUPED_TB_MODULES = ("test_synth_size.py",)
+
+
+def _read(path: Path) -> dict[str, float]:
+    with contextlib.suppress(OSError, ValueError, AttributeError):
+        return {str(k): float(v) for k, v in json.loads(path.read_text()).items()}
+    return {}
+
+
+def _durations() -> dict[str, float]:
+    """The committed durations, updated with those measured here."""
+    return {**_read(COMMITTED), **_read(MEASURED)}
+
+
+def _group(item: pytest.Item) -> str | None:
+    path = Path(str(item.path))
+    if path.parent.name == "tests" and path.parent.parent.name == "sw":
+        return f"sw/tests/{path.name}"
+    if path.name in GROUPED_TB_MODULES:
+        return f"tb/{path.name}"
+    return None
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(session: pytest.Session, config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Order the items longest unit first and mark the groups (before xdist's own hook reads the marks)."""
+    durations = _durations()
+    units: dict[str, list[pytest.Item]] = {}
+    for item in items:
+        group = _group(item)
+        if group is not None:
+            item.add_marker(pytest.mark.xdist_group(group))
+        units.setdefault(group or item.nodeid, []).append(item)
+    cost = {
+        key: sum(durations.get(i.nodeid, UNKNOWN_S if _group(i) is None else 0.1) for i in unit)
+        for key, unit in units.items()
+    }
+    order = sorted(units, key=lambda key: -cost[key])  # (stable: ties keep the collection order)
+    items[:] = [item for key in order for item in units[key]]
+
+
+_reports: dict[str, float] = {}
+
+
+def pytest_runtest_logreport(report: pytest.TestReport) -> None:
+    _reports[report.nodeid.split("@")[0]] = _reports.get(report.nodeid.split("@")[0], 0.0) + report.duration
+
+
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    """Merge this run's durations into build/test_durations.json (on the xdist controller, or in a run without
+    xdist; not after an interrupted run or a usage error)."""
+    config: Any = session.config
+    if hasattr(config, "workerinput") or exitstatus not in (0, 1) or not _reports:
+        return
+    table = _read(MEASURED)
+    table.update({k: round(v, 2) for k, v in _reports.items()})
+    MEASURED.parent.mkdir(parents=True, exist_ok=True)
+    MEASURED.write_text(json.dumps(dict(sorted(table.items())), indent=0) + "\n")
