@@ -12,7 +12,7 @@ VHDL  := $(wildcard hdl/*.vhd)
 BACKEND = GHDL_BACKEND=$${GHDL_BACKEND:-$$(test -x /usr/bin/ghdl-llvm && echo llvm || echo mcode)}
 
 .DEFAULT_GOAL := test
-.PHONY: setup test check coverage mutate soak lint synth-check bench synth demo shell waves clean help
+.PHONY: setup test check coverage mutate soak lint synth-check bench synth demo shell waves vitis-driver clean help
 
 help:
 	@echo "make test         lint, synthesis check and the whole regression (pytest -n $(JOBS))"
@@ -27,6 +27,7 @@ help:
 	@echo "make synth-check  every RTL file under --std=93c and --std=08, ghdl synth of each top, no latch"
 	@echo "make bench        the change latency of CTRL.CHANGE per ramp phase, and the simulation speed (clocks/s)"
 	@echo "make synth        size and fmax: yosys iCE40 / xc7, nextpnr HX8K / UP5K -> build/synth/report.json"
+	@echo "make vitis-driver the Vitis driver folder (drivers/stepramp_v1_0 + sw/c/src) in build/vitis/drivers/"
 	@echo "make clean        remove build/ (keeps .venv)"
 
 setup:
@@ -95,6 +96,9 @@ waves:
 	@if command -v gtkwave >/dev/null 2>&1; then gtkwave $(GTKW); \
 	elif command -v surfer >/dev/null 2>&1; then surfer $(WAVE); \
 	else echo "no viewer here: open the laid-out view with  gtkwave $(GTKW)  (or the raw waveform: surfer $(WAVE))"; fi
+
+vitis-driver: setup
+	$(PY) -m stepramp.tools.vitis_driver
 
 clean:
 	rm -rf build .pytest_cache

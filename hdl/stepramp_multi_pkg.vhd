@@ -1,7 +1,7 @@
 -- SPDX-License-Identifier: MIT
 -- stepramp_multi_pkg: the address map of the multi-axis top stepramp_multi (its global window and the axis
 -- windows). Registers and timing: docs/stepramp_multi.md; the Python and C copies (stepramp.board.multi,
--- sw/c/stepramp_multi.h) are checked against this file by sw/tests/test_multi.py.
+-- sw/c/src/stepramp_multi.h) are checked against this file by sw/tests/test_multi.py.
 
 library ieee;
   use ieee.std_logic_1164.all;

@@ -8,7 +8,7 @@
 #
 # Usage (from the repository root or anywhere else):
 #   vivado -mode batch -source scripts/package_vivado.tcl
-# Result: build/vivado_ip/stepramp_axil/ (component.xml, hdl/, xgui/), VLNV stepramp:ip:stepramp_axil:<version>
+# Result: build/vivado_ip/stepramp_axil/ (component.xml, hdl/, xgui/, drivers/stepramp_v1_0/), VLNV stepramp:ip:stepramp_axil:<version>
 # with the version of the ID register (hdl/stepramp_regs_pkg.vhd, C_ID_VALUE: 0x53520002 -> 0.2). Add
 # build/vivado_ip to the IP repositories of the Vivado project (Settings > IP > Repository).
 #
@@ -100,6 +100,33 @@ foreach reg [stepramp_ipxact_registers [file join $root rdl stepramp.xml]] {
     set_property access $access $f
     set_property description $fdescription $f
     catch {set_property reset_value $reset $f}
+  }
+}
+
+# The Vitis (classic / SDK standalone BSP) driver beside the IP: drivers/stepramp_v1_0 with data/stepramp.mdd,
+# data/stepramp.tcl and src/Makefile from the repository's drivers/stepramp_v1_0, and the driver's sources
+# (sw/c/src/*.c, *.h) in src/ -- the folder `python -m stepramp.tools.vitis_driver` writes (checked by
+# sw/tests/test_vitis_driver.py). A BSP made from a design with this IP picks the driver for stepramp_axil.
+set drv_name stepramp_v1_0
+set drv_dir  [file join $ip_dir drivers $drv_name]
+file mkdir [file join $drv_dir data] [file join $drv_dir src]
+foreach f [lsort [glob [file join $root drivers $drv_name data *]]] {
+  file copy -force $f [file join $drv_dir data]
+}
+file copy -force [file join $root drivers $drv_name src Makefile] [file join $drv_dir src]
+foreach f [lsort [glob [file join $root sw c src *.c] [file join $root sw c src *.h]]] {
+  file copy -force $f [file join $drv_dir src]
+}
+ipx::add_file_group -type software_driver {} $core
+set drv_group [ipx::get_file_groups xilinx_softwaredriver -of_objects $core]
+foreach f [lsort [glob -directory $drv_dir -tails data/* src/*]] {
+  set fobj [ipx::add_file drivers/$drv_name/$f $drv_group]
+  switch -glob -- $f {
+    *.mdd   {set_property type mdd $fobj}
+    *.tcl   {set_property type tclSource $fobj}
+    *.c     -
+    *.h     {set_property type cSource $fobj}
+    default {set_property type unknown $fobj}
   }
 }
 

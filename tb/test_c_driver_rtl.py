@@ -1,8 +1,8 @@
 # SPDX-License-Identifier: MIT
-"""The C driver (sw/c/stepramp.c) itself against the RTL, both tops.
+"""The C driver (sw/c/src/stepramp.c) itself against the RTL, both tops.
 
 build/libstepramp_cb.so is the driver compiled for a host whose bus is a set of callbacks
-(sw/c/stepramp_cbbus.c); stepramp.sim.cdriver.CDriver attaches those callbacks to the bench's bus master and runs
+(sw/c/host/stepramp_cbbus.c); stepramp.sim.cdriver.CDriver attaches those callbacks to the bench's bus master and runs
 every C call in a thread bridged into the simulation (cocotb's bridge/resume). So each register access, byte lane and
 polling loop of the C code reaches the core as a MicroBlaze program's would, and the core's answer is checked
 against the bit-exact model (stepramp.models.engine) and the register map (stepramp.board.regmap), never against the

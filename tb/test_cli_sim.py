@@ -97,3 +97,25 @@ def test_sim_equals_model_in_exact_mode(tmp_path: Path) -> None:
     assert sim["ramp"] == "exact" and sim["error"] is None
     assert sim["registers"] == model["registers"] and sim["edges"] == model["edges"]
     assert sim["edges"] != avr["edges"]
+
+
+def test_sim_accepts_a_slow_exact_ramp(tmp_path: Path) -> None:
+    """`--ramp exact` with ramp constants above 2^48 (c0 = 1.40e6 ticks at 50 MHz, PRESCALE 1: a scaled seed word,
+    docs/algorithm.md "Exact step times"): `stepramp sim` takes the move the AVR446 ramp takes, its summary (edges'
+    checksum) equals `stepramp model`'s, and every pulse is within 1 tick of the ideal ramp (max_deviation_ticks, the
+    judge stepramp.models.ideal)."""
+    move = ["--steps", "3", "--accel", "64.9", "--decel", "40", "--speed", "100", "--spr", "400", "--fclk", "50e6"]
+    model = json.loads(
+        subprocess.run(
+            [BIN, "model", *move, "--ramp", "exact", "--summary"], capture_output=True, text=True, check=True
+        ).stdout
+    )
+    assert model["registers"]["decel_seed"] >= 1 << 48, "the move does not need a scaled ramp constant"
+    out = tmp_path / "sim.json"
+    cmd = [BIN, "sim", *move, "--ramp", "exact", "--summary", "--json", str(out), "--build", str(tmp_path / "build")]
+    run = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stderr[-2000:]
+    sim = json.loads(out.read_text())
+    assert sim["error"] is None and sim["registers"] == model["registers"]
+    assert sim["summary"] == model["summary"]
+    assert sim["summary"]["max_deviation_ticks"] <= 1.0

@@ -12,7 +12,7 @@ speed; every latch's pin_time (LATCH_TIME - N - 2) is the clock edge after which
 within one clock, on TIME's axis as a TIME read through the driver (TIME_LO, then TIME_HI) shows it.
 
 - python_homing: HOMING_RUNS runs (12 per top; 24 over both) with the Python driver.
-- c_homing: C_HOMING_RUNS runs (4 per top) with the C driver's stepramp_home (sw/c/stepramp_homing.c) on the same
+- c_homing: C_HOMING_RUNS runs (4 per top) with the C driver's stepramp_home (sw/c/src/stepramp_homing.c) on the same
   core, through cocotb's bridge (stepramp.sim.cdriver).
 - limit_homing (PLB-like top): LIMIT_NEG used as home, 3 runs: the core's own limit stop (hard, then soft) ends the
   seek; from off the limit and from on it.
@@ -336,7 +336,7 @@ async def limit_homing(dut) -> None:
 def c_types(cdrv: CDriver) -> tuple[Any, Any, Any]:
     """stepramp_inputs_t, stepramp_homing_t and stepramp_homing_result_t as ctypes structures, and the signatures of
     the C calls this test makes beyond CDriver's."""
-    c_dir = REPO / "sw" / "c"
+    c_dir = REPO / "sw" / "c" / "src"
     inputs_t = c_struct(c_dir / "stepramp.h", "stepramp_inputs_t")
     latch_t = c_struct(c_dir / "stepramp.h", "stepramp_latch_t")
     homing_t = c_struct(c_dir / "stepramp_homing.h", "stepramp_homing_t")
@@ -358,7 +358,7 @@ def c_latch(latch: Any) -> Latch:
 # Limit: measured 0.54 / 0.56 ms of simulated time for 4 runs (PLB / AXI), about 0.14 ms a run; 0.5 ms a run.
 @cocotb.test(timeout_time=500 * max(C_RUNS, 1), timeout_unit="us")
 async def c_homing(dut) -> None:
-    """C_HOMING_RUNS runs of the C driver's stepramp_home (sw/c/stepramp_homing.c) on the same core and mechanics:
+    """C_HOMING_RUNS runs of the C driver's stepramp_home (sw/c/src/stepramp_homing.c) on the same core and mechanics:
     the same physics as python_homing."""
     tb = await PeripheralTb.started(dut)
     cdrv = CDriver(Path(os.environ["STEPRAMP_C_CB_LIB"]), tb.bus, idle=lambda: Cycles(tb.clk, POLL_IDLE))

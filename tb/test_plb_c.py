@@ -5,8 +5,8 @@ For a few profiles, stepramp_plan_move of build/libstepramp.so plans the move; i
 stepramp.board.plan.Plan, which the Python driver writes over the bus (StepRamp.program / start / wait_done through
 peripheral_tb.PeripheralTb): the PLB-like top stepramp_plb with stepramp.sim.ipif's master, and the AXI4-Lite top too.
 The STEP edges must be those of the bit-exact model for that plan, and the position must follow. Then the C driver
-itself: the bus writes stepramp_move makes into the fake register bank (sw/c/stepramp_fakebus.c) are replayed on the
-bus, byte enables included. The C library is built by the pytest function below (``make -C sw/c lib``).
+itself: the bus writes stepramp_move makes into the fake register bank (sw/c/host/stepramp_fakebus.c) are replayed on
+the bus, byte enables included. The C library is built by the pytest function below (``make -C sw/c lib``).
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ PROFILE_NAMES = ("trap_basic", "triangle_negative", "run_start", "trap_prescale_
 
 def c_plan_move(so: ctypes.CDLL, prof: Profile) -> Plan:
     """The C library's plan of a profile, as a Python Plan."""
-    c_plan_t = c_struct(C_DIR / "stepramp_plan.h", "stepramp_plan_t")
+    c_plan_t = c_struct(C_DIR / "src" / "stepramp_plan.h", "stepramp_plan_t")
     so.stepramp_plan_move.argtypes = [
         ctypes.POINTER(c_plan_t),
         ctypes.c_int64,

@@ -16,7 +16,7 @@ from typing import Any
 from stepramp.sim.cdriver import C_TYPES
 from stepramp.tools import clib
 
-PLAN_HEADER = clib.C_DIR / "stepramp_plan.h"
+PLAN_HEADER = clib.SRC_DIR / "stepramp_plan.h"
 
 
 def struct_fields(header: Path, struct: str, types: dict[str, Any] | None = None) -> list[tuple[str, Any]]:

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""The C port of stepramp.board.change (sw/c/stepramp_change.c): bit-for-bit parity with the Python driver.
+"""The C port of stepramp.board.change (sw/c/src/stepramp_change.c): bit-for-bit parity with the Python driver.
 
 The library is built with ``make -C sw/c`` (as in test_c_plan.py) and loaded with ctypes. For random changes, extreme
 and invalid inputs, stepramp_plan_change must give every field of Python's plan_change (the segment, the move back
@@ -40,7 +40,7 @@ from stepramp.board.plan import MAX_STEPS, RAMP_EXACT, plan_move, plan_move_info
 from stepramp.sim.profiles import EXACT_PROFILES, PROFILES
 from stepramp.tools import clib
 
-CHANGE_HEADER = clib.C_DIR / "stepramp_change.h"
+CHANGE_HEADER = clib.SRC_DIR / "stepramp_change.h"
 SEED = int(os.environ.get("STEPRAMP_SEED", "20261127"))
 RANDOM_COUNT = 3000
 ENDLESS = -1  # STEPRAMP_ENDLESS: Python's remaining None

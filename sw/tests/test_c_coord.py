@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""The C port of stepramp.board.coord (sw/c/stepramp_coord.c): bit-for-bit parity with the Python driver.
+"""The C port of stepramp.board.coord (sw/c/src/stepramp_coord.c): bit-for-bit parity with the Python driver.
 
 The library is built with ``make -C sw/c`` (as in test_c_plan.py) and loaded with ctypes. For random coordinated
 moves (valid ones, wide physical ranges, invalid and extreme values, 0 to 9 axes), stepramp_plan_coordinated_info
@@ -32,7 +32,7 @@ from stepramp.board.plan import MAX_PRESCALE, MAX_STEPS, Plan, plan_move, plan_m
 from stepramp.sim.profiles import PROFILES, design_args
 from stepramp.tools import clib
 
-COORD_HEADER = clib.C_DIR / "stepramp_coord.h"
+COORD_HEADER = clib.SRC_DIR / "stepramp_coord.h"
 SEED = int(os.environ.get("STEPRAMP_SEED", "20261203"))
 RANDOM_COUNT = 6000
 ARRAY_AXES = MAX_AXES + 1  # the steps array passed to C: room for the 9-axis refusal

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""The C port of the coordinated stop on the line (stepramp_plan_coordinated_stop, sw/c/stepramp_coord.c) against
+"""The C port of the coordinated stop on the line (stepramp_plan_coordinated_stop, sw/c/src/stepramp_coord.c) against
 stepramp.board.coord.plan_coordinated_stop_at: bit for bit.
 
 For random coordinated moves (2 to 8 axes, accel / decel from 1/20 to 20, PRESCALE 1 to 64) and random take-over

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""The C driver (sw/c/stepramp.c): its host unit tests, and its bus writes against the Python driver's.
+"""The C driver (sw/c/src/stepramp.c): its host unit tests, and its bus writes against the Python driver's.
 
 ``make -C sw/c`` builds and runs the host tests (a missing gcc or make is a failure, not a skip). The shared
 library holds the driver with its register access routed to the fake register bank of stepramp_fakebus.c, whose
@@ -42,12 +42,12 @@ from stepramp.board.plan import (
     Plan,
     plan_move,
 )
-from stepramp.board.regmap import ERROR_CODES, ID_RAMP_BIT, ID_VALUE, offset
+from stepramp.board.regmap import ERROR_CODES, ID_RAMP_BIT, ID_VALUE, REGISTERS, RW, offset
 from stepramp.sim.profiles import INVALID_INPUTS, PROFILES, design_args
 from stepramp.tools import clib
 
-DRIVER_HEADER = clib.C_DIR / "stepramp.h"
-FAKEBUS_HEADER = clib.C_DIR / "stepramp_fakebus.h"
+DRIVER_HEADER = clib.SRC_DIR / "stepramp.h"
+FAKEBUS_HEADER = clib.HOST_DIR / "stepramp_fakebus.h"
 
 
 def _define(header: Path, name: str) -> int:
@@ -484,3 +484,29 @@ def test_core_error_texts_match_the_register_map(lib: ctypes.CDLL) -> None:
     for code in range(len(ERROR_CODES), 20):
         assert lib.stepramp_strcoreerror(code).decode() == "unknown error code"
         assert lib.stepramp_corename(code).decode() == "UNKNOWN"
+
+
+def test_fake_bank_resets_and_write_masks_come_from_the_register_map(lib: ctypes.CDLL) -> None:
+    """The fake register bank (sw/c/host/stepramp_fakebus.c) at reset holds every register's reset value, and a
+    register written with all ones (while the core is stopped) keeps only its RW bits: both recomputed here from the
+    register map's fields, so a reset value or a field added in rdl/stepramp.rdl reaches the bank without a hand
+    copy (it uses stepramp_regs.h's STEPRAMP_<REG>_RESET / _RW_MASK)."""
+    lib.stepramp_hostbus_write32.argtypes = [ctypes.c_size_t, ctypes.c_uint32]
+    lib.stepramp_hostbus_write32.restype = None
+    regs = lib.stepramp_fakebus_state().contents.regs
+    lib.stepramp_fakebus_reset(FAKEBUS_BASE, ID_VALUE)
+    assert {r.name: regs[r.offset // 4] for r in REGISTERS} == {
+        r.name: sum(f.reset << f.lsb for f in r.fields) for r in REGISTERS
+    }
+    kept = {}
+    for reg in REGISTERS:
+        if reg.name == "STATUS":
+            continue  # W1C: test_stepramp.c's STATUS tests
+        lib.stepramp_fakebus_reset(FAKEBUS_BASE, ID_VALUE)
+        lib.stepramp_hostbus_write32(FAKEBUS_BASE + reg.offset, 0xFFFF_FFFF)
+        kept[reg.name] = regs[reg.offset // 4]
+    assert kept == {
+        r.name: sum(f.mask for f in r.fields if f.access == RW) or sum(f.reset << f.lsb for f in r.fields)
+        for r in REGISTERS
+        if r.name != "STATUS"
+    }

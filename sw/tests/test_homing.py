@@ -1,14 +1,14 @@
 # SPDX-License-Identifier: MIT
-"""The drivers' machine-input calls and the homing (stepramp.board.homing, sw/c/stepramp_homing.c) without a
+"""The drivers' machine-input calls and the homing (stepramp.board.homing, sw/c/src/stepramp_homing.c) without a
 simulator.
 
 - The Python driver's input calls on a fake register bank: the words of docs/registers.md, the byte lanes that keep
   the other sticky flags, the latch's pin_time, TIME read LO then HI, the E-stop clear, the reasons for bad input.
 - Homing.check: the arguments and the latch-speed bound (filter + settle + LATCH_MARGIN clocks per step).
 - Both drivers' homing on the C fake register bank (libstepramp.so) with a model of the core and the axis behind it
-  (the bank's hook; the model's rules are those of sw/c/test_stepramp_homing.c): a switch whose filtered edge trails
-  the crossing by `delay` clocks, so that at T clocks per step the latch lands floor(delay / T) steps past it. From
-  many starts and delays the zero is the switch's first position off it (the physics), and the Python and the C
+  (the bank's hook; the model's rules are those of sw/c/tests/test_stepramp_homing.c): a switch whose filtered edge
+  trails the crossing by `delay` clocks, so that at T clocks per step the latch lands floor(delay / T) steps past it.
+  From many starts and delays the zero is the switch's first position off it (the physics), and the Python and the C
   driver write the same words to the same registers in the same order.
 """
 
@@ -199,9 +199,9 @@ HOOK = ctypes.CFUNCTYPE(None, ctypes.c_uint32, ctypes.c_int)
 
 
 class Core:
-    """The core and the axis behind the fake bank (as sw/c/test_stepramp_homing.c models them): one step per STATUS
-    read while a motion runs; the switch's filtered edge arrives floor(delay / T) steps after the crossing at T clocks
-    per step (CRUISE_HI); SOFT_STOP ends the motion 3 steps later; a limit used as home stops the motion itself
+    """The core and the axis behind the fake bank (as sw/c/tests/test_stepramp_homing.c models them): one step per
+    STATUS read while a motion runs; the switch's filtered edge arrives floor(delay / T) steps after the crossing at T
+    clocks per step (CRUISE_HI); SOFT_STOP ends the motion 3 steps later; a limit used as home stops the motion itself
     (LIMIT_EN: ERROR LIMIT); INPUT_CFG selects what the latch takes."""
 
     def __init__(self, state: Any, carriage: int, at: int, side: int, pin: str, delay: int) -> None:
@@ -327,11 +327,11 @@ class BankAccess:
                 self.so.stepramp_hostbus_write8(BASE + addr + b, value >> (8 * b) & 0xFF)
 
 
-HEADER = clib.C_DIR / "stepramp_homing.h"
+HEADER = clib.SRC_DIR / "stepramp_homing.h"
 
 
 class CLatch(ctypes.Structure):
-    _fields_ = struct_fields(clib.C_DIR / "stepramp.h", "stepramp_latch_t")
+    _fields_ = struct_fields(clib.SRC_DIR / "stepramp.h", "stepramp_latch_t")
 
 
 class CHoming(ctypes.Structure):
@@ -343,7 +343,7 @@ class CResult(ctypes.Structure):
 
 
 class CInputs(ctypes.Structure):
-    _fields_ = struct_fields(clib.C_DIR / "stepramp.h", "stepramp_inputs_t")
+    _fields_ = struct_fields(clib.SRC_DIR / "stepramp.h", "stepramp_inputs_t")
 
 
 @pytest.fixture(scope="module")

@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: MIT
 """The multi-axis driver (stepramp.board.multi) over a fake multi-axis top (no simulator), and the address map's four
-copies (hdl/stepramp_multi_pkg.vhd, multi.py, sw/c/stepramp_multi.h, docs/stepramp_multi.md) against each other."""
+copies (hdl/stepramp_multi_pkg.vhd, multi.py, sw/c/src/stepramp_multi.h, docs/stepramp_multi.md) against each other."""
 
 from __future__ import annotations
 
@@ -221,7 +221,7 @@ def _vhdl_constants() -> dict[str, int]:
 
 
 def _c_defines() -> dict[str, int]:
-    text = (REPO / "sw" / "c" / "stepramp_multi.h").read_text()
+    text = (REPO / "sw" / "c" / "src" / "stepramp_multi.h").read_text()
     return {n: int(v, 0) for n, v in re.findall(r"#define (STEPRAMP_MULTI_\w+) (0x[0-9A-Fa-f]+|\d+)u", text)}
 
 

@@ -18,7 +18,7 @@ that its quantized last pulse lands on the tick nearest the ideal end, the same 
 
 An axis of 1 step has its only pulse at t = 0 (it covers no distance: r = 0); it is planned with the path's
 values and cannot end with the others. An axis of 0 steps emits nothing. The C driver computes the same plans bit for
-bit (sw/c/stepramp_coord.c, sw/tests/test_c_coord.py).
+bit (sw/c/src/stepramp_coord.c, sw/tests/test_c_coord.py).
 """
 
 from __future__ import annotations

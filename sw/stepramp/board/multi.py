@@ -8,7 +8,7 @@ access shifted to its window); MultiAxis adds what needs the global window: the 
 axes' pulse 0 on one clock edge), SYNC_SOFT_STOP (a soft stop of the selected axes on one clock edge), the status
 word, the interrupt mask, and coordinated linear moves planned by stepramp.board.coord.plan_coordinated and started
 together. The global registers are written as whole words, as the
-C driver (sw/c/stepramp_multi.c) writes them.
+C driver (sw/c/src/stepramp_multi.c) writes them.
 
     multi = await MultiAxis.probe(access, fclk=50e6, spr=400 * 16)
     plans = await multi.move_coordinated([3200, -1600, 800], accel=40.0, decel=40.0, speed=20.0)

@@ -4,7 +4,7 @@
 The one source is the SystemRDL file rdl/stepramp.rdl. `python -m stepramp.tools.regmap_gen` compiles it
 (systemrdl-compiler) and writes the plain tables of regmap.json (package data beside this module) that this module
 reads (so that the driver needs no compiler), the VHDL package (hdl/stepramp_regs_pkg.vhd, with the register file's
-masks and resets), the C header (sw/c/stepramp_regs.h), the Markdown table (docs/registers.md) and IP-XACT
+masks and resets), the C header (sw/c/src/stepramp_regs.h), the Markdown table (docs/registers.md) and IP-XACT
 (rdl/stepramp.xml). sw/tests/test_regmap.py checks that every generated file is current.
 
 All registers are 32 bits wide, at byte offsets on a 32-bit bus. Motion registers (STEPS .. STOP_RATIO) may be

@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: MIT
-"""The C driver (sw/c/stepramp.c) running against a simulated core: its register access goes through the callback
-bus of build/libstepramp_cb.so (sw/c/stepramp_cbbus.c) into cocotb bus transactions.
+"""The C driver (sw/c/src/stepramp.c) running against a simulated core: its register access goes through the callback
+bus of build/libstepramp_cb.so (sw/c/host/stepramp_cbbus.c) into cocotb bus transactions.
 
 Each C call runs in a thread started by cocotb's ``bridge``; every register access the C code makes calls back into
 Python, where ``resume`` runs the bus transaction (and the driver's idle hook, between two STATUS polls) as a
@@ -68,7 +68,7 @@ class CDriver:
         self.bus = bus
         self.idle = idle
         self.base = base
-        c_dir = Path(__file__).resolve().parents[3] / "sw" / "c"
+        c_dir = Path(__file__).resolve().parents[3] / "sw" / "c" / "src"
         self.dev_t = c_struct(c_dir / "stepramp.h", "stepramp_t")
         self.status_t = c_struct(c_dir / "stepramp.h", "stepramp_status_t")
         self.plan_t = c_struct(c_dir / "stepramp_plan.h", "stepramp_plan_t")

@@ -9,6 +9,10 @@ import subprocess
 from pathlib import Path
 
 C_DIR = Path(__file__).resolve().parents[3] / "sw" / "c"
+#: the driver a MicroBlaze runs (its headers declare the structs the tests read)
+SRC_DIR = C_DIR / "src"
+#: the host-only code: the fake register bank, the ctypes entry points, the callback bus
+HOST_DIR = C_DIR / "host"
 BUILD_DIR = C_DIR / "build"
 SHARED_LIB = BUILD_DIR / "libstepramp.so"
 

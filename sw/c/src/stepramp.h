@@ -121,7 +121,7 @@ enum {
 #define STEPRAMP_STATE_DECEL 3u
 
 /** STEP width + STEP space after reset (1 + 1 clocks): stepramp_t.min_gap until stepramp_configure_outputs. */
-#define STEPRAMP_MIN_GAP_RESET 2u
+#define STEPRAMP_MIN_GAP_RESET (STEPRAMP_STEP_WIDTH_RESET + STEPRAMP_STEP_SPACE_RESET)
 
 /** The machine inputs as bits (INPUT_CFG.POL_*, stepramp_status_t.levels and .events, stepramp_clear_events). */
 #define STEPRAMP_INPUT_LIMIT_NEG 0x1u
@@ -139,8 +139,8 @@ enum {
 /** The largest INPUT_FILTER (20 bits), clocks. */
 #define STEPRAMP_FILTER_MAX UINT32_C(0xFFFFF)
 
-/** INPUT_CFG after reset: LIMIT_EN set, everything else 0 (stepramp_t.input_cfg after stepramp_init). */
-#define STEPRAMP_INPUT_CFG_RESET STEPRAMP_INPUT_CFG_LIMIT_EN_MASK
+/* INPUT_CFG after reset (stepramp_t.input_cfg after stepramp_init): STEPRAMP_INPUT_CFG_RESET of stepramp_regs.h
+ * (LIMIT_EN set, everything else 0). */
 
 /**
  * One stepramp core: its base address and the parameters every move is planned with, and what the driver knows of

@@ -1,7 +1,9 @@
 /* SPDX-License-Identifier: MIT */
 /*
  * A fake stepramp register bank for host tests: see stepramp_fakebus.h. Mirrors hdl/stepramp_regfile.vhd's
- * register semantics (docs/registers.md), except that the motion registers keep all 32 written bits.
+ * register semantics (docs/registers.md). The reset values and the bits each register stores come from the
+ * generated stepramp_regs.h (STEPRAMP_<REG>_RESET, _RW_MASK, _W1C_MASK), as the register file's come from
+ * hdl/stepramp_regs_pkg.vhd: a register or a field added in rdl/stepramp.rdl needs no hand copy here.
  */
 #include "stepramp_fakebus.h"
 
@@ -13,17 +15,19 @@
 stepramp_fakebus_t stepramp_fakebus;
 
 #define WORD(name) (STEPRAMP_REG_##name / 4u)
-#define CTRL_CMD_MASK (STEPRAMP_CTRL_START_MASK | STEPRAMP_CTRL_SOFT_STOP_MASK | STEPRAMP_CTRL_HARD_STOP_MASK)
-#define CTRL_EN_MASK UINT32_C(0x7F00) /* IRQ_DONE_EN .. IRQ_LATCH_EN, byte 1 */
 #define FLAGS_MASK (STEPRAMP_STATUS_DONE_MASK | STEPRAMP_STATUS_ERROR_MASK)
 /* the machine inputs' STATUS bits (levels, events, ESTOP_FAULT, LATCHED): the test sets them, writes keep them */
-#define INPUT_BITS UINT32_C(0x01FF0000)
+#define INPUT_BITS                                                                                                    \
+    (STEPRAMP_STATUS_LIMIT_NEG_MASK | STEPRAMP_STATUS_LIMIT_POS_MASK | STEPRAMP_STATUS_HOME_MASK |                     \
+     STEPRAMP_STATUS_ESTOP_MASK | STEPRAMP_STATUS_LIMIT_NEG_EV_MASK | STEPRAMP_STATUS_LIMIT_POS_EV_MASK |             \
+     STEPRAMP_STATUS_HOME_EV_MASK | STEPRAMP_STATUS_ESTOP_FAULT_MASK | STEPRAMP_STATUS_LATCHED_MASK)
 /* W1C: DONE, ERROR, the input events and LATCHED; ESTOP_FAULT only while ESTOP reads inactive */
-#define W1C_MASK                                                                                                      \
-    (FLAGS_MASK | STEPRAMP_STATUS_LIMIT_NEG_EV_MASK | STEPRAMP_STATUS_LIMIT_POS_EV_MASK |                              \
-     STEPRAMP_STATUS_HOME_EV_MASK | STEPRAMP_STATUS_LATCHED_MASK)
-#define INPUT_CFG_BITS UINT32_C(0x0F3F)
+#define W1C_MASK (STEPRAMP_STATUS_W1C_MASK & ~STEPRAMP_STATUS_ESTOP_FAULT_MASK)
 #define STATE_STOP 0u /* STATUS.STATE of an idle core (docs/registers.md) */
+
+/* per word: the bits a write stores (0: nothing stored, the register is read only or acts on write) */
+#define RW_ENTRY(name) [WORD(name)] = STEPRAMP_##name##_RW_MASK,
+static const uint32_t rw_mask[STEPRAMP_FAKEBUS_WORDS] = {STEPRAMP_REGISTERS(RW_ENTRY)};
 
 /* the core side's hook (stepramp_fakebus_set_hook) and TIME bits 63:32 (a TIME_LO read copies them to TIME_HI) */
 static stepramp_fakebus_hook_fn hook;
@@ -50,11 +54,10 @@ void stepramp_fakebus_reset(uintptr_t base, uint32_t id)
 
     memset(f, 0, sizeof *f);
     f->base = base;
+#define RESET_REG(name) f->regs[WORD(name)] = STEPRAMP_##name##_RESET;
+    STEPRAMP_REGISTERS(RESET_REG)
+#undef RESET_REG
     f->regs[WORD(ID)] = id;
-    f->regs[WORD(PRESCALE)] = 1u; /* reset values */
-    f->regs[WORD(STEP_WIDTH)] = 1u;
-    f->regs[WORD(STEP_SPACE)] = 1u;
-    f->regs[WORD(INPUT_CFG)] = STEPRAMP_INPUT_CFG_LIMIT_EN_MASK;
     hook = NULL;
     time_hi_live = 0u;
 }
@@ -134,12 +137,7 @@ static void write_word(uint32_t off, uint32_t data, uint32_t be)
         f->starts += (bits & STEPRAMP_CTRL_START_MASK) != 0u;
         f->soft_stops += (bits & STEPRAMP_CTRL_SOFT_STOP_MASK) != 0u;
         f->hard_stops += (bits & STEPRAMP_CTRL_HARD_STOP_MASK) != 0u;
-        if (be & 2u) { /* the interrupt enables live in byte 1 */
-            *reg = (*reg & ~CTRL_EN_MASK) | (bits & CTRL_EN_MASK);
-        }
-        if (be & 4u) { /* ENABLE in byte 2 */
-            *reg = (*reg & ~STEPRAMP_CTRL_ENABLE_MASK) | (bits & STEPRAMP_CTRL_ENABLE_MASK);
-        }
+        *reg = merge(*reg, data, be) & rw_mask[word]; /* the interrupt enables and ENABLE; commands read 0 */
     } else if (word == WORD(STATUS)) {
         *reg &= ~(bits & W1C_MASK);
         if ((*reg & STEPRAMP_STATUS_ESTOP_MASK) == 0u) { /* the fault is kept while ESTOP is active */
@@ -151,11 +149,8 @@ static void write_word(uint32_t off, uint32_t data, uint32_t be)
                                         (status & STEPRAMP_STATUS_DIR_MASK) != 0u, STEPRAMP_ERR_POS_BUSY,
                                         STEPRAMP_STATUS_ERROR_MASK);
         } else {
-            *reg = merge(*reg, data, be);
+            *reg = merge(*reg, data, be) & rw_mask[word];
         }
-    } else if ((word >= WORD(STEPS) && word <= WORD(STOP_RATIO)) ||
-               (word >= WORD(SEGMENT) && word <= WORD(CHANGE_AT))) {
-        *reg = merge(*reg, data, be); /* the motion and the segment registers: at any time */
     } else if ((word >= WORD(DRIVE) && word <= WORD(STEP_SPACE)) || word == WORD(INPUT_FILTER) ||
                word == WORD(INPUT_CFG)) {
         if (status & STEPRAMP_STATUS_BUSY_MASK) { /* stepping and input configuration: only while stopped */
@@ -163,14 +158,12 @@ static void write_word(uint32_t off, uint32_t data, uint32_t be)
                                         (status & STEPRAMP_STATUS_DIR_MASK) != 0u, STEPRAMP_ERR_CFG_BUSY,
                                         STEPRAMP_STATUS_ERROR_MASK);
         } else {
-            *reg = merge(*reg, data, be);
-            if (word == WORD(INPUT_FILTER)) {
-                *reg &= UINT32_C(0xFFFFF); /* 20 bits */
-            } else if (word == WORD(INPUT_CFG)) {
-                *reg &= INPUT_CFG_BITS;
-            }
+            *reg = merge(*reg, data, be) & rw_mask[word];
         }
-    } /* ID, CUR_DELAY, STEP_COUNT, LATCH_POS .. TIME_HI: read only */
+    } else { /* the motion and the segment registers: at any time; ID, CUR_DELAY, STEP_COUNT, LATCH_POS ..
+              * TIME_HI: read only (no RW bits) */
+        *reg = (merge(*reg, data, be) & rw_mask[word]) | (*reg & ~rw_mask[word]);
+    }
     if (hook != NULL) {
         hook(off, 1);
     }

@@ -2,7 +2,9 @@
 /*
  * A fake stepramp register bank for host tests (not for the target): a uint32_t array behind the driver's
  * STEPRAMP_READ32 / STEPRAMP_WRITE32 / STEPRAMP_WRITE8, with the core's register semantics -- byte-lane
- * writes (little-endian lanes: byte address offset b is bits 8b+7:8b), ID and the status fields read only,
+ * writes (little-endian lanes: byte address offset b is bits 8b+7:8b), each register keeping only its RW bits
+ * and starting from its reset value (STEPRAMP_<REG>_RW_MASK, _RESET of stepramp_regs.h), ID and the status fields
+ * read only,
  * CTRL command bits act on write and read 0, STATUS.DONE / ERROR / the input events / LATCHED cleared by writing 1
  * (ESTOP_FAULT only while STATUS.ESTOP reads 0), POSITION writes ignored (ERROR, POS_BUSY) while busy, the stepping
  * and input configuration (DRIVE .. STEP_SPACE, INPUT_FILTER, INPUT_CFG) too (CFG_BUSY), LATCH_POS .. TIME_HI read
