@@ -7,7 +7,8 @@ committed tb/test_durations.json, updated with build/test_durations.json (which 
 own); a test in neither is taken as 60 s (a new test is most likely a simulation: run it early). Each sw/tests
 module stays one unit on one worker (xdist_group: its module fixtures are set up once, and ~1,000 quick tests do not
 cost a scheduling round each); so does each tb module with a module-scoped fixture (test_synth_size's yosys run).
-No test is left out or changed: this only orders and groups.
+No test is left out or changed: this only orders and groups. To refresh the committed table after a full run:
+cp build/test_durations.json tb/test_durations.json.
 """
 
 from __future__ import annotations
