@@ -3,12 +3,12 @@
 
 Longest first: the tests run in the order of their measured durations, longest first, so that the two workers end
 together (a 5-minute simulation started last would leave one worker idle for 5 minutes). The durations are the
-committed tb/test_durations.json, updated with build/test_durations.json (which every run here updates with its
+committed tb/durations.json, updated with build/durations.json (which every run here updates with its
 own); a test in neither is taken as 60 s (a new test is most likely a simulation: run it early). Each sw/tests
 module stays one unit on one worker (xdist_group: its module fixtures are set up once, and ~1,000 quick tests do not
 cost a scheduling round each); so does each tb module with a module-scoped fixture (test_synth_size's yosys run).
 No test is left out or changed: this only orders and groups. To refresh the committed table after a full run:
-cp build/test_durations.json tb/test_durations.json.
+cp build/durations.json tb/durations.json.
 """
 
 from __future__ import annotations
@@ -22,8 +22,8 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 #: The durations measured here (every passing run), and the committed ones (a fresh clone).
-MEASURED = REPO / "build" / "test_durations.json"
-COMMITTED = Path(__file__).with_name("test_durations.json")
+MEASURED = REPO / "build" / "durations.json"
+COMMITTED = Path(__file__).with_name("durations.json")
 #: A test with no measured duration: a new simulation, run early.
 UNKNOWN_S = 60.0
 #: tb modules whose tests share a module-scoped fixture: one worker runs them all.
@@ -76,7 +76,7 @@ def pytest_runtest_logreport(report: pytest.TestReport) -> None:
 
 
 def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
-    """Merge this run's durations into build/test_durations.json (on the xdist controller, or in a run without
+    """Merge this run's durations into build/durations.json (on the xdist controller, or in a run without
     xdist; not after an interrupted run or a usage error)."""
     config: Any = session.config
     if hasattr(config, "workerinput") or exitstatus not in (0, 1) or not _reports:
