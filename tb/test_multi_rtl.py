@@ -475,6 +475,12 @@ async def coordinated_move(dut) -> None:
     w = tb.write_edges[-1]
     await tb.multi.wait_done(range(3), idle=lambda: tb.idle(1000))
     _, wants = tb.expected_sync(plans, w)
+    await check_coordinated_ends(tb, wants, steps, info, prescale)
+
+
+async def check_coordinated_ends(tb: Any, wants: list[list[int]], steps: list[int], info: Any, prescale: int) -> None:
+    """Every axis's edges as the model's (wants) and its POSITION, the last pulses within max(2 ticks, 0.01 c0 of the
+    slowest axis) of each other, and the pins' checks."""
     for i in range(3):
         assert tb.rises[i] == wants[i], f"axis {i}: {edges_differ(tb.rises[i], wants[i])}"
         assert await tb.axis(i).position() == steps[i], f"axis {i}: POSITION"
@@ -503,15 +509,7 @@ async def coordinated_dir_changes(dut) -> None:
     await tb.multi.wait_done(range(3), idle=lambda: tb.idle(1000))
     _, wants = tb.expected_sync(plans, w)
     assert len({want[0] for want in wants}) == 1, "the model's pulses 0 are not on one edge"
-    for i in range(3):
-        assert tb.rises[i] == wants[i], f"axis {i}: {edges_differ(tb.rises[i], wants[i])}"
-        assert await tb.axis(i).position() == steps[i], f"axis {i}: POSITION"
-    ends = [r[-1] for r in tb.rises]
-    c0_slowest = max(move.c0 for move in info.infos)
-    tolerance = max(2.0, 0.01 * c0_slowest) * prescale  # clocks
-    spread = max(ends) - min(ends)
-    assert spread <= tolerance, f"last pulses at {ends}: {spread} clocks apart, more than {tolerance}"
-    tb.check_pins()
+    await check_coordinated_ends(tb, wants, steps, info, prescale)
 
 
 @cocotb.test(timeout_time=400, timeout_unit="us")
