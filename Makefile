@@ -42,10 +42,9 @@ synth-check: setup
 	$(PY) -m stepramp.tools.rtlcheck --out build/synth_check
 
 # Every simulation of the regression writes its functional coverage to build/coverage (stepramp.sim.coverage); the
-# regression fails when a bin stays empty. The random scripts run on a fixed seed here (SCRIPT_SEED=1 unless given):
-# SCRIPT_SEED=1387059826 finds a soft stop during a pending jog change whose RTL edges differ from the model's
-# (docs/verification.md, "Known open"), a fault older than this tree; pytest alone draws a fresh seed. The workers take the tests longest first, each sw/tests module as one unit
-# (tb/conftest.py), so that they end together.
+# regression fails when a bin stays empty. The random scripts run on a fixed seed here (SCRIPT_SEED=1 unless given),
+# so that a red run names its cause and replays; pytest alone draws a fresh seed and prints it. The workers take the
+# tests longest first, each sw/tests module as one unit (tb/conftest.py), so that they end together.
 COVERAGE := build/coverage
 DIST     := --dist loadgroup --no-loadscope-reorder
 test: lint

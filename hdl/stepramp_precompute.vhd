@@ -601,6 +601,11 @@ begin
             elsif (alt_cont = '1' and eq_sa = '0') then
               -- A down head goes on: its next value (in v_r) is the stop's too.
               pc_state <= C_PC_ALT_ADD;
+            elsif (alt_cont = '1' and head_started = '0' and G_RAMP = 0) then
+              -- ... where it gave way to c_sa at interval 2 (sa = 2), its own value there: the seed D_(K-2), which
+              -- is also still the unit's last answer (the seed load) for take_alt.
+              v_r      <= rec_val & C_Q16_PAD;
+              pc_state <= C_PC_ALT_ADD;
             elsif (alt_cont = '1') then
               -- ... and where it gave way to c_sa, its own value D_(K-sa).
               request('0', '1', head_ctr);

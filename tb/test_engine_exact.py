@@ -170,6 +170,9 @@ def test_exact_engine_segments() -> None:
     c_dec = exact.ramp_constant(f_tick * (2.0 / d) ** 0.5)
     ups = _segment(120, UP, 30, 400, sa=60, sd=90, accel_seed=c_acc, decel_seed=c_dec, cruise=300 << 32)
     downs = _segment(150, DOWN, 140, 300, sa=40, sd=120, accel_seed=c_dec, decel_seed=c_dec, cruise=500 << 32)
+    # sa = 2: interval 2 is c_sa, so a stop decided at pulse 1 takes the head's own interval 2
+    down2 = _segment(150, DOWN, 140, 300, sa=2, sd=120, accel_seed=c_dec, decel_seed=c_dec, cruise=500 << 32)
+    pulse0 = segment_edges(down2[2], 1, count=1)[0]
     jog = Segment(
         length=None,
         head=UP,
@@ -194,6 +197,7 @@ def test_exact_engine_segments() -> None:
         ("up head, soft stop in the cruise", ups, Stop("soft", 25_000)),
         ("down head", downs, None),
         ("down head, soft stop in the head", downs, Stop("soft", 4_000)),
+        ("down head with sa = 2, soft stop at pulse 1", down2, Stop("soft", pulse0 + 1)),
     ):
         want = segment_edges(seg, 1, stop=None if stop is None else (stop.kind, stop.at_cycle))
         runs.append((label, plan, fields, stop, want))

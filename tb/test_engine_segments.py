@@ -82,14 +82,18 @@ def soft_after(seg: Segment, k: int) -> Stop:
 
 def test_engine_segments_positioning() -> None:
     """Up heads from n0 > 0 (faster), down heads (slower), a cruise from interval 1; with and without soft stops in
-    the head (a down head goes on to its rest; one decided at sa - 1, where the head gave way to c_sa), in the cruise,
-    and ignored where the segment's own decel ends no later."""
+    the head (a down head goes on to its rest; one decided at sa - 1, where the head gave way to c_sa, and at pulse 1
+    of heads with sa = 2, where that value is the seed itself, and sa = 1), in the cruise, and ignored where the
+    segment's own decel ends no later."""
     up = change(40.0, 60, 2000.0, 1500.0, 100.0)
     down = change(140.0, 260, 2000.0, 1500.0, 60.0)
     flat = change(100.0, 160, 2000.0, 1500.0, 100.0)
     assert up.head == UP and up.head_index >= 10 and up.sa >= 4
     assert down.head == DOWN and down.sa >= 6 and down.head_index < down.length
     assert flat.sa == 1
+    down2 = change(140.0, 260, 2000.0, 48000.0, 110.0)
+    down1 = change(140.0, 260, 2000.0, 24000.0, 130.0)
+    assert down2.head == DOWN and down2.sa == 2 and down1.head == DOWN and down1.sa == 1
     cases = [
         Case("up", up),
         Case("up negative, prescale 2", change(40.0, 60, 2000.0, 1500.0, 100.0, prescale=2), direction=1),
@@ -101,6 +105,9 @@ def test_engine_segments_positioning() -> None:
         Case("down, soft stop at sa - 1", down, stop=soft_after(down, down.sa - 2)),
         Case("down, soft stop in the cruise", down, stop=soft_after(down, down.sa + 1)),
         Case("down, hard stop", down, stop=Stop(HARD, normal_edge(down, 5) + 3)),
+        # sa = 2: interval 2 is c_sa, so a stop at pulse 1 takes the head's own interval 2 (its seed), not one beyond
+        Case("down, sa = 2, soft stop at pulse 1", down2, stop=soft_after(down2, 0)),
+        Case("down, sa = 1, soft stop at pulse 1", down1, stop=soft_after(down1, 0)),
     ]
     play("positioning", cases)
 
@@ -111,6 +118,8 @@ def test_engine_segments_endless() -> None:
     jog = change(0.0, None, 2000.0, 1500.0, 100.0)
     jog_up = change(40.0, None, 2000.0, 1500.0, 100.0)
     jog_down = change(140.0, None, 2000.0, 1500.0, 60.0)
+    jog_down2 = change(140.0, None, 2000.0, 48000.0, 110.0)
+    assert jog_down2.head == DOWN and jog_down2.sa == 2
     assert jog.head_index == 0 and jog.run_stop > 0 and jog_down.head == DOWN
     cases = [
         Case("jog, soft stop in ACCEL", jog, stop=soft_after(jog, 3)),
@@ -120,6 +129,7 @@ def test_engine_segments_endless() -> None:
         Case("jog from speed, soft stop in RUN", jog_up, stop=soft_after(jog_up, jog_up.sa + 4)),
         Case("jog down, soft stop in the head", jog_down, stop=soft_after(jog_down, 3)),
         Case("jog down, soft stop in RUN", jog_down, stop=soft_after(jog_down, jog_down.sa + 3)),
+        Case("jog down, sa = 2, soft stop at pulse 1", jog_down2, stop=soft_after(jog_down2, 0)),
     ]
     play("endless", cases)
 
