@@ -137,8 +137,12 @@ architecture rtl of stepramp_engine is
   signal chk_code     : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
   signal n_zero       : std_logic;
   signal n_one        : std_logic;
+  -- The check before its register (check_proc).
+  signal chk_c    : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
+  signal n_zero_c : std_logic;
+  signal n_one_c  : std_logic;
   -- Clocks until a pulse keeps min_gap from the previous pulse of the move (0: it may come).
-  signal gap_left : unsigned(16 downto 0);
+  signal gap_left : natural range 0 to 2 ** 17 - 1;
   -- A soft stop request waits for its pulse p (the first pulse edge after the edge that sampled it).
   signal sreq : std_logic;
   -- Take-over: chg_pend_r an accepted change waits for its pulse P; chg_hit STEP_COUNT = P (registered: pulse P - 1
@@ -161,8 +165,12 @@ architecture rtl of stepramp_engine is
   signal tick        : std_logic;
 
   -- Interval now counting down. cnt is 33 bits: an interval lasts up to 2^32 ticks (integer part 2^32 - 1 plus a
-  -- carry from the fraction).
-  signal cnt : unsigned(32 downto 0);
+  -- carry from the fraction). Its low 16 bits are an integer and the high 17 bits step when they wrap: a 33-bit
+  -- down counter in hardware, but a simulator counts the low part natively instead of bit by bit (gap_left too).
+  signal cnt_lo : natural range 0 to 2 ** 16 - 1;
+  signal cnt_hi : unsigned(16 downto 0);
+  -- step_count_r = change_at (registered as chg_hit)
+  signal chg_eq : std_logic;
   -- cnt = 1 and gap_left /= 0 as registered flags, set together with the counters, so that the decision of a
   -- pulse edge starts from flip-flops.
   signal cnt_one  : std_logic;
@@ -334,8 +342,11 @@ begin
   stop_mode_m <= stop_mode or alt_r;
 
   -- Parameter check of the latched move: only values the move will really use (rule order of the spec) must be
-  -- >= 1.0. Registered every clock; the sequencer reads it at edge 2 (the parameters are latched at edge 0).
-  check_proc : process (clk) is
+  -- >= 1.0. Combinational from the latched parameters and registered every clock (seq_proc); the sequencer reads it
+  -- at edge 2 (the parameters are latched at edge 0). A process on the parameters, not on the clock: a simulator
+  -- evaluates it once a move, not every clock (the register is the same).
+  check_proc : process (p_prescale, p_l, p_endless, p_sa, p_sd, p_sd_sa, p_l_sd, p_c_first0, p_c_last, p_c_sa,
+                        p_c_sd, p_cruise, p_accel_seed0, p_decel_seed0, p_head_down, p_k_sa, p_n0_sa) is
 
     variable v_chk   : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
     variable v_n_one : boolean;
@@ -344,55 +355,55 @@ begin
 
   begin
 
-    -- Only while busy: the latched parameters are undefined before the first start, and an idle engine should not
-    -- compare them every clock (simulation speed; the result is only read at edge 2 of a move).
-    if (rising_edge(clk) and busy_r = '1') then
-      -- Two subtractions (p_sd_sa, p_l_sd, registered with the move) give every relation of sa, sd and L the rules
-      -- need. Once sa <= sd <= L holds (BOUNDS), sa <= L follows, sa = L is sa = sd = L, and sa, sd >= 1 make
-      -- "/= 1" a test of the upper bits.
-      -- p_l = N - 1 modulo 2^31: all ones for N = 0, 0 for N = 1.
-      v_n_one := p_l = 0 and p_endless = '0';
-      v_n_two := (p_l /= 0 and p_l /= C_L_OF_N0) or p_endless = '1';
-      -- An endless move has no last interval and no final decel: sd and L are not read (v_fin: they are).
-      v_fin := p_endless = '0';
+    -- (Before the first latch the parameters are undefined; the result is read only after one.)
+    -- Two subtractions (p_sd_sa, p_l_sd, registered with the move) give every relation of sa, sd and L the rules
+    -- need. Once sa <= sd <= L holds (BOUNDS), sa <= L follows, sa = L is sa = sd = L, and sa, sd >= 1 make
+    -- "/= 1" a test of the upper bits.
+    -- p_l = N - 1 modulo 2^31: all ones for N = 0, 0 for N = 1.
+    v_n_one := p_l = 0 and p_endless = '0';
+    v_n_two := (p_l /= 0 and p_l /= C_L_OF_N0) or p_endless = '1';
+    -- An endless move has no last interval and no final decel: sd and L are not read (v_fin: they are).
+    v_fin := p_endless = '0';
 
-      v_chk := C_ERR_NONE;
-      if (p_prescale = 0) then
-        v_chk := C_ERR_PRESCALE;
-      elsif (v_n_two) then
-        -- N >= 2
-        if (p_sa = 0 or (v_fin and (p_sd = 0 or p_sd_sa(31) = '1' or p_l_sd(31) = '1'))) then
-          v_chk := C_ERR_BOUNDS;
-        elsif (p_c_first0 = '1') then
-          v_chk := C_ERR_C_FIRST;
-        elsif ((p_l(30 downto 1) /= 0 or not v_fin) and p_c_last(47 downto 16) = 0) then
-          v_chk := C_ERR_C_LAST;
-        elsif (p_sa(30 downto 1) /= 0 and (p_sd_sa /= 0 or p_l_sd /= 0 or not v_fin) and p_c_sa(47 downto 16) = 0) then
-          v_chk := C_ERR_C_SA;
-        elsif (v_fin and p_sd(30 downto 1) /= 0 and p_l_sd /= 0 and p_sd_sa /= 0 and p_c_sd(47 downto 16) = 0) then
-          v_chk := C_ERR_C_SD;
-        elsif ((p_sd_sa(30 downto 1) /= 0 or not v_fin) and p_cruise(63 downto 32) = 0) then
-          v_chk := C_ERR_CRUISE;
-        elsif ((p_sa(30 downto 2) /= 0 or p_sa(1 downto 0) = "11") and p_accel_seed0 = '1') then
-          v_chk := C_ERR_ACCEL_SEED;
-        elsif (v_fin and p_l_sd(30 downto 1) /= 0 and p_decel_seed0 = '1') then
-          v_chk := C_ERR_DECEL_SEED;
-        elsif ((p_head_down = '1' and p_k_sa(31) = '1') or (p_head_down = '0' and p_n0_sa(31) = '1')) then
-          v_chk := C_ERR_SEGMENT;
-        end if;
-      end if;
-      chk_code <= v_chk;
+    v_chk := C_ERR_NONE;
 
-      if (not v_n_one and not v_n_two) then
-        n_zero <= '1';
-      else
-        n_zero <= '0';
+    if (p_prescale = 0) then
+      v_chk := C_ERR_PRESCALE;
+    elsif (v_n_two) then
+      -- N >= 2
+      if (p_sa = 0 or (v_fin and (p_sd = 0 or p_sd_sa(31) = '1' or p_l_sd(31) = '1'))) then
+        v_chk := C_ERR_BOUNDS;
+      elsif (p_c_first0 = '1') then
+        v_chk := C_ERR_C_FIRST;
+      elsif ((p_l(30 downto 1) /= 0 or not v_fin) and p_c_last(47 downto 16) = 0) then
+        v_chk := C_ERR_C_LAST;
+      elsif (p_sa(30 downto 1) /= 0 and (p_sd_sa /= 0 or p_l_sd /= 0 or not v_fin) and p_c_sa(47 downto 16) = 0) then
+        v_chk := C_ERR_C_SA;
+      elsif (v_fin and p_sd(30 downto 1) /= 0 and p_l_sd /= 0 and p_sd_sa /= 0 and p_c_sd(47 downto 16) = 0) then
+        v_chk := C_ERR_C_SD;
+      elsif ((p_sd_sa(30 downto 1) /= 0 or not v_fin) and p_cruise(63 downto 32) = 0) then
+        v_chk := C_ERR_CRUISE;
+      elsif ((p_sa(30 downto 2) /= 0 or p_sa(1 downto 0) = "11") and p_accel_seed0 = '1') then
+        v_chk := C_ERR_ACCEL_SEED;
+      elsif (v_fin and p_l_sd(30 downto 1) /= 0 and p_decel_seed0 = '1') then
+        v_chk := C_ERR_DECEL_SEED;
+      elsif ((p_head_down = '1' and p_k_sa(31) = '1') or (p_head_down = '0' and p_n0_sa(31) = '1')) then
+        v_chk := C_ERR_SEGMENT;
       end if;
-      if (v_n_one) then
-        n_one <= '1';
-      else
-        n_one <= '0';
-      end if;
+    end if;
+
+    chk_c <= v_chk;
+
+    if (not v_n_one and not v_n_two) then
+      n_zero_c <= '1';
+    else
+      n_zero_c <= '0';
+    end if;
+
+    if (v_n_one) then
+      n_one_c <= '1';
+    else
+      n_one_c <= '0';
     end if;
 
   end process check_proc;
@@ -568,7 +579,8 @@ begin
     ) is
     begin
 
-      cnt     <= unsigned(d);
+      cnt_lo  <= to_integer(unsigned(d(15 downto 0)));
+      cnt_hi  <= unsigned(d(32 downto 16));
       cnt_one <= '0';
 
       if (unsigned(d) = 1) then
@@ -593,6 +605,9 @@ begin
       adv_r       <= d_load;
       alt_r       <= d_alt;
       taken_r     <= d_load or d_alt;
+      chk_code    <= chk_c;
+      n_zero      <= n_zero_c;
+      n_one       <= n_one_c;
 
       case phase is
 
@@ -631,8 +646,13 @@ begin
         when C_PH_RUN =>
 
           if (tick = '1' and cnt_one = '0') then
-            cnt <= cnt - 1;
-            if (cnt = 2) then
+            if (cnt_lo = 0) then
+              cnt_lo <= 2 ** 16 - 1;
+              cnt_hi <= cnt_hi - 1;
+            else
+              cnt_lo <= cnt_lo - 1;
+            end if;
+            if (cnt_lo = 2 and cnt_hi = 0) then
               cnt_one <= '1';
             end if;
           end if;
@@ -646,7 +666,7 @@ begin
 
       -- Step spacing: gap_left is 0 once min_gap clocks have passed since the last pulse (none before pulse 0).
       if (d_pulse = '1' and unsigned(min_gap) /= 0) then
-        gap_left <= unsigned(min_gap) - 1;
+        gap_left <= to_integer(unsigned(min_gap)) - 1;
         if (unsigned(min_gap(16 downto 1)) /= 0) then
           gap_nz <= '1';
         else
@@ -694,7 +714,7 @@ begin
       -- busy, with nothing pending, no soft stop requested or in effect (nor one in this write), pulse P - 1 not
       -- yet emitted (STEP_COUNT < P) and P not past the running segment's last pulse (an endless one has none);
       -- else refused (the motion goes on).
-      chg_hit       <= to_sl(step_count_r = unsigned(change_at));
+      chg_hit       <= chg_eq;
       chg_refused_r <= '0';
       tk_d1         <= tk;
       tk_d2         <= tk_d1;
@@ -756,7 +776,7 @@ begin
         busy_r        <= '0';
         done_r        <= '0';
         error_r       <= '0';
-        gap_left      <= (others => '0');
+        gap_left      <= 0;
         gap_nz        <= '0';
         err_code_r    <= C_ERR_NONE;
         step_r        <= '0';
@@ -784,6 +804,10 @@ begin
     end if;
 
   end process seq_proc;
+
+  -- (A concurrent compare: evaluated when STEP_COUNT or CHANGE_AT changes, registered every clock in seq_proc.)
+  chg_eq <= '1' when step_count_r = unsigned(change_at) else
+            '0';
 
   chg_pend    <= chg_pend_r;
   chg_refused <= chg_refused_r;

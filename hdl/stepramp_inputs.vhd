@@ -44,13 +44,17 @@ architecture rtl of stepramp_inputs is
 
   type cnt_array_t is array (0 to 3) of unsigned(G_FILTER_BITS - 1 downto 0);
 
-  signal sync1     : std_logic_vector(3 downto 0);
-  signal sync2     : std_logic_vector(3 downto 0);
-  signal level_r   : std_logic_vector(3 downto 0);
-  signal rise_r    : std_logic_vector(3 downto 0);
-  signal fall_r    : std_logic_vector(3 downto 0);
-  signal cnt       : cnt_array_t;
-  signal last      : unsigned(G_FILTER_BITS - 1 downto 0);
+  signal sync1   : std_logic_vector(3 downto 0);
+  signal sync2   : std_logic_vector(3 downto 0);
+  signal level_r : std_logic_vector(3 downto 0);
+  signal rise_r  : std_logic_vector(3 downto 0);
+  signal fall_r  : std_logic_vector(3 downto 0);
+  signal cnt     : cnt_array_t;
+  signal last    : unsigned(G_FILTER_BITS - 1 downto 0);
+  -- TIME counts every clock: its low 16 bits are an integer (a simulator adds it natively, not bit by bit), the
+  -- high 48 bits step when the low part wraps (a 64-bit counter in hardware all the same).
+  signal time_lo   : natural range 0 to 2 ** 16 - 1;
+  signal time_hi   : unsigned(47 downto 0);
   signal time_r    : unsigned(63 downto 0);
   signal latched_r : std_logic;
   signal lpos_r    : std_logic_vector(31 downto 0);
@@ -139,8 +143,13 @@ begin
   begin
 
     if rising_edge(clk) then
-      time_r <= time_r + 1;
-      hit    := '0';
+      if (time_lo = 2 ** 16 - 1) then
+        time_lo <= 0;
+        time_hi <= time_hi + 1;
+      else
+        time_lo <= time_lo + 1;
+      end if;
+      hit := '0';
 
       case latch_src is
 
@@ -174,7 +183,8 @@ begin
       end if;
 
       if (rst = '1') then
-        time_r    <= (others => '0');
+        time_lo   <= 0;
+        time_hi   <= (others => '0');
         latched_r <= '0';
         lpos_r    <= (others => '0');
         ltime_r   <= (others => '0');
@@ -189,6 +199,7 @@ begin
   latched    <= latched_r;
   latch_pos  <= lpos_r;
   latch_time <= std_logic_vector(ltime_r);
+  time_r     <= time_hi & to_unsigned(time_lo, 16);
   time_count <= std_logic_vector(time_r);
 
   assert G_FILTER_BITS >= 1 and G_FILTER_BITS <= 32

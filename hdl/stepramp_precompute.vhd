@@ -202,7 +202,13 @@ architecture rtl of stepramp_precompute is
   signal nd_req_num   : std_logic_vector(G_DIV_WIDTH - 1 downto 0);
   -- 2 * rec_val + rec_rem, the numerator of the next recurrence step, registered every clock (rec_val and rec_rem
   -- are set at least one clock before the request that reads it), so that the divider loads a flip-flop.
-  signal rec_num  : unsigned(G_DIV_WIDTH - 1 downto 0);
+  signal rec_num   : unsigned(G_DIV_WIDTH - 1 downto 0);
+  signal rec_num_c : unsigned(G_DIV_WIDTH - 1 downto 0);
+  -- cur_prod + stop_ratio; the accumulator step's fraction sum (with its carry), integer part + 1, and result.
+  signal prod_sum : unsigned(47 downto 0);
+  signal frac_sum : unsigned(32 downto 0);
+  signal int_inc  : unsigned(32 downto 0);
+  signal acc_sum  : unsigned(64 downto 0);
   signal nd_busy  : std_logic;
   signal nd_valid : std_logic;
   signal nd_value : std_logic_vector(47 downto 0);
@@ -299,12 +305,24 @@ begin
 
   end generate exact_gen;
 
+  -- The adders pc_proc reads, as concurrent statements of the registers they add (the same logic as variables in the
+  -- process, but a simulator evaluates them when an operand changes, not every clock):
+  -- 2 * rec_val + rec_rem (registered in rec_num), the next running product (registered in prod_next), and the
+  -- fractional-carry accumulator step of the value in v_r (used by C_PC_ADD and C_PC_ALT_ADD: one adder),
+  -- carry-select: the fraction's sum and the integer part + 1 are computed side by side and the fraction's carry
+  -- picks the integer part, so no carry ripples through all 65 bits. "s >> 32 = 0" (no ticks) follows from the same
+  -- carry and v_r's integer part.
+  rec_num_c <= resize(rec_val & '0', G_DIV_WIDTH) + rec_rem;
+  prod_sum  <= ('0' & cur_prod) + p_stop_ratio;
+  frac_sum  <= ('0' & v_r(31 downto 0)) + ('0' & acc);
+  int_inc   <= ('0' & v_r(63 downto 32)) + 1;
+  acc_sum   <= int_inc & frac_sum(31 downto 0) when frac_sum(32) = '1' else
+               ('0' & v_r(63 downto 32)) & frac_sum(31 downto 0);
+
   pc_proc : process (clk) is
 
     variable v_sum  : unsigned(64 downto 0);
-    variable v_low  : unsigned(32 downto 0);
     variable v_zero : std_logic;
-    variable v_prod : unsigned(47 downto 0);
     -- The index step of a pulse edge (advance or take_alt): the interval after the one that starts is prepared.
     variable v_idx      : boolean;
     variable v_pcm      : unsigned(30 downto 0); -- pc_m before the step
@@ -433,25 +451,15 @@ begin
 
     if rising_edge(clk) then
       nd_flush      <= '0';
-      rec_num       <= resize(rec_val & '0', G_DIV_WIDTH) + rec_rem;
+      rec_num       <= rec_num_c;
       v_idx         := false;
       v_pcm         := pc_m;
       v_cur_prod    := cur_prod;
       v_prod_big    := prod_big;
-      v_prod        := ('0' & cur_prod) + p_stop_ratio;
-      prod_next     <= v_prod(46 downto 0);
-      prod_next_big <= prod_big or v_prod(47);
-      -- The fractional-carry accumulator step of the value in v_r (used by C_PC_ADD and C_PC_ALT_ADD: one adder),
-      -- carry-select: the fraction's sum and the integer part + 1 are computed side by side and the fraction's carry
-      -- picks the integer part, so no carry ripples through all 65 bits. "s >> 32 = 0" (no ticks) follows from the
-      -- same carry and v_r's integer part.
-      v_low := ('0' & v_r(31 downto 0)) + ('0' & acc);
-      if (v_low(32) = '1') then
-        v_sum := (('0' & v_r(63 downto 32)) + 1) & v_low(31 downto 0);
-      else
-        v_sum := ('0' & v_r(63 downto 32)) & v_low(31 downto 0);
-      end if;
-      v_zero := v_int_zero and not v_low(32);
+      prod_next     <= prod_sum(46 downto 0);
+      prod_next_big <= prod_big or prod_sum(47);
+      v_sum         := acc_sum;
+      v_zero        := v_int_zero and not frac_sum(32);
 
       -- Request handshake: the unit takes req at the first edge where it is not busy (always the first one in
       -- practice: it is flushed at start and serves at most one request per interval).

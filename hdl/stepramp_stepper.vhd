@@ -115,7 +115,7 @@ architecture rtl of stepramp_stepper is
   constant C_SETUP_MIN : natural := C_START_TO_STEP + 1;
 
   -- since_step saturates above the largest min_gap - C_START_TO_STEP - 1 (min_gap <= 2 * 65535).
-  constant C_SINCE_MAX : unsigned(16 downto 0) := (others => '1');
+  constant C_SINCE_MAX : natural := 2 ** 17 - 1;
 
   -- STEP pulse. The reset keeps a pulse in progress, so it reads step_r: both start at 0 at configuration (the
   -- flip-flops' power-up value), which lets the first reset decide in every simulator (a netlist's X would stay).
@@ -123,10 +123,13 @@ architecture rtl of stepramp_stepper is
   signal step_r    : std_logic             := '0';
   signal width_cnt : unsigned(15 downto 0) := (others => '0');
   -- vsg_on signal_007
-  signal width_m1   : unsigned(15 downto 0);
-  signal since_step : unsigned(16 downto 0); -- edges since eng_step was last sampled '1' (saturating)
-  signal min_gap_r  : unsigned(16 downto 0);
-  signal space_ok   : std_logic;             -- an eng_start registered at this edge keeps min_gap
+  signal width_m1 : unsigned(15 downto 0);
+  -- The counters and comparisons that change every clock are integers (17-bit registers in hardware, as vectors
+  -- would be): a simulator adds and compares them natively instead of bit by bit.
+  signal since_step : natural range 0 to C_SINCE_MAX; -- edges since eng_step was last sampled '1' (saturating)
+  signal min_gap_c  : natural range 0 to 2 ** 17 - 1;
+  signal min_gap_r  : natural range 0 to 2 ** 17 - 1;
+  signal space_ok   : std_logic;                      -- an eng_start registered at this edge keeps min_gap
 
   -- Start gate.
   signal gstate      : std_logic_vector(1 downto 0);
@@ -138,7 +141,7 @@ architecture rtl of stepramp_stepper is
   signal fault_r     : std_logic;
   signal setup_cnt   : unsigned(15 downto 0);
   signal setup_wait  : unsigned(15 downto 0);
-  signal hold_m1     : unsigned(15 downto 0);
+  signal hold_m1     : natural range 0 to 2 ** 16 - 1;
   signal hold_ok     : std_logic;
 
   -- Winding levels of the on/off modes, from the half-step index h (0 .. 7).
@@ -215,7 +218,7 @@ begin
       elsif (eng_step = '1') then
         step_r     <= '1';
         width_cnt  <= width_m1;
-        since_step <= (others => '0');
+        since_step <= 0;
       else
         if (step_r = '1') then
           if (width_cnt = 0) then
@@ -232,29 +235,25 @@ begin
 
   end process step_proc;
 
-  -- The shortest distance between two STEP rising edges (step_space: the STEP low time, 0 acts as 1).
+  -- The shortest distance between two STEP rising edges (step_space: the STEP low time, 0 acts as 1), registered.
+  min_gap_c <= to_integer(width_m1) + 2 when unsigned(step_space) = 0 else
+               to_integer(width_m1) + 1 + to_integer(unsigned(step_space));
+
   gap_proc : process (clk) is
-
-    variable v_space : unsigned(16 downto 0);
-
   begin
 
     if rising_edge(clk) then
-      v_space := resize(unsigned(step_space), 17);
-      if (v_space = 0) then
-        v_space := to_unsigned(1, 17);
-      end if;
-      min_gap_r <= resize(width_m1, 17) + 1 + v_space;
+      min_gap_r <= min_gap_c;
     end if;
 
   end process gap_proc;
 
-  eng_min_gap <= std_logic_vector(min_gap_r);
+  eng_min_gap <= std_logic_vector(to_unsigned(min_gap_r, 17));
 
   -- An eng_start registered at edge S gives a STEP rising edge at S + C_START_TO_STEP; the previous one was at the
   -- last edge R that sampled eng_step = '1' (R = S when eng_step is '1' now, else since_step = S - 1 - R).
   space_ok <= '1' when eng_step = '1' and min_gap_r <= C_START_TO_STEP else
-              '1' when eng_step = '0' and resize(since_step, 18) + C_START_TO_STEP + 1 >= resize(min_gap_r, 18) else
+              '1' when eng_step = '0' and since_step + C_START_TO_STEP + 1 >= min_gap_r else
               '0';
 
   ---------------------------------------------------------------------------------------------------------------------
@@ -262,8 +261,8 @@ begin
   -- eng_start follows so that the engine's first STEP rising edge comes max(dir_setup, 5) clocks after it.
   ---------------------------------------------------------------------------------------------------------------------
   -- DIR may change at edge D when D - R >= max(dir_hold, 1), i.e. since_step (value after edge D - 1) >= hold - 1.
-  hold_m1 <= (others => '0') when unsigned(dir_hold) = 0 else
-             unsigned(dir_hold) - 1;
+  hold_m1 <= 0 when to_integer(unsigned(dir_hold)) = 0 else
+             to_integer(unsigned(dir_hold)) - 1;
 
   hold_ok <= '1' when since_step >= hold_m1 else
              '0';

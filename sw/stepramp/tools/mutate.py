@@ -60,6 +60,11 @@ _ENGINE = [
     "tb/test_engine.py::test_engine_runs_the_loaded_move",
     "tb/test_engine.py::test_engine_start_without_load",
 ]
+#: continuation segments (down heads, their soft stops) run from START on the engine bench
+_SEGMENTS = [
+    "tb/test_engine_segments.py::test_engine_segments_positioning",
+    "tb/test_engine_segments.py::test_engine_segments_endless",
+]
 _PLB = [
     "tb/test_peripheral.py::test_registers[stepramp_plb]",
     "tb/test_peripheral.py::test_profiles[stepramp_plb-1]",
@@ -85,8 +90,8 @@ SUITES: dict[str, list[str]] = {
     "stepramp_next_delay.vhd": ["tb/test_next_delay.py", *_ENGINE[:6]],
     "stepramp_isqrt.vhd": ["tb/test_isqrt.py", "tb/test_next_delay_exact.py"],
     "stepramp_next_delay_exact.vhd": ["tb/test_next_delay_exact.py"],
-    "stepramp_precompute.vhd": ["tb/test_precompute.py", *_ENGINE],
-    "stepramp_engine.vhd": [*_ENGINE, *_PLB[:1]],
+    "stepramp_precompute.vhd": ["tb/test_precompute.py", *_ENGINE, *_SEGMENTS],
+    "stepramp_engine.vhd": [*_ENGINE, *_SEGMENTS, *_PLB[:1]],
     "stepramp_stepper.vhd": ["tb/test_stepper.py", *_PLB],
     "stepramp_regfile.vhd": ["tb/test_regfile.py", "tb/test_readback.py", *_PLB],
     "stepramp_core.vhd": ["tb/test_core.py::test_core", *_PLB],
