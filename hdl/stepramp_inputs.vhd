@@ -51,6 +51,7 @@ architecture rtl of stepramp_inputs is
   signal fall_r  : std_logic_vector(3 downto 0);
   signal cnt     : cnt_array_t;
   signal last    : unsigned(G_FILTER_BITS - 1 downto 0);
+  signal last_c  : unsigned(G_FILTER_BITS - 1 downto 0);
   -- TIME counts every clock: its low 16 bits are an integer (a simulator adds it natively, not bit by bit), the
   -- high 48 bits step when the low part wraps (a 64-bit counter in hardware all the same).
   signal time_lo   : natural range 0 to 2 ** 16 - 1;
@@ -78,15 +79,19 @@ begin
 
   end process sync_proc;
 
-  -- The count a mismatch must reach: FILTER - 1 (0 for FILTER 0 and 1), registered off the compare's path.
+  -- The count a mismatch must reach: FILTER - 1 (0 for FILTER 0 and 1), registered off the compare's path (the
+  -- subtraction a concurrent statement, which a simulator evaluates when FILTER changes, not every clock).
+  last_c <= (others => '0') when unsigned(filter) = 0 else
+            unsigned(filter) - 1;
+
   last_proc : process (clk) is
   begin
 
     if rising_edge(clk) then
-      if (rst = '1' or unsigned(filter) = 0) then
+      if (rst = '1') then
         last <= (others => '0');
       else
-        last <= unsigned(filter) - 1;
+        last <= last_c;
       end if;
     end if;
 
