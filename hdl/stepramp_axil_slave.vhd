@@ -156,6 +156,10 @@ begin
       end if;
 
       if (rst = '1') then
+        -- (The addresses too: the register file converts them every time they change, and an undefined one would
+        -- be converted to a warning at every access of the other kind.)
+        awaddr_r    <= (others => '0');
+        araddr_r    <= (others => '0');
         aw_full     <= '0';
         w_full      <= '0';
         ar_full     <= '0';

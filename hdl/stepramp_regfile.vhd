@@ -135,8 +135,11 @@ architecture rtl of stepramp_regfile is
 
   -- The read-back RAM: its port (word address, lane write enables, write data) and registered read data; written
   -- tells, per storage word, whether it was written since reset; ram_sel_r picks ram_q over rdata_r for the read.
-  signal ram       : ram_t;
-  signal ram_addr  : natural range 0 to C_WORDS - 1;
+  signal ram      : ram_t;
+  signal ram_addr : natural range 0 to C_WORDS - 1;
+  -- The write's word (waddr with G_WADDR; the access's word ram_addr otherwise), as a concurrent statement like
+  -- ram_addr: a simulator converts the addresses when they change, not every clock.
+  signal bus_wword : natural range 0 to 2 ** (C_ADDR_BITS - 2) - 1;
   signal ram_we    : std_logic_vector(3 downto 0);
   signal ram_wdata : std_logic_vector(31 downto 0);
   signal ram_q     : std_logic_vector(31 downto 0);
@@ -356,11 +359,8 @@ begin
   begin
 
     if rising_edge(clk) then
-      w  := to_integer(unsigned(addr(C_ADDR_BITS - 1 downto 2)));
-      ww := w;
-      if (G_WADDR) then
-        ww := to_integer(unsigned(waddr(C_ADDR_BITS - 1 downto 2)));
-      end if;
+      w           := ram_addr;
+      ww          := bus_wword;
       ack_r       <= '0';
       err_r       <= '0';
       start_r     <= '0';
@@ -680,6 +680,9 @@ begin
   -- The RAM's write port: the storage writes that bus_proc accepts into mem, with the same byte merge and mask. A
   -- word's first write since reset enables every lane, the disabled ones taking the reset value (what mem holds).
   ram_addr <= to_integer(unsigned(addr(C_ADDR_BITS - 1 downto 2)));
+
+  bus_wword <= to_integer(unsigned(waddr(C_ADDR_BITS - 1 downto 2))) when G_WADDR else
+               ram_addr;
 
   ram_wr_proc : process (wr, ram_addr, wdata, be, moving, written, locked) is
 

@@ -9,8 +9,10 @@ deliberate change in size): iCE40 LUT4 and FF of each entity as the top instanti
 
 from __future__ import annotations
 
+import functools
 import json
 import shutil
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -20,11 +22,18 @@ from stepramp.tools.synth import BASELINE, entity_cells, ice40_summary, netlist
 TOP = "stepramp_plb"
 
 
-@pytest.fixture(scope="module")
-def entities(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict[str, int]]:
-    assert shutil.which("yosys"), "yosys is needed for the size check (Debian: apt-get install yosys)"
-    out: Path = tmp_path_factory.mktemp("synth")
+@functools.cache
+def _synthesised() -> dict[str, dict[str, int]]:
+    """The synthesis, once per process: an xdist worker tears module fixtures down whenever its queue runs empty,
+    and would run yosys again for the next test of this module."""
+    out = Path(tempfile.mkdtemp(prefix="synth_size_"))
     return entity_cells(TOP, netlist(TOP, out), out)  # both raise on a latch
+
+
+@pytest.fixture(scope="module")
+def entities() -> dict[str, dict[str, int]]:
+    assert shutil.which("yosys"), "yosys is needed for the size check (Debian: apt-get install yosys)"
+    return _synthesised()
 
 
 def test_no_latch_cells(entities: dict[str, dict[str, int]]) -> None:

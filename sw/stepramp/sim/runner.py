@@ -290,7 +290,7 @@ def run_cocotb(
     runner = get_runner("ghdl")
     if waves is None and os.environ.get("WAVES", "0") not in ("", "0"):
         waves = build_dir / f"{toplevel}.ghw"  # WAVES=1 pytest ...: every simulation writes its waveform
-    plusargs = ["--ieee-asserts=disable-at-0"]
+    plusargs = ["--ieee-asserts=disable-at-0", *os.environ.get("STEPRAMP_GHDL_EXTRA", "").split()]
     if waves is not None:
         kind = "fst" if waves.suffix == ".fst" else "wave"
         plusargs.append(f"--{kind}={waves.resolve()}")
