@@ -255,6 +255,7 @@ def run_cocotb(
     .ghw of a top with a layout in stepramp.sim.waves, a GTKWave save file (.gtkw) is written beside it. With WAVES=1 in
     the environment every call writes build_dir/<toplevel>.ghw.
     log_file: send the build and simulation output there instead of stdout.
+    STEPRAMP_GHDL_EXTRA in the environment: more GHDL run options, space-separated (e.g. --backtrace-severity=warning).
     netlist: simulate `ghdl synth`'s Verilog netlist of the top (its generics baked in) with Icarus Verilog instead
     (stepramp.sim.netlist; the benches see STEPRAMP_NETLIST=1 and collect no coverage).
     Returns the results file; under pytest a failing test raises SystemExit.

@@ -65,6 +65,8 @@ _SEGMENTS = [
     "tb/test_engine_segments.py::test_engine_segments_positioning",
     "tb/test_engine_segments.py::test_engine_segments_endless",
 ]
+#: the exact ramp (G_RAMP = 1) on the engine bench: its segments, stops and parameter check
+_EXACT = ["tb/test_engine_exact.py::test_exact_engine_segments"]
 _PLB = [
     "tb/test_peripheral.py::test_registers[stepramp_plb]",
     "tb/test_peripheral.py::test_profiles[stepramp_plb-1]",
@@ -90,8 +92,8 @@ SUITES: dict[str, list[str]] = {
     "stepramp_next_delay.vhd": ["tb/test_next_delay.py", *_ENGINE[:6]],
     "stepramp_isqrt.vhd": ["tb/test_isqrt.py", "tb/test_next_delay_exact.py"],
     "stepramp_next_delay_exact.vhd": ["tb/test_next_delay_exact.py"],
-    "stepramp_precompute.vhd": ["tb/test_precompute.py", *_ENGINE, *_SEGMENTS],
-    "stepramp_engine.vhd": [*_ENGINE, *_SEGMENTS, *_PLB[:1]],
+    "stepramp_precompute.vhd": ["tb/test_precompute.py", *_ENGINE, *_SEGMENTS, *_EXACT],
+    "stepramp_engine.vhd": [*_ENGINE, *_SEGMENTS, *_EXACT, *_PLB[:1]],
     "stepramp_stepper.vhd": ["tb/test_stepper.py", *_PLB],
     "stepramp_regfile.vhd": ["tb/test_regfile.py", "tb/test_readback.py", *_PLB],
     "stepramp_core.vhd": ["tb/test_core.py::test_core", *_PLB],
