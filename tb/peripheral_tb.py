@@ -21,7 +21,6 @@ from typing import Any
 import cocotb
 from cocotb.triggers import ClockCycles, FallingEdge, First, RisingEdge, Timer
 
-from monitors import MotionMonitors
 from stepramp.board.driver import Outputs, Status, StepRamp, StepRampError
 from stepramp.board.plan import Plan, plan_move
 from stepramp.board.regmap import ERROR_CODES
@@ -38,6 +37,7 @@ from stepramp.sim.clocking import (
 )
 from stepramp.sim.coverage import watch_coverage
 from stepramp.sim.ipif import IpifError, IpifMaster
+from stepramp.sim.monitors import MotionMonitors
 from stepramp.sim.profiles import PROFILES_BY_NAME
 from stepramp.sim.stepwatch import StepWatch
 from stepramp.sim.waves import LAYOUTS, missing_in, signal_paths

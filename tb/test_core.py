@@ -7,7 +7,7 @@ below is a master for that port with the driver's async read / write interface, 
 programs the core exactly as it programs a board; the master checks the port's timing on every access (no answer in
 the strobe's own cycle, ack in the next one, ack for one clock only) and watches ack and err for answers nobody
 asked for. Expected values come from stepramp.board.regmap (registers), stepramp.models.engine (every STEP edge, stops),
-stepramp.models.stepping (windings, through the motion monitors of tb/monitors.py) and the rules of
+stepramp.models.stepping (windings, through the motion monitors of stepramp.sim.monitors) and the rules of
 docs/stepramp_plb.md, never from the RTL.
 
 Tests (one simulation, one after the other):
@@ -36,7 +36,6 @@ from typing import Any
 from cocotb.triggers import ClockCycles, FallingEdge, Lock, ReadOnly, RisingEdge, Timer
 from cocotb.utils import get_sim_time
 
-from monitors import MotionMonitors, StepWidthMonitor
 from peripheral_tb import MotionBench, check_stopped, stop_cases
 from stepramp.board.driver import MODES, Outputs, StepRamp
 from stepramp.board.plan import Plan, plan_move
@@ -54,6 +53,7 @@ from stepramp.models import stepping as sm
 from stepramp.models.engine import edges as model_edges
 from stepramp.sim.clocking import CLK_PERIOD_PS, apply_reset, quiet_inputs, start_clock
 from stepramp.sim.coverage import watch_coverage
+from stepramp.sim.monitors import MotionMonitors, StepWidthMonitor
 from stepramp.sim.profiles import PROFILES_BY_NAME
 from stepramp.sim.runner import run_cocotb
 from stepramp.sim.stepwatch import StepWatch

@@ -9,7 +9,7 @@ does; a limit is a soft or hard stop committed at F + 1 (the engine samples it a
 engine samples at F + 1; LATCH_TIME = F - r (r: the last edge that saw the reset) and LATCH_POS is POSITION after
 edge F. The STEP edges of a stopped move are stepramp.models.engine.edges_with_stop's for that request edge.
 
-Every test that drives ESTOP runs tb/monitors.py's EstopMonitor: no STEP rising edge more than 2 clocks after the
+Every test that drives ESTOP runs stepramp.sim.monitors's EstopMonitor: no STEP rising edge more than 2 clocks after the
 filtered ESTOP edge. The ESTOP latencies it measured are printed (the closing figure of issue 16).
 """
 
@@ -21,7 +21,6 @@ from typing import Any
 import pytest
 from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly, RisingEdge, ValueChange
 
-from monitors import EstopMonitor
 from peripheral_tb import TOPS, PeripheralTb
 from stepramp.board.driver import Outputs, StepRamp
 from stepramp.board.plan import Plan, plan_move
@@ -30,6 +29,7 @@ from stepramp.models.engine import edges as model_edges
 from stepramp.models.engine import edges_with_stop, segment_edges
 from stepramp.sim.clocking import CLK_PERIOD_PS, Cycles, now_periods
 from stepramp.sim.coverage import watch_coverage
+from stepramp.sim.monitors import EstopMonitor
 from stepramp.sim.profiles import PROFILES_BY_NAME
 from stepramp.sim.runner import run_cocotb
 from tbutil import build_dir, cocotb, edges_differ

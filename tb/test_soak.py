@@ -54,7 +54,6 @@ from typing import Any
 import pytest
 from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge, SimTimeoutError, with_timeout
 
-from monitors import EstopMonitor
 from peripheral_tb import BAD_VALUES, TOPS, PeripheralTb, expect_rejected
 from stepramp.board.change import Segment, plan_change, speed_at_pulse
 from stepramp.board.driver import MODES, Outputs, StepRamp, StepRampError
@@ -62,6 +61,7 @@ from stepramp.board.plan import Plan, plan_move, plan_move_info
 from stepramp.board.regmap import LIVE, REGISTERS, REGISTERS_BY_NAME, RW, STAGING, W1C, offset
 from stepramp.models.engine import change_edges, edges_with_stop, segment_edges
 from stepramp.models.engine import edges as model_edges
+from stepramp.sim.monitors import EstopMonitor
 from stepramp.sim.profiles import design_args
 from stepramp.sim.runner import run_cocotb
 from tbutil import build_dir, cocotb, edges_differ, env_int, now_cycles

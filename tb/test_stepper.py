@@ -7,7 +7,7 @@ takes eng_start at the next edge (edge 0), raises busy, emits pulse 0 two clocks
 `interval` clocks (>= 64), updating the electrical position (`eng_elec_pos`, the pulses counted modulo 512) in the
 cycle of each pulse and dropping busy in the cycle of the last. The bench may also set `eng_elec_pos` directly, to
 reach any electrical position at once (the real engine only counts pulses).
-Expected values come from stepramp.models.stepping; the pins are also watched by tb/monitors.py.
+Expected values come from stepramp.models.stepping; the pins are also watched by stepramp.sim.monitors.
 
 Edge numbers: edge e is the rising edge at e * CLK_PERIOD_NS; inputs are driven at the falling edge after edge
 e - 1 (so edge e samples them); "high after edge e" is the cycle after it.
@@ -24,16 +24,16 @@ import pytest
 from cocotb.triggers import ClockCycles, Event, FallingEdge, ReadOnly, RisingEdge, Timer
 from cocotb.utils import get_sim_time
 
-from monitors import (
+from stepramp.board.driver import MODES, Outputs
+from stepramp.models import stepping as sm
+from stepramp.sim import coverage
+from stepramp.sim.monitors import (
     DirTimingMonitor,
     ElectricalMonitor,
     MotionMonitors,
     ShootThroughMonitor,
     StepWidthMonitor,
 )
-from stepramp.board.driver import MODES, Outputs
-from stepramp.models import stepping as sm
-from stepramp.sim import coverage
 from stepramp.sim.runner import run_cocotb
 from tbutil import CLK_PERIOD_NS, build_dir, cocotb, env_int, start_clock_and_reset
 

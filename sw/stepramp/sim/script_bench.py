@@ -23,6 +23,7 @@ import cocotb
 from cocotb.triggers import FallingEdge, First, ReadOnly, RisingEdge, Timer, ValueChange
 from cocotb.utils import get_sim_time
 
+from stepramp.board.multi import axis_base
 from stepramp.board.regmap import REGISTERS_BY_NAME, offset
 from stepramp.sim.clocking import (
     CLK_PERIOD_NS,
@@ -35,6 +36,7 @@ from stepramp.sim.clocking import (
 )
 from stepramp.sim.coverage import watch_core
 from stepramp.sim.ipif import IpifMaster
+from stepramp.sim.monitors import EstopMonitor
 
 CTRL = offset("CTRL")
 INPUT_CFG = REGISTERS_BY_NAME["INPUT_CFG"]
@@ -200,20 +202,6 @@ async def _drive_pins(dut: Any, clk: Any, origin: int, pins: list[list[Any]]) ->
         getattr(dut, str(name)).value = int(level)
 
 
-async def _estop_watch(dut: Any, violations: list[str], origin: int) -> None:
-    """docs/algorithm.md, "Machine inputs": no STEP rising edge more than 2 clocks after the filtered ESTOP edge, while
-    the ESTOP stop (the filtered level or the fault) holds."""
-    stop = dut.core_inst.estop_stop
-    while True:
-        await RisingEdge(stop)
-        f = now_cycles(CLK_PERIOD_PS)
-        while int(stop.value):
-            await First(RisingEdge(dut.step), FallingEdge(stop))
-            late = now_cycles(CLK_PERIOD_PS) - f
-            if int(stop.value) and int(dut.step.value) and late > 2:
-                violations.append(f"STEP rose {late} clocks after the filtered ESTOP edge {f - origin}")
-
-
 async def _play(dut: Any, top: str, script: dict[str, Any]) -> dict[str, Any]:
     clk = dut.aclk if top == "stepramp_axil" else dut.clk
     quiet_inputs(dut)
@@ -226,11 +214,9 @@ async def _play(dut: Any, top: str, script: dict[str, Any]) -> dict[str, Any]:
     rec = _Recorder(dut, clk)
     latency = await _latency(bus, clk, rec)
     origin = now_cycles(CLK_PERIOD_PS) + LEAD_CLOCKS
-    estop_violations: list[str] = []
-    watchers = [
-        cocotb.start_soon(_drive_pins(dut, clk, origin, script.get("pins", []))),
-        cocotb.start_soon(_estop_watch(dut, estop_violations, origin)),
-    ]
+    # docs/algorithm.md, "Machine inputs": no STEP rising edge more than 2 clocks after the filtered ESTOP edge
+    estop = EstopMonitor(dut.core_inst.estop_stop, [dut.step]).start()
+    watchers = [cocotb.start_soon(_drive_pins(dut, clk, origin, script.get("pins", [])))]
     commits: list[int] = []
     for action in script["actions"]:
         at = origin + int(action["at"])
@@ -257,13 +243,14 @@ async def _play(dut: Any, top: str, script: dict[str, Any]) -> dict[str, Any]:
     rec.running = False
     for task in watchers:
         task.cancel()
+    estop.stop()
     keep = [i for i, e in enumerate(rec.edges) if e - origin <= int(script["until"])]
     return {
         "edges": [rec.edges[i] - origin for i in keep],
         "positions": [rec.positions[i] for i in keep],
         "core_errors": [[e - origin, code] for e, code in rec.errors],
         "commits": commits,
-        "estop_violations": estop_violations,
+        "estop_violations": [f"{t:.0f} ns: {message}" for t, message in estop.violations],
     }
 
 
@@ -360,13 +347,13 @@ async def _play_multi(dut: Any, top: str, script: dict[str, Any]) -> dict[str, A
     cfg = 1 << INPUT_CFG.field("LIMIT_EN").lsb
     cfg |= int(bool(script.get("limit_hard"))) << INPUT_CFG.field("LIMIT_HARD").lsb
     for axis in range(axes):
-        base = 0x100 * (axis + 1)
+        base = axis_base(axis)
         await bus.write(base + offset("INPUT_FILTER"), int(script.get("input_filter", 0)))
         await bus.write(base + offset("INPUT_CFG"), cfg)
     rec = _MultiRecorder(dut, axes)
     await RisingEdge(clk)
     issued = now_cycles(CLK_PERIOD_PS)
-    await bus.write(0x100 + CTRL, 0, strobe=0x2)  # (axis 0's interrupt enables, all off: changes nothing)
+    await bus.write(axis_base(0) + CTRL, 0, strobe=0x2)  # (axis 0's interrupt enables, all off: changes nothing)
     await Timer(5 * CLK_PERIOD_NS, unit="ns")
     latency = rec.writes[-1][0] - issued
     origin = now_cycles(CLK_PERIOD_PS) + LEAD_CLOCKS
@@ -383,7 +370,7 @@ async def _play_multi(dut: Any, top: str, script: dict[str, Any]) -> dict[str, A
         await _at_edge(clk, issue)
         seen = len(rec.writes)
         # the axis's CTRL, or the global window's SYNC_SOFT_STOP or SYNC_START (a group of axes)
-        ctrl = int(action.get("commit", 0x100 * (int(action["axis"]) + 1) + CTRL))
+        ctrl = int(action["commit"]) if "commit" in action else axis_base(int(action["axis"])) + CTRL
         await bus.write(ctrl, int(action["ctrl"]), strobe=0x1)
         await Timer(2 * CLK_PERIOD_NS, unit="ns")
         committed = next((e for e, a in rec.writes[seen:] if a == ctrl), None)
@@ -394,7 +381,7 @@ async def _play_multi(dut: Any, top: str, script: dict[str, Any]) -> dict[str, A
     driver.cancel()
     status = []
     for axis in range(axes):
-        status.append(await bus.read(0x100 * (axis + 1) + offset("STATUS")))
+        status.append(await bus.read(axis_base(axis) + offset("STATUS")))
     until = int(script["until"])
     return {
         "edges": [[e - origin for e in edges if e - origin <= until] for edges in rec.edges],
