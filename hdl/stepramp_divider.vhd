@@ -33,35 +33,9 @@ architecture rtl of stepramp_divider is
   constant C_IDX_W : positive := clog2(G_WIDTH);
   -- The numerator as bit pairs: padded to an even width.
   constant C_PAIRS : positive := (G_WIDTH + 1) / 2;
-  -- The radix-4 step's trial differences (G_DEN_WIDTH + 3 bits) are carry-select adders: the low C_LO bits are one
-  -- carry chain, the bits above are computed for both borrows and picked by the low chain's borrow, so no carry
-  -- ripples through the whole width in the step (the divider's clock, issue 12).
+  -- The radix-4 step's trial differences (G_DEN_WIDTH + 3 bits) are carry-select subtractors (stepramp_pkg's
+  -- csel_sub), so that no borrow ripples through the whole width in the step (the divider's clock).
   constant C_TW : positive := G_DEN_WIDTH + 3;
-  constant C_LO : positive := (C_TW + 1) / 2;
-
-  -- trial - sub, carry-select: sub is k D (k = 1 .. 3).
-  function diff (
-    trial : unsigned(C_TW - 1 downto 0);
-    sub   : unsigned(C_TW - 1 downto 0)
-  ) return unsigned is
-
-    variable lo  : unsigned(C_LO downto 0);            -- the low bits' difference and its borrow
-    variable hi0 : unsigned(C_TW - C_LO - 1 downto 0); -- the bits above without a borrow from below
-    variable hi1 : unsigned(C_TW - C_LO - 1 downto 0); -- and with one (a - b - 1 = a + not b)
-
-  begin
-
-    lo  := ('0' & trial(C_LO - 1 downto 0)) - ('0' & sub(C_LO - 1 downto 0));
-    hi0 := trial(C_TW - 1 downto C_LO) - sub(C_TW - 1 downto C_LO);
-    hi1 := trial(C_TW - 1 downto C_LO) + not sub(C_TW - 1 downto C_LO);
-
-    if (lo(C_LO) = '1') then
-      return hi1 & lo(C_LO - 1 downto 0);
-    end if;
-
-    return hi0 & lo(C_LO - 1 downto 0);
-
-  end function diff;
 
   -- State encoding as constants (not an enum) so that GHDL's VPI shows it as a plain vector.
   constant C_IDLE  : std_logic_vector(1 downto 0) := "00";
@@ -188,9 +162,9 @@ begin
           pair_r <= pair;
 
           trial := '0' & rem_r & pair_r;
-          d1    := diff(trial, "000" & den_r);
-          d2    := diff(trial, "00" & den_r & '0');
-          d3    := diff(trial, '0' & den3_r);
+          d1    := csel_sub(trial, "000" & den_r);
+          d2    := csel_sub(trial, "00" & den_r & '0');
+          d3    := csel_sub(trial, '0' & den3_r);
           if (d3(G_DEN_WIDTH + 2) = '0') then
             rem_r <= d3(G_DEN_WIDTH - 1 downto 0);
             quo_r <= quo_r(G_WIDTH - 3 downto 0) & "11";

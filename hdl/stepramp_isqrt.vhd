@@ -42,35 +42,9 @@ architecture rtl of stepramp_isqrt is
   -- is at most 2 s < 2^(C_PAIRS + G_EXTRA + 1) (the remainder after the last zero pair is not kept: only its sign
   -- is used).
   constant C_RW : positive := C_PAIRS + G_EXTRA + 1;
-  -- The trial 4 rem + pair - (4 t + 1): both operands below 2^(C_RW + 2), one sign bit above them. A carry-select
-  -- difference, as in the divider: the low C_LO bits are one carry chain, the bits above are computed for both
-  -- borrows and picked by the low chain's borrow.
+  -- The trial 4 rem + pair - (4 t + 1): both operands below 2^(C_RW + 2), one sign bit above them; a carry-select
+  -- subtractor (stepramp_pkg's csel_sub), as in the divider.
   constant C_TW : positive := C_RW + 3;
-  constant C_LO : positive := (C_TW + 1) / 2;
-
-  -- trial - sub, carry-select.
-  function diff (
-    trial : unsigned(C_TW - 1 downto 0);
-    sub   : unsigned(C_TW - 1 downto 0)
-  ) return unsigned is
-
-    variable lo  : unsigned(C_LO downto 0);            -- the low bits' difference and its borrow
-    variable hi0 : unsigned(C_TW - C_LO - 1 downto 0); -- the bits above without a borrow from below
-    variable hi1 : unsigned(C_TW - C_LO - 1 downto 0); -- and with one (a - b - 1 = a + not b)
-
-  begin
-
-    lo  := ('0' & trial(C_LO - 1 downto 0)) - ('0' & sub(C_LO - 1 downto 0));
-    hi0 := trial(C_TW - 1 downto C_LO) - sub(C_TW - 1 downto C_LO);
-    hi1 := trial(C_TW - 1 downto C_LO) + not sub(C_TW - 1 downto C_LO);
-
-    if (lo(C_LO) = '1') then
-      return hi1 & lo(C_LO - 1 downto 0);
-    end if;
-
-    return hi0 & lo(C_LO - 1 downto 0);
-
-  end function diff;
 
   -- State encoding as constants (not an enum) so that GHDL's VPI shows it as a plain vector.
   constant C_IDLE  : std_logic_vector(1 downto 0) := "00";
@@ -200,7 +174,7 @@ begin
           end if;
           pair_r <= pair;
 
-          d := diff('0' & rem_r & pair_r, '0' & root_r & "01");
+          d := csel_sub('0' & rem_r & pair_r, '0' & root_r & "01");
           if (d(C_TW - 1) = '0') then
             rem_r  <= d(C_RW - 1 downto 0);
             root_r <= root_r(C_RW - 2 downto 0) & '1';

@@ -1,5 +1,5 @@
 -- SPDX-License-Identifier: MIT
--- stepramp_pkg: helpers shared by the stepramp entities (log2_ceil, clog2, to_sl); compiled first
+-- stepramp_pkg: helpers shared by the stepramp entities (log2_ceil, clog2, to_sl, csel_sub); compiled first
 -- (docs/integration.md, "Compile order").
 
 library ieee;
@@ -22,6 +22,14 @@ package stepramp_pkg is
   function to_sl (
     b : boolean
   ) return std_logic;
+
+  -- trial - sub (both of one width w >= 2, modulo 2^w) as a carry-select subtractor: the low (w + 1) / 2 bits are one
+  -- borrow chain, the bits above are computed for both borrows and picked by the low chain's borrow, so no borrow
+  -- ripples through the whole width (the divider's radix-4 step and the square root's trial, each in one clock).
+  function csel_sub (
+    trial : unsigned;
+    sub   : unsigned
+  ) return unsigned;
 
 end package stepramp_pkg;
 
@@ -72,5 +80,33 @@ package body stepramp_pkg is
     return '0';
 
   end function to_sl;
+
+  function csel_sub (
+    trial : unsigned;
+    sub   : unsigned
+  ) return unsigned is
+
+    constant C_W  : positive := trial'length;
+    constant C_LO : positive := (C_W + 1) / 2;
+
+    alias    a   : unsigned(C_W - 1 downto 0) is trial;
+    alias    b   : unsigned(C_W - 1 downto 0) is sub;
+    variable lo  : unsigned(C_LO downto 0);            -- the low bits' difference and its borrow
+    variable hi0 : unsigned(C_W - C_LO - 1 downto 0);  -- the bits above without a borrow from below
+    variable hi1 : unsigned(C_W - C_LO - 1 downto 0);  -- and with one (a - b - 1 = a + not b)
+
+  begin
+
+    lo  := ('0' & a(C_LO - 1 downto 0)) - ('0' & b(C_LO - 1 downto 0));
+    hi0 := a(C_W - 1 downto C_LO) - b(C_W - 1 downto C_LO);
+    hi1 := a(C_W - 1 downto C_LO) + not b(C_W - 1 downto C_LO);
+
+    if (lo(C_LO) = '1') then
+      return hi1 & lo(C_LO - 1 downto 0);
+    end if;
+
+    return hi0 & lo(C_LO - 1 downto 0);
+
+  end function csel_sub;
 
 end package body stepramp_pkg;
