@@ -259,6 +259,24 @@ uint32_t stepramp_priv_min_interval_clks(uint32_t ramp, double c0_a, double c0_d
                                                       : STEPRAMP_MIN_INTERVAL_CLKS_EXACT_WIDE;
 }
 
+/* The four interval fields of a plan from the info's exact intervals (Q32.16), in the order Python evaluates them
+ * (the first overflow wins: EOVERFLOW) */
+static stepramp_err_t interval_fields(stepramp_plan_t *out, const stepramp_info_t *inf)
+{
+    stepramp_err_t err = stepramp_priv_to_fixed(inf->t_first, TWO_POW_16, TWO_POW_48, &out->c_first);
+
+    if (err == STEPRAMP_OK) {
+        err = stepramp_priv_to_fixed(inf->t_last, TWO_POW_16, TWO_POW_48, &out->c_last);
+    }
+    if (err == STEPRAMP_OK) {
+        err = stepramp_priv_to_fixed(inf->t_sa, TWO_POW_16, TWO_POW_48, &out->c_sa);
+    }
+    if (err == STEPRAMP_OK) {
+        err = stepramp_priv_to_fixed(inf->t_sd, TWO_POW_16, TWO_POW_48, &out->c_sd);
+    }
+    return err;
+}
+
 /* plan._exact_plan: the exact intervals without the recurrence deficit, the ramp constants of c0 and cd0 in the
  * seeds, in the order Python evaluates Plan's fields (the first failure wins; all are EOVERFLOW) */
 static stepramp_err_t exact_fields(stepramp_plan_t *out, stepramp_info_t *inf, const ramp_t *ramp, int64_t sa,
@@ -272,16 +290,7 @@ static stepramp_err_t exact_fields(stepramp_plan_t *out, stepramp_info_t *inf, c
     inf->t_sd = ramp_interval(ramp, sd);
     inf->t_accel_seed = ramp->k_a;
     inf->t_decel_seed = ramp->k_d;
-    err = stepramp_priv_to_fixed(inf->t_first, TWO_POW_16, TWO_POW_48, &out->c_first);
-    if (err == STEPRAMP_OK) {
-        err = stepramp_priv_to_fixed(inf->t_last, TWO_POW_16, TWO_POW_48, &out->c_last);
-    }
-    if (err == STEPRAMP_OK) {
-        err = stepramp_priv_to_fixed(inf->t_sa, TWO_POW_16, TWO_POW_48, &out->c_sa);
-    }
-    if (err == STEPRAMP_OK) {
-        err = stepramp_priv_to_fixed(inf->t_sd, TWO_POW_16, TWO_POW_48, &out->c_sd);
-    }
+    err = interval_fields(out, inf);
     if (err == STEPRAMP_OK) {
         err = stepramp_ramp_constant(ramp->k_a, &out->accel_seed);
     }
@@ -317,16 +326,7 @@ static stepramp_err_t avr446_fields(stepramp_plan_t *out, stepramp_info_t *inf, 
     inf->t_accel_seed = seed_a;
     inf->t_decel_seed = seed_d;
 
-    err = stepramp_priv_to_fixed(inf->t_first, TWO_POW_16, TWO_POW_48, &out->c_first);
-    if (err == STEPRAMP_OK) {
-        err = stepramp_priv_to_fixed(inf->t_last, TWO_POW_16, TWO_POW_48, &out->c_last);
-    }
-    if (err == STEPRAMP_OK) {
-        err = stepramp_priv_to_fixed(inf->t_sa, TWO_POW_16, TWO_POW_48, &out->c_sa);
-    }
-    if (err == STEPRAMP_OK) {
-        err = stepramp_priv_to_fixed(inf->t_sd, TWO_POW_16, TWO_POW_48, &out->c_sd);
-    }
+    err = interval_fields(out, inf);
     if (err == STEPRAMP_OK) {
         err = stepramp_priv_to_fixed(inf->t_accel_seed, TWO_POW_16, TWO_POW_48, &out->accel_seed);
     }
