@@ -97,11 +97,15 @@ async def divider_against_model(dut) -> None:
 
 @cocotb.test(timeout_time=2, timeout_unit="us")  # measured 0.4 us at width 32
 async def divider_ignores_start_while_busy(dut) -> None:
-    """A start pulse during a division changes nothing: the first result comes out, then the divider idles."""
+    """Every output is 0 after reset (docs/stepramp_divider.md, "Ports"). A start pulse during a division changes
+    nothing: the first result comes out, then the divider idles."""
     width = len(dut.numerator)
     top = (1 << width) - 1
     dut.start.value = 0
     await start_clock_and_reset(dut.clk, dut.rst)
+    await FallingEdge(dut.clk)
+    outputs = {n: int(getattr(dut, n).value) for n in ("busy", "done", "div_zero", "quotient", "remainder")}
+    assert not any(outputs.values()), f"after reset: {outputs}"
     dut.numerator.value = top
     dut.denominator.value = 1
     dut.start.value = 1

@@ -433,9 +433,10 @@ async def estop_in_every_kind_of_motion(dut) -> None:
 
 @cocotb.test(timeout_time=10, timeout_unit="ms")
 async def position_latch(dut) -> None:
-    """LATCH_POS and LATCH_TIME at HOME's activation and release edges during a move, and at LIMIT_NEG's activation
-    (which also stops the move): LATCH_TIME = F - r, LATCH_POS = POSITION after edge F (the pulses whose engine edge
-    is at or before F, from the model); the first edge only until LATCHED is cleared; the irq enable."""
+    """LATCH_POS and LATCH_TIME at HOME's activation and release edges during a move, at LIMIT_NEG's activation
+    (which also stops the move), and at LIMIT_POS's release (nothing while it is held) and activation at rest:
+    LATCH_TIME = F - r, LATCH_POS = POSITION after edge F (the pulses whose engine edge is at or before F, from the
+    model); the first edge only until LATCHED is cleared; the irq enable."""
     ib = await InputsTb.started(dut)
     tb = ib.tb
     await tb.configure(Outputs(step_width=4, dir_setup=12, dir_hold=6), enable=True)
@@ -495,6 +496,24 @@ async def position_latch(dut) -> None:
     assert flag and (pos, t) == expected(f, n0, s0, position, -1, plan), f"limit latch ({pos}, {t})"
     got = tb.edges_since(n0, s0)
     assert got == edges_with_stop(plan, "soft", f + LIMIT_SAMPLE - tb.start_edges[s0])
+    # LIMIT_POS as the source (3), at rest: its release latches at F and nothing while it is held; its activation.
+    here = await bus.read(offset("POSITION"))
+    here -= (1 << 32) * (here >> 31)
+    for release in (1, 0):
+        await ib.configure(6, latch_src=3, on_active=1 - release, on_release=release)
+        if release:
+            await ib.pin("limit_pos", 1)
+            await ClockCycles(ib.clk, 30)
+            await ib.clear_events()
+            await ClockCycles(ib.clk, 10)
+            assert (await latched())[0] == 0, "LIMIT_POS latched while it is held, before its release"
+        a = await ib.pin("limit_pos", 1 - release)
+        await ClockCycles(ib.clk, 20)
+        f = ib.filtered_at(1, a)
+        flag, pos, t = await latched()
+        assert flag == 1 and (pos, t) == (here, f - ib.reset_edge), f"LIMIT_POS latch ({flag}, {pos}, {t}) at F = {f}"
+        await ib.pin("limit_pos", 0)
+        await ClockCycles(ib.clk, 20)
     tb.finish()
 
 

@@ -104,7 +104,7 @@ async def ipif_data_and_first_access(tb: PeripheralTb) -> None:
 async def axil_quiet_in_reset(tb: PeripheralTb) -> None:
     """AXI4-Lite (the protocol's reset rule): from the first edge of reset on, BVALID and RVALID are low and stay low
     after it until an access asks for a response; the address and data channels are ready. Then the tie rule from
-    reset on."""
+    reset on, and after a read alone."""
     dut, clk = tb.dut, tb.clk
     await tb.bus.write(offset("STEPS"), 5)  # a response channel used before the reset
     await FallingEdge(clk)
@@ -130,6 +130,12 @@ async def axil_quiet_in_reset(tb: PeripheralTb) -> None:
         await write
         reads.append(await read)
     assert reads == [0, 0x11, 0x22], f"reads tied with writes of 0x11, 0x22, 0x33 after reset gave {reads}"
+    # After a read alone (a read went last), a tie lets the write go first: the tied read sees the new value.
+    assert await tb.bus.read(offset("STEPS")) == 0x33
+    write = cocotb.start_soon(tb.bus.write(offset("STEPS"), 0x44))
+    read = cocotb.start_soon(tb.bus.read(offset("STEPS")))
+    await write
+    assert await read == 0x44, "a tie after a read: the read went first (the write should, a read went last)"
 
 
 @cocotb.test(timeout_time=60, timeout_unit="us")  # measured 14 us (the slower top)

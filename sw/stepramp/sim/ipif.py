@@ -17,7 +17,7 @@ from cocotb_bus.drivers import BusDriver
 
 
 class IpifError(Exception):
-    """The slave answered with IP2Bus_Error."""
+    """The slave answered with IP2Bus_Error, or broke the protocol (both acknowledges at once)."""
 
 
 class IpifMaster(BusDriver):
@@ -65,6 +65,10 @@ class IpifMaster(BusDriver):
                 await ReadOnly()
                 ack = self.bus.ip2bus_rdack.value if rnw else self.bus.ip2bus_wrack.value
                 if int(ack):
+                    other = self.bus.ip2bus_wrack.value if rnw else self.bus.ip2bus_rdack.value
+                    if int(other):  # (IPIF: the acknowledge of the access's own kind only)
+                        kind = "read" if rnw else "write"
+                        raise IpifError(f"{kind} {addr:#x}: IP2Bus_RdAck and IP2Bus_WrAck both high at its ack")
                     self.last_ack_edge = round(get_sim_time("ns") / self.period_ns)
                     value = int(self.bus.ip2bus_data.value) if rnw else 0
                     error = bool(int(self.bus.ip2bus_error.value))
