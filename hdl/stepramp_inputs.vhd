@@ -84,15 +84,13 @@ begin
   last_c <= (others => '0') when unsigned(filter) = 0 else
             unsigned(filter) - 1;
 
+  -- (No reset: the filter does not read it until its synchronisers, which are reset, can differ from the filtered
+  -- level, two clocks after reset, and by then it follows FILTER's reset value.)
   last_proc : process (clk) is
   begin
 
     if rising_edge(clk) then
-      if (rst = '1') then
-        last <= (others => '0');
-      else
-        last <= last_c;
-      end if;
+      last <= last_c;
     end if;
 
   end process last_proc;
