@@ -27,6 +27,7 @@ from cocotb.utils import get_sim_time
 from stepramp.board.driver import MODES, Outputs
 from stepramp.models import stepping as sm
 from stepramp.sim import coverage
+from stepramp.sim.clocking import reset_held, start_clock
 from stepramp.sim.monitors import (
     DirTimingMonitor,
     ElectricalMonitor,
@@ -35,7 +36,7 @@ from stepramp.sim.monitors import (
     StepWidthMonitor,
 )
 from stepramp.sim.runner import run_cocotb
-from tbutil import CLK_PERIOD_NS, build_dir, cocotb, env_int, start_clock_and_reset
+from tbutil import CLK_PERIOD_NS, build_dir, cocotb, env_int
 
 MICROSTEPS = env_int("STEPPER_G_MICROSTEPS", sm.DEFAULT_MICROSTEPS)
 LG = MICROSTEPS.bit_length() - 1
@@ -186,7 +187,12 @@ async def setup(dut: Any, cfg: Outputs, position: int = 0, enable: int = 1) -> F
     dut.start_hold.value = 0
     eng = FakeEngine(dut, position=position).start()
     _CLOCK_T0_PS[0] = round(get_sim_time("ps"))
-    await start_clock_and_reset(dut.clk, dut.rst, settle=4)
+    start_clock(dut.clk)
+    async with reset_held(dut.clk, dut.rst):
+        await ReadOnly()  # in reset (docs/stepramp_stepper.md): no start held, no fault
+        held = (int(dut.gate_busy.value), int(dut.dir_fault.value))
+        assert held == (0, 0), f"gate_busy, dir_fault in reset: {held}"
+    await ClockCycles(dut.clk, 4)
     coverage.watch_stepper(dut)
     return eng
 
