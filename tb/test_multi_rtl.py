@@ -19,6 +19,8 @@ Tests (one simulation per top):
 * sync_start_same_clock: equal moves on axes 0 and 2 started by one SYNC_START: their STEP edges are the same clock
   edges, equal to the model's from the write's edge; axis 1 (programmed, not selected) does not move; AXES_STATUS and
   POSITION after;
+* sync_group_is_the_named_axes: a SYNC_START of axis 0 (DIR change, setup 200) and, 40 clocks later, axis 1's own
+  START (DIR change, setup 1,000): axis 0 starts at its own gate, not held by axis 1, which keeps its own timing;
 * axes_status_and_irq: axis 0 started through its CTRL.START, then SYNC_START of all three (axis 0 is busy and
   ignores it); AXES_STATUS BUSY / DONE read while the moves run and end; irq with IRQ_MASK = axis 1 only rises one
   clock after axis 1's last STEP edge (the other axes' irq lines are up before, as AXES_STATUS.IRQ shows), follows
@@ -41,6 +43,7 @@ generic's assertion, 8 passes.
 
 from __future__ import annotations
 
+import dataclasses
 import subprocess
 from pathlib import Path
 from typing import Any
@@ -74,6 +77,7 @@ from stepramp.models import stepping as sm
 from stepramp.models.engine import change_edges, edges_with_stop, phase_of, soft_stop_pulse
 from stepramp.models.engine import edges as model_edges
 from stepramp.sim.clocking import CLK_PERIOD_NS, CLK_PERIOD_PS, quiet_inputs, start_clock
+from stepramp.sim.ipif import IpifMaster
 from stepramp.sim.profiles import design_args
 from stepramp.sim.runner import run_cocotb
 from stepramp.tools.rtlcheck import analyse
@@ -391,6 +395,78 @@ async def sync_start_same_clock(dut) -> None:
     tb.check_pins()
 
 
+@cocotb.test(timeout_time=800, timeout_unit="us")  # measured about 250 us
+async def sync_group_is_the_named_axes(dut) -> None:
+    """A SYNC_START's common start holds only the axes it names: axis 0 (named, DIR change, DIR setup 200) starts at
+    its own gate although axis 1, idle at that SYNC_START and not named, is started 40 clocks later through its own
+    CTRL.START with a DIR change and DIR setup 1,000; axis 1 keeps its own gate timing. Then a SYNC_START of both
+    while axis 0 is in its DIR hold after a move: both start on axis 0's gate. A read of SYNC_SOFT_STOP during a move
+    (PLB-like: with all ones left on the data lines) does not stop it. Each as the model says."""
+    tb = await MultiTb.started(dut)
+    await tb.configure()
+    for i, setup in ((0, 200), (1, 1000)):
+        out = Outputs(step_width=4, dir_setup=setup, dir_hold=0)
+        await tb.axis(i).configure_outputs(out)
+        tb.outputs[i] = out
+    plan = short_plan(-12, 100.0, 4.0)
+    await tb.axis(0).program(plan)
+    await tb.axis(1).program(plan)
+    await tb.multi.sync_start([0])
+    w0 = tb.write_edges[-1]
+    await ClockCycles(tb.clk, 40)
+    await tb.axis(1).start()
+    w1 = tb.write_edges[-1]
+    await tb.multi.wait_done([0, 1], idle=lambda: tb.idle(500))
+    _, wants = tb.expected_sync([plan, dataclasses.replace(plan, steps=0)], w0)
+    assert tb.rises[0] == wants[0], f"axis 0 (named): {edges_differ(tb.rises[0], wants[0])}"
+    want1 = tb.expected(1, plan, w1, 0, None)
+    assert tb.rises[1] == want1, f"axis 1 (its own START): {edges_differ(tb.rises[1], want1)}"
+    assert tb.rises[0][0] < tb.rises[1][0], "axis 0 waited for axis 1's gate"
+
+    # ... and it waits for a named axis in its DIR hold: axis 0 reverses soon after a move (DIR hold 6,000 clocks),
+    # axis 1 keeps its direction; both start on axis 0's gate.
+    hold = Outputs(step_width=4, dir_setup=5, dir_hold=6000)
+    await tb.axis(0).configure_outputs(hold)
+    tb.outputs[0] = hold
+    await tb.axis(0).program(short_plan(12, 100.0, 4.0))
+    await tb.axis(0).start()
+    await tb.multi.wait_done([0], idle=lambda: tb.idle(200))
+    lasts: list[int | None] = [tb.rises[0][-1], tb.rises[1][-1]]
+    n0 = [len(tb.rises[0]), len(tb.rises[1])]
+    await tb.axis(0).program(plan)
+    await tb.axis(1).program(plan)
+    await tb.multi.sync_start([0, 1])
+    w = tb.write_edges[-1]
+    assert w < lasts[0] + 6000, "the SYNC_START came after axis 0's DIR hold"
+    await tb.multi.wait_done([0, 1], idle=lambda: tb.idle(500))
+    _, wants = tb.expected_sync([plan, plan], w, [0, 1], lasts)
+    for i in range(2):
+        got = tb.rises[i][n0[i] :]
+        assert got == wants[i], f"axis {i} after the hold: {edges_differ(got, wants[i])}"
+    assert wants[0][0] == wants[1][0], "the model's common start is not one edge"
+
+    # SYNC_SOFT_STOP acts on its write only: read it (it reads 0; on the PLB-like bus with all ones left on
+    # Bus2IP_Data, as a bus may leave a write's data) while axis 0 runs a move started through its CTRL (a write
+    # whose bit 0 is set), then leave the bus alone: the move runs to its end.
+    fwd = short_plan(12, 100.0, 4.0)
+    k0 = len(tb.rises[0])
+    last = tb.rises[0][-1]
+    await tb.axis(0).program(fwd)
+    await tb.axis(0).start()
+    w = tb.write_edges[-1]
+    want = tb.expected(0, fwd, w, 1, last)
+    await tb.wait_rises(0, k0 + 3)
+    if isinstance(tb.bus, IpifMaster):
+        assert await tb.bus.read(REG_SYNC_SOFT_STOP, data_lines=0xFFFF_FFFF) == 0
+    else:
+        assert await tb.bus.read(REG_SYNC_SOFT_STOP) == 0
+    await tb.idle(want[-1] - w + 200)
+    got = tb.rises[0][k0:]
+    assert got == want, f"axis 0 with a read of SYNC_SOFT_STOP: {edges_differ(got, want)}"
+    await tb.multi.wait_done([0], idle=lambda: tb.idle(200))
+    tb.check_pins()
+
+
 @cocotb.test(timeout_time=400, timeout_unit="us")
 async def axes_status_and_irq(dut) -> None:
     """AXES_STATUS BUSY / DONE while axes start and end at different times; SYNC_START ignored by a busy axis; one
@@ -679,6 +755,7 @@ async def estop_stops_every_axis(dut) -> None:
 TESTS = [
     "register_windows",
     "sync_start_same_clock",
+    "sync_group_is_the_named_axes",
     "axes_status_and_irq",
     "coordinated_move",
     "coordinated_dir_changes",

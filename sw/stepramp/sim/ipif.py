@@ -81,8 +81,10 @@ class IpifMaster(BusDriver):
             self.accesses += 1
             return value, error
 
-    async def read(self, addr: int) -> int:
-        value, error = await self._access(addr, 1, 0, 0xF)
+    async def read(self, addr: int, data_lines: int = 0) -> int:
+        """A read; data_lines: what Bus2IP_Data shows during it (IPIF does not define it; a bus may leave a write's
+        data there)."""
+        value, error = await self._access(addr, 1, data_lines, 0xF)
         if error:
             raise IpifError(f"read {addr:#x}: IP2Bus_Error")
         return value
