@@ -134,13 +134,14 @@ EQUIVALENT: dict[str, str] = {
         "plan before such STARTs and sees the running move unchanged)"
     ),
     **{
-        f'regs_pkg: {w}     => x"00000000", @11 bit -> "00000001"': (
-            f"word {w} (LATCH_POS .. TIME_HI) is a live word, outside the storage words (mem is STEPS .. INPUT_CFG): "
-            "neither its RW mask nor its reset value is read (storage_mask and reset_value serve storage words only, "
-            "the read-back RAM is written for storage words only); tb/test_regfile.py time_and_latch_registers "
-            "writes these words and reads their inputs back"
+        f'regs_pkg: {w:<7}=> x"00000000", @11 bit -> "00000001"': (
+            f"word {w} (STATUS, POSITION, CUR_DELAY, STEP_COUNT, LATCH_POS .. TIME_HI) is not a storage word (mem is "
+            "STEPS .. STOP_RATIO, DRIVE .. STEP_SPACE and SEGMENT .. INPUT_CFG): neither its RW mask nor its reset "
+            "value is read (storage_mask and reset_value serve storage words only, the read-back RAM is written for "
+            "storage words only); tb/test_regfile.py time_and_latch_registers writes the live words and reads their "
+            "inputs back, tb/test_peripheral.py reset_values_and_id reads every register after reset"
         )
-        for w in range(38, 43)
+        for w in (2, 22, 23, 24, *range(38, 43))
     },
     "precompute: cur_head <= '0'; @12 bit -> '1'": (
         "cur_head at take_alt (a soft stop takes effect): stop_mode_r is set at the same edge, and until the move "
