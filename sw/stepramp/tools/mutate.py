@@ -154,6 +154,9 @@ EQUIVALENT: dict[str, str] = {
         "slots 2 n and 2 n + 1 with n < width / 2, so at most slot width - 1, and the result is slot 0: the extra "
         "slot is never read"
     ),
+    "isqrt: if (unsigned(extra) > G_EXTRA) then @20 rel -> >=": (
+        "extra = G_EXTRA takes the clamp instead of the value itself: both give ext_r = G_EXTRA"
+    ),
     "plb_slave: rd_r     <= '0'; @12 bit -> '1'": (
         "rd_r's reset value is never seen: in reset and in the clock after it the register file's ack is '0' and its "
         "rdata is 0 (rdata_r and ram_sel_r are reset), so ip2bus_data, rdack and wrack are 0 with rd_r either way, "
