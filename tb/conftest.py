@@ -5,8 +5,10 @@ Longest first: the tests run in the order of their measured durations, longest f
 together (a 5-minute simulation started last would leave one worker idle for 5 minutes). The durations are the
 committed tb/durations.json, updated with build/durations.json (which every run here updates with its
 own); a test in neither is taken as 60 s (a new test is most likely a simulation: run it early). Each sw/tests
-module stays one unit on one worker (xdist_group: its module fixtures are set up once, and ~1,000 quick tests do not
-cost a scheduling round each); so does each tb module with a module-scoped fixture (test_synth_size's yosys run).
+module stays one unit on one worker (its module fixtures are set up once, and ~1,000 quick tests do not cost a
+scheduling round each); so does each tb module with a module-scoped fixture (test_synth_size's yosys run). The units
+are given to xdist by UnitScheduling, a loadgroup scheduler that reads the unit from the test's path: xdist 3.8's own
+loadgroup marks a group by rewriting `item._nodeid`, which pytest 9 no longer reads, so its groups were split.
 No test is left out or changed: this only orders and groups. To refresh the committed table after a full run:
 cp build/durations.json tb/durations.json.
 """
@@ -41,25 +43,41 @@ def _durations() -> dict[str, float]:
     return {**_read(COMMITTED), **_read(MEASURED)}
 
 
-def _group(item: pytest.Item) -> str | None:
-    path = Path(str(item.path))
-    if path.parent.name == "tests" and path.parent.parent.name == "sw":
-        return f"sw/tests/{path.name}"
-    if path.name in GROUPED_TB_MODULES:
-        return f"tb/{path.name}"
+def _unit_of_path(path: str) -> str | None:
+    """The unit of a test file ("sw/tests/x.py" or "tb/test_synth_size.py"), or None: each test its own unit."""
+    parts = Path(path).parts
+    if len(parts) >= 3 and parts[-3:-1] == ("sw", "tests"):
+        return f"sw/tests/{parts[-1]}"
+    if parts and parts[-1] in GROUPED_TB_MODULES:
+        return f"tb/{parts[-1]}"
     return None
+
+
+def _group(item: pytest.Item) -> str | None:
+    return _unit_of_path(str(item.path))
+
+
+def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
+    """With `--dist loadgroup`: one work unit per sw/tests module and per grouped tb module, each other test its own
+    (the units of pytest_collection_modifyitems, in its order: `--no-loadscope-reorder`)."""
+    if config.getvalue("dist") != "loadgroup":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class UnitScheduling(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            return _unit_of_path(nodeid.split("::")[0]) or nodeid
+
+    return UnitScheduling(config, log)
 
 
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(session: pytest.Session, config: pytest.Config, items: list[pytest.Item]) -> None:
-    """Order the items longest unit first and mark the groups (before xdist's own hook reads the marks)."""
+    """Order the items longest unit first, each unit's tests together."""
     durations = _durations()
     units: dict[str, list[pytest.Item]] = {}
     for item in items:
-        group = _group(item)
-        if group is not None:
-            item.add_marker(pytest.mark.xdist_group(group))
-        units.setdefault(group or item.nodeid, []).append(item)
+        units.setdefault(_group(item) or item.nodeid, []).append(item)
     cost = {
         key: sum(durations.get(i.nodeid, UNKNOWN_S if _group(i) is None else 0.1) for i in unit)
         for key, unit in units.items()
