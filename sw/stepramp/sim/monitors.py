@@ -117,11 +117,14 @@ class StepWidthMonitor(Monitor):
             await RisingEdge(self.step)
             rise = self.now()
             await self.step.falling_edge
-            fall = self.now()
-            self.pulses += 1
-            self.widths.append(fall - rise)
-            for problem in sm.check_step_widths([rise], [fall], self.step_width, exact=self.exact):
-                self.violation(problem)
+            self.pulse(rise, self.now())
+
+    def pulse(self, rise: float, fall: float) -> None:
+        """One pulse seen, from its rising edge to its falling edge (clock periods)."""
+        self.pulses += 1
+        self.widths.append(fall - rise)
+        for problem in sm.check_step_widths([rise], [fall], self.step_width, exact=self.exact):
+            self.violation(problem)
 
 
 class DirTimingMonitor(Monitor):
@@ -151,13 +154,16 @@ class DirTimingMonitor(Monitor):
     async def _watch_step(self) -> None:
         while True:
             await RisingEdge(self.step)
-            t = self.now()
-            self.rises += 1
-            if self.last_change is not None and not sm.setup_ok(self.last_change, t, self.dir_setup):
-                self.violation(
-                    f"STEP rise {t - self.last_change:.0f} clocks after the DIR change (setup {max(self.dir_setup, 1)})"
-                )
-            self.last_rise = t
+            self.rise(self.now())
+
+    def rise(self, t: float) -> None:
+        """A STEP rising edge at t (clock periods), against the latest DIR change."""
+        self.rises += 1
+        if self.last_change is not None and not sm.setup_ok(self.last_change, t, self.dir_setup):
+            self.violation(
+                f"STEP rise {t - self.last_change:.0f} clocks after the DIR change (setup {max(self.dir_setup, 1)})"
+            )
+        self.last_rise = t
 
     async def _watch_dir(self) -> None:
         while True:
@@ -276,9 +282,13 @@ class ElectricalMonitor(Monitor):
         self._spawn(self._check_after(self.position, self.steps, initial=True))
         while True:
             await RisingEdge(self.step)
-            self.position += -1 if _bit(self.direction) else 1
-            self.steps += 1
+            self.step_seen()
             self._spawn(self._check_after(self.position, self.steps))
+
+    def step_seen(self) -> None:
+        """A STEP rising edge, now: the position moves by one in DIR's direction."""
+        self.position += -1 if _bit(self.direction) else 1
+        self.steps += 1
 
     async def _check_after(self, pos: int, steps: int, initial: bool = False) -> None:
         """settle clocks after a STEP rising edge (at once for the initial check): compare, unless a newer STEP
@@ -426,11 +436,33 @@ class MotionMonitors:
             sig["clk"], sig["step"], sig["dir"], pins, clk_period_ns=clk_period_ns, **electrical
         )
         self.all: list[Monitor] = [self.width, self.dir, self.shoot, self.electrical]
+        self._hub: Any = None
 
     def start(self) -> MotionMonitors:
-        for m in self.all:
-            m.start()
+        """Start watching. The STEP edges wake one coroutine (_step_edges) that does the STEP work of the width, DIR
+        and electrical monitors, the same checks at the same instants as their own watchers would make, with three
+        wakes per pulse instead of six and a task; DIR changes and the bridges keep their own watchers."""
+        self.shoot.start()
+        self.dir._tasks = [cocotb.start_soon(self.dir._watch_dir())]
+        el = self.electrical
+        el._spawn(el._check_after(el.position, el.steps, initial=True))
+        self._hub = cocotb.start_soon(self._step_edges())
         return self
+
+    async def _step_edges(self) -> None:
+        step, el = self.width.step, self.electrical
+        while True:
+            await RisingEdge(step)
+            rise = self.width.now()
+            self.dir.rise(rise)
+            el.step_seen()
+            if el.settle:
+                el._spawn(el._check_after(el.position, el.steps))
+            else:  # (what _check_after does with no settle time, without a task)
+                await ReadOnly()
+                el._check_position(el.position)
+            await step.falling_edge
+            self.width.pulse(rise, self.width.now())
 
     @classmethod
     def for_outputs(
@@ -454,6 +486,9 @@ class MotionMonitors:
         ).start()
 
     def stop(self) -> None:
+        if self._hub is not None and not self._hub.done():
+            self._hub.cancel()
+        self._hub = None
         for m in self.all:
             m.stop()
 

