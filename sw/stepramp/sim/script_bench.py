@@ -14,8 +14,8 @@ STEPRAMP_SCRIPT_RESULT: per script {"edges", "positions", "core_errors": [[edge,
 from __future__ import annotations
 
 import json
-import math
 import os
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -25,18 +25,19 @@ from cocotb.utils import get_sim_time
 
 from stepramp.board.multi import axis_base
 from stepramp.board.regmap import REGISTERS_BY_NAME, offset
+from stepramp.sim import player
 from stepramp.sim.clocking import (
     CLK_PERIOD_NS,
     CLK_PERIOD_PS,
     apply_reset,
     now_cycles,
-    now_periods,
     quiet_inputs,
     start_clock,
 )
 from stepramp.sim.coverage import watch_core
 from stepramp.sim.ipif import IpifMaster
 from stepramp.sim.monitors import EstopMonitor
+from stepramp.sim.player import WriteLog
 
 CTRL = offset("CTRL")
 INPUT_CFG = REGISTERS_BY_NAME["INPUT_CFG"]
@@ -126,17 +127,15 @@ async def _reset(dut: Any, top: str) -> Any:
 
 
 class _Recorder:
-    """STEP rising edges with POSITION after them, the register file's write strobes and the core's errors, as
-    absolute clock edges, from now on."""
+    """STEP rising edges with POSITION after them and the core's errors, as absolute clock edges, from now on."""
 
     def __init__(self, dut: Any, clk: Any) -> None:
         self.dut, self.clk = dut, clk
         self.edges: list[int] = []
         self.positions: list[int] = []
-        self.writes: list[tuple[int, int]] = []  # (edge, byte offset)
         self.errors: list[tuple[int, int]] = []
         self.running = True
-        for coro in (self._steps(), self._writes(), self._errors()):
+        for coro in (self._steps(), self._errors()):
             cocotb.start_soon(coro)
 
     async def _steps(self) -> None:
@@ -146,15 +145,6 @@ class _Recorder:
             self.edges.append(now_cycles(CLK_PERIOD_PS))
             self.positions.append(core.position.value.to_signed())
 
-    async def _writes(self) -> None:
-        # wr rises after edge X; the register file samples the write at X + 1 (the commits are single writes).
-        regfile = self.dut.core_inst.regfile_inst
-        while self.running:
-            await RisingEdge(regfile.wr)
-            await ReadOnly()
-            # (wr may rise at a falling edge, from the bus's select: the last rising edge, floored, + 1)
-            self.writes.append((math.floor(now_periods(CLK_PERIOD_PS)) + 1, int(regfile.waddr.value) & ~3))
-
     async def _errors(self) -> None:
         # ERROR is sticky (a script never clears it): a new error shows as a new ERR_CODE, or as ERROR rising.
         regfile = self.dut.core_inst.regfile_inst
@@ -163,31 +153,6 @@ class _Recorder:
             await ReadOnly()
             if int(regfile.error_flag.value):
                 self.errors.append((now_cycles(CLK_PERIOD_PS), int(regfile.err_code_r.value)))
-
-
-async def _at_edge(clk: Any, edge: int, late_ok: bool = False) -> None:
-    """Return just after rising edge `edge` (absolute), as after `await RisingEdge(clk)` (the calibration's state: the
-    bus masters' own coroutines see the same edges then)."""
-    now = get_sim_time("ps")
-    if late_ok and now >= edge * CLK_PERIOD_PS:
-        return
-    assert now < edge * CLK_PERIOD_PS, f"edge {edge} has passed (now {now / CLK_PERIOD_PS:.2f})"
-    quarter = (edge - 1) * CLK_PERIOD_PS + CLK_PERIOD_PS // 4
-    if now < quarter:
-        await Timer(quarter - now, unit="ps")
-    await RisingEdge(clk)
-
-
-async def _latency(bus: Any, clk: Any, rec: _Recorder) -> int:
-    """Clock edges from the rising edge at which a write is called to the edge the register file samples it (a CTRL
-    write of byte 1 with the interrupt enables off: it changes nothing)."""
-    await RisingEdge(clk)
-    issued = now_cycles(CLK_PERIOD_PS)
-    seen = len(rec.writes)
-    await bus.write(CTRL, 0, strobe=0x2)
-    await Timer(5 * CLK_PERIOD_NS, unit="ns")
-    assert len(rec.writes) == seen + 1, "the calibration write was not seen once by the register file"
-    return rec.writes[seen][0] - issued
 
 
 async def _drive_pins(dut: Any, clk: Any, origin: int, pins: list[list[Any]]) -> None:
@@ -212,35 +177,18 @@ async def _play(dut: Any, top: str, script: dict[str, Any]) -> dict[str, Any]:
         await bus.write(offset("INPUT_FILTER"), int(script.get("input_filter", 0)))
         await bus.write(offset("INPUT_CFG"), cfg)
     rec = _Recorder(dut, clk)
-    latency = await _latency(bus, clk, rec)
+    regfile = dut.core_inst.regfile_inst
+    log = WriteLog(regfile.wr, regfile.waddr)
+    latency = await player.calibrate(bus, clk, log, CTRL)
     origin = now_cycles(CLK_PERIOD_PS) + LEAD_CLOCKS
     # docs/algorithm.md, "Machine inputs": no STEP rising edge more than 2 clocks after the filtered ESTOP edge
     estop = EstopMonitor(dut.core_inst.estop_stop, [dut.step]).start()
     watchers = [cocotb.start_soon(_drive_pins(dut, clk, origin, script.get("pins", [])))]
-    commits: list[int] = []
-    for action in script["actions"]:
-        at = origin + int(action["at"])
-        prep = at - int(script["prep_clocks"])
-        if action["writes"]:
-            await _at_edge(clk, prep, late_ok=True)  # (the previous commit's answer may end in it)
-            for addr, value in action["writes"]:
-                await bus.write(int(addr), int(value))
-        issue = at - latency
-        assert get_sim_time("ps") < issue * CLK_PERIOD_PS, (
-            f"the preparing writes of the commit at {action['at']} ran past its issue clock ({len(action['writes'])} "
-            f"writes in {script['prep_clocks']} clocks)"
-        )
-        await _at_edge(clk, issue)
-        seen = len(rec.writes)
-        await bus.write(CTRL, int(action["ctrl"]), strobe=0x1)
-        await Timer(2 * CLK_PERIOD_NS, unit="ns")
-        committed = next((e for e, a in rec.writes[seen:] if a == CTRL), None)
-        assert committed == at, (
-            f"the commit meant for clock {action['at']} landed on {None if committed is None else committed - origin}"
-        )
-        commits.append(committed - origin)
-    await _at_edge(clk, origin + int(script["until"]) + 2)
+    commits = player.commits_of(script["actions"], int(script["prep_clocks"]), lambda _: CTRL)
+    landed = await player.play(bus, clk, log, commits, origin, latency)
+    await player.at_edge(clk, origin + int(script["until"]) + 2)
     rec.running = False
+    log.stop()
     for task in watchers:
         task.cancel()
     estop.stop()
@@ -249,7 +197,7 @@ async def _play(dut: Any, top: str, script: dict[str, Any]) -> dict[str, Any]:
         "edges": [rec.edges[i] - origin for i in keep],
         "positions": [rec.positions[i] for i in keep],
         "core_errors": [[e - origin, code] for e, code in rec.errors],
-        "commits": commits,
+        "commits": landed,
         "estop_violations": [f"{t:.0f} ns: {message}" for t, message in estop.violations],
     }
 
@@ -283,18 +231,15 @@ async def play_scripts(dut: Any) -> None:
 
 
 class _MultiRecorder:
-    """Per axis, the STEP rising edges (from the step vector) and the position counted from DIR at each; the top's
-    write strobes (stepramp_multi's wr and waddr: an axis takes a write at the edge the top samples it)."""
+    """Per axis, the STEP rising edges (from the step vector) and the position counted from DIR at each."""
 
     def __init__(self, dut: Any, axes: int) -> None:
         self.dut, self.axes = dut, axes
         self.edges: list[list[int]] = [[] for _ in range(axes)]
         self.positions: list[list[int]] = [[] for _ in range(axes)]
-        self.writes: list[tuple[int, int]] = []
         self.running = True
         self._pos = [0] * axes
-        for coro in (self._steps(), self._writes()):
-            cocotb.start_soon(coro)
+        cocotb.start_soon(self._steps())
 
     async def _steps(self) -> None:
         step, direction = self.dut.step, self.dut.dir
@@ -312,13 +257,6 @@ class _MultiRecorder:
                         self._pos[axis] += -1 if dirs >> axis & 1 else 1
                         self.edges[axis].append(edge)
                         self.positions[axis].append(self._pos[axis])
-
-    async def _writes(self) -> None:
-        multi = self.dut.multi_inst
-        while self.running:
-            await RisingEdge(multi.wr)
-            await ReadOnly()
-            self.writes.append((math.floor(now_periods(CLK_PERIOD_PS)) + 1, int(multi.waddr.value) & ~3))
 
 
 async def _drive_multi_pins(dut: Any, origin: int, pins: list[list[Any]]) -> None:
@@ -351,33 +289,22 @@ async def _play_multi(dut: Any, top: str, script: dict[str, Any]) -> dict[str, A
         await bus.write(base + offset("INPUT_FILTER"), int(script.get("input_filter", 0)))
         await bus.write(base + offset("INPUT_CFG"), cfg)
     rec = _MultiRecorder(dut, axes)
-    await RisingEdge(clk)
-    issued = now_cycles(CLK_PERIOD_PS)
-    await bus.write(axis_base(0) + CTRL, 0, strobe=0x2)  # (axis 0's interrupt enables, all off: changes nothing)
-    await Timer(5 * CLK_PERIOD_NS, unit="ns")
-    latency = rec.writes[-1][0] - issued
+    # the top's write strobes (stepramp_multi's wr and waddr: an axis takes a write at the edge the top samples it)
+    log = WriteLog(dut.multi_inst.wr, dut.multi_inst.waddr)
+    latency = await player.calibrate(bus, clk, log, axis_base(0) + CTRL)  # (axis 0's interrupt enables: all off)
     origin = now_cycles(CLK_PERIOD_PS) + LEAD_CLOCKS
     driver = cocotb.start_soon(_drive_multi_pins(dut, origin, script.get("pins", [])))
-    commits = []
-    for action in script["actions"]:
-        at = origin + int(action["at"])
-        if action["writes"]:  # (a SYNC_START's "prep": the clocks its axes' writes take)
-            await _at_edge(clk, at - int(action.get("prep", script["prep_clocks"])), late_ok=True)
-            for addr, value in action["writes"]:
-                await bus.write(int(addr), int(value))
-        issue = at - latency
-        assert get_sim_time("ps") < issue * CLK_PERIOD_PS, f"the writes of the commit at {action['at']} ran late"
-        await _at_edge(clk, issue)
-        seen = len(rec.writes)
-        # the axis's CTRL, or the global window's SYNC_SOFT_STOP or SYNC_START (a group of axes)
-        ctrl = int(action["commit"]) if "commit" in action else axis_base(int(action["axis"])) + CTRL
-        await bus.write(ctrl, int(action["ctrl"]), strobe=0x1)
-        await Timer(2 * CLK_PERIOD_NS, unit="ns")
-        committed = next((e for e, a in rec.writes[seen:] if a == ctrl), None)
-        assert committed == at, f"the commit meant for clock {action['at']} landed on {committed}"
-        commits.append(committed - origin)
-    await _at_edge(clk, origin + int(script["until"]) + 2)
+
+    def commit_address(action: Mapping[str, Any]) -> int:
+        # the axis's CTRL, or the global window's SYNC_SOFT_STOP or SYNC_START (a group of axes); a SYNC_START's
+        # "prep" is the clocks its axes' writes take
+        return int(action["commit"]) if "commit" in action else axis_base(int(action["axis"])) + CTRL
+
+    commits = player.commits_of(script["actions"], int(script["prep_clocks"]), commit_address)
+    landed = await player.play(bus, clk, log, commits, origin, latency)
+    await player.at_edge(clk, origin + int(script["until"]) + 2)
     rec.running = False
+    log.stop()
     driver.cancel()
     status = []
     for axis in range(axes):
@@ -390,7 +317,7 @@ async def _play_multi(dut: Any, top: str, script: dict[str, Any]) -> dict[str, A
             for edges, positions in zip(rec.edges, rec.positions, strict=True)
         ],
         "status": status,
-        "commits": commits,
+        "commits": landed,
     }
 
 

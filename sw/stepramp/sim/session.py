@@ -220,8 +220,8 @@ class RtlSession:
 
     def script(self, script: dict[str, Any]) -> tuple[list[int], int]:
         """A command script on the RTL (stepramp.board.script; ValueError if it is not valid): its STEP edges (clocks
-        from its clock 0) and POSITION read back at its end. The commits land at their clocks up to the bus's
-        latency (the regression's exact contract is stepramp.sim.script_sim's, from a reset)."""
+        from its clock 0) and POSITION read back at its end. Played by stepramp.sim.player: every commit lands on its
+        clock, or the session fails."""
         answer = self.request({"op": "script", "script": script})
         if "value_error" in answer:
             raise ValueError(answer["value_error"])
@@ -268,7 +268,8 @@ try:
     from cocotb.triggers import ClockCycles, First, RisingEdge, SimTimeoutError, Timer, with_timeout
     from cocotb.utils import get_sim_time
 
-    from stepramp.sim.clocking import apply_reset, quiet_inputs, start_clock
+    from stepramp.sim import player
+    from stepramp.sim.clocking import apply_reset, now_cycles, quiet_inputs, start_clock
 except ImportError:  # the front end does not need cocotb
     cocotb = None  # type: ignore[assignment]
 
@@ -301,10 +302,18 @@ if cocotb is not None:
         mech: dict[str, Any] | None = None if cfg.get("mechanics") is None else {**MECHANICS, **cfg["mechanics"]}
         carriage: Any = None
 
+        # the register file's write strobes: where each of a script's commits landed (stepramp.sim.player)
+        regfile = dut.core_inst.regfile_inst
+        writes = player.WriteLog(regfile.wr, regfile.waddr, period_ps)
+        latency = 0
+
         async def setup() -> StepWatch:
             nonlocal carriage
             await apply_reset(dut.clk, dut.rst, settle=2)
             pins = StepWatch(dut.step, dut.core_inst.busy, period_ps)
+            # the bus's write latency for the scripts' commits (a CTRL byte-1 write of 0 while CTRL is 0 after reset)
+            nonlocal latency
+            latency = await player.calibrate(bus, dut.clk, writes, offset("CTRL"))
             await drv.check_id()
             await drv.configure_outputs(
                 Outputs(mode=cfg["mode"], dir_setup=cfg["dir_setup"], dir_hold=cfg["dir_setup"])
@@ -368,22 +377,14 @@ if cocotb is not None:
                 planned = plan_script(load_script(req["script"]))
             except ValueError as exc:
                 return {"value_error": str(exc)}
-            origin = round(get_sim_time("ps") / period_ps) + PREP_CLOCKS + 10
+            origin = now_cycles(period_ps) + PREP_CLOCKS + 10
             first = len(pins.step_edges)
-
-            async def at_clock(clock: int) -> None:
-                delay = (origin + clock) * period_ps - get_sim_time("ps")
-                if delay > 0:
-                    await Timer(delay, unit="ps")
+            ctrl = offset("CTRL")
+            commits = [player.Commit(a.at, a.writes, ctrl, a.ctrl, PREP_CLOCKS) for a in planned.actions]
 
             async def run() -> dict[str, Any]:
-                for action in planned.actions:
-                    await at_clock(action.at - PREP_CLOCKS)
-                    for addr, value in action.writes:
-                        await bus.write(addr, value)
-                    await at_clock(action.at - 2)
-                    await bus.write(offset("CTRL"), action.ctrl, strobe=0x1)
-                await at_clock(planned.until)
+                await player.play(bus, dut.clk, writes, commits, origin, latency)
+                await player.at_edge(dut.clk, origin + planned.until, late_ok=True, period_ps=period_ps)
                 await drv.clear_flags()
                 edges = [e - origin for e in pins.step_edges[first:]]
                 return {"edges": edges, "position": await drv.position()}
