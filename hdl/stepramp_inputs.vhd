@@ -56,7 +56,6 @@ architecture rtl of stepramp_inputs is
   -- high 48 bits step when the low part wraps (a 64-bit counter in hardware all the same).
   signal time_lo   : natural range 0 to 2 ** 16 - 1;
   signal time_hi   : unsigned(47 downto 0);
-  signal time_r    : unsigned(63 downto 0);
   signal latched_r : std_logic;
   signal lpos_r    : std_logic_vector(31 downto 0);
   signal ltime_r   : unsigned(63 downto 0);
@@ -182,7 +181,7 @@ begin
       if (hit = '1' and (latched_r = '0' or latch_clr = '1')) then
         latched_r <= '1';
         lpos_r    <= position;
-        ltime_r   <= time_r;
+        ltime_r   <= time_hi & to_unsigned(time_lo, 16);
       end if;
 
       if (rst = '1') then
@@ -202,8 +201,10 @@ begin
   latched    <= latched_r;
   latch_pos  <= lpos_r;
   latch_time <= std_logic_vector(ltime_r);
-  time_r     <= time_hi & to_unsigned(time_lo, 16);
-  time_count <= std_logic_vector(time_r);
+  -- TIME to the port in two parts, so that a simulator converts and assigns the 16 low bits at each clock and the 48
+  -- high bits only when they step.
+  time_count(15 downto 0)  <= std_logic_vector(to_unsigned(time_lo, 16));
+  time_count(63 downto 16) <= std_logic_vector(time_hi);
 
   assert G_FILTER_BITS >= 1 and G_FILTER_BITS <= 32
     report "stepramp_inputs: G_FILTER_BITS must be 1 .. 32"
