@@ -348,12 +348,16 @@ async def estop_in_every_kind_of_motion(dut) -> None:
     estop_code = ERROR_CODES["ESTOP"][0]
     plan = trap(200)
     # "aimed": the pin timed so that the filtered edge F is the engine edge of a pulse (its STEP rises at F + 1, the
-    # latest a STEP edge can come), and "aimed - 1": one clock later (that pulse is the first one suppressed).
+    # latest a STEP edge can come), "aimed - 1": one clock later (that pulse is the first one suppressed), and
+    # "aimed + 1": one clock earlier (F + 1, where the engine samples the stop, is that pulse's own engine edge: a
+    # stop one clock late, from the latched fault alone, would let it through).
+    aim = {"aimed": 0, "aimed - 1": 1, "aimed + 1": -1}
     cases: list[tuple[str, int]] = [(phase, pulses) for pulses, phase in PHASES] + [
         ("jog", 40),
         ("held", 0),
         ("aimed", 100),
         ("aimed - 1", 100),
+        ("aimed + 1", 100),
     ]
     for filter_clocks in (1, 9):
         for case, pulses in cases:
@@ -375,7 +379,7 @@ async def estop_in_every_kind_of_motion(dut) -> None:
                 n0, s0 = await move_until(ib, drv, plan, pulses)
             if case.startswith("aimed"):
                 # pulse pulses + 3's engine edge E (the model's edge from the start); F = E (or E + 1 for "- 1")
-                e = tb.start_edges[s0] + model_edges(plan)[pulses + 3] + (1 if case.endswith("1") else 0)
+                e = tb.start_edges[s0] + model_edges(plan)[pulses + 3] + aim[case]
                 await ClockCycles(ib.clk, e - max(filter_clocks, 1) - 2 - ib.edge() - 1)
             a = await ib.pin("estop", 1)
             word = await ib.wait_done()

@@ -21,6 +21,8 @@ from stepramp.models.engine import (
     DECEL,
     FIRST_PULSE_LATENCY,
     RUN,
+    accumulate,
+    accumulate_runs,
     edges,
     interval_values,
     phases,
@@ -484,3 +486,18 @@ def test_no_zero_or_negative_interval() -> None:
         times = tick_times(plan)
         assert all(b > a for a, b in itertools.pairwise(times)), args
         assert all(v > 0 for v in interval_values(plan)), args
+
+
+def test_accumulate_runs_is_accumulate_of_the_expanded_values() -> None:
+    """The run-at-once accumulator gives accumulate()'s times on random runs: long and single, values with and
+    without a fraction, from any starting fraction (seeded; the seed replays)."""
+    seed = 20261128
+    rng = random.Random(seed)
+    for trial in range(300):
+        runs = [
+            (rng.randrange(1, 1 << rng.choice((33, 40, 48, 63))), rng.choice((1, 1, 2, rng.randrange(1, 5000))))
+            for _ in range(rng.randrange(0, 12))
+        ]
+        acc = rng.randrange(1 << 32)
+        flat = [v for v, n in runs for _ in range(n)]
+        assert accumulate_runs(runs, acc) == accumulate(flat, acc), f"seed {seed}, trial {trial}: {runs}, acc {acc}"

@@ -115,11 +115,31 @@ def accumulate(values: Iterable[int], acc: int = 0) -> list[int]:
     return times
 
 
+def accumulate_runs(runs: Iterable[tuple[int, int]], acc: int = 0) -> list[int]:
+    """accumulate() of a run-length coded value sequence ((value, count) runs): the same times, a run of equal values
+    at once (after k intervals of v from fraction a, the time has grown by (a + k v) >> 32)."""
+    times = [0]
+    t = 0
+    for value, count in runs:
+        if count == 1:
+            s = acc + value
+            t += s >> FRAC_CRUISE
+            acc = s & _FRAC_MASK
+            times.append(t)
+            continue
+        base = acc
+        times.extend([t + ((base + k * value) >> FRAC_CRUISE) for k in range(1, count + 1)])
+        s = base + count * value
+        t += s >> FRAC_CRUISE
+        acc = s & _FRAC_MASK
+    return times
+
+
 def tick_times(plan: Plan) -> list[int]:
     """Pulse times T_k in ticks, k = 0 .. N-1 (T_0 = 0), through the 32-bit fractional accumulator."""
     if plan.steps == 0:
         return []
-    return accumulate(interval_values(plan), start_acc(plan.ramp))
+    return accumulate_runs(value_runs(plan), start_acc(plan.ramp))
 
 
 def edges(plan: Plan) -> list[int]:
@@ -434,7 +454,7 @@ def segment_values(seg: Segment, count: int) -> list[int]:
 def segment_ticks(seg: Segment, count: int, acc: int = 0) -> list[int]:
     """Tick times of the segment's pulses 0 .. count (pulse 0 is pulse P, at tick 0), through the fractional
     accumulator that starts at `acc` (the fraction the running plan left at pulse P)."""
-    return accumulate(segment_values(seg, count), acc)
+    return accumulate_runs(_take_runs(segment_runs(seg), count), acc)
 
 
 def segment_stop_length(seg: Segment, p: int) -> int | None:
@@ -513,15 +533,19 @@ def segment_edges(
     def to_edges(values: list[int]) -> list[int]:
         return [FIRST_PULSE_LATENCY + prescale * t for t in accumulate(values, start_acc(seg.ramp))]
 
+    def first_edges(count: int) -> list[int]:  # (to_edges of segment_values(seg, count), a run at once)
+        ticks = accumulate_runs(_take_runs(segment_runs(seg), count), start_acc(seg.ramp))
+        return [FIRST_PULSE_LATENCY + prescale * t for t in ticks]
+
     if stop is None:
         if seg.length is None and count is None:
             raise ValueError("an endless segment without a stop needs a count")
-        return to_edges(segment_values(seg, seg.length if count is None else count))
+        return first_edges(seg.length if count is None else count)
     kind, request_edge = stop
     # enough of the normal edges to pass the request edge
     n = 64
     while True:
-        normal = to_edges(segment_values(seg, n))
+        normal = first_edges(n)
         if normal[-1] > request_edge or (seg.length is not None and n >= seg.length):
             break
         n *= 2

@@ -97,7 +97,12 @@ SUITES: dict[str, list[str]] = {
     # (gate_wait serves only the multi-axis top's common start)
     "stepramp_stepper.vhd": ["tb/test_stepper.py", *_PLB, "tb/test_multi_rtl.py::test_multi_rtl[stepramp_multi_plb]"],
     "stepramp_regfile.vhd": ["tb/test_regfile.py", "tb/test_readback.py", *_PLB],
-    "stepramp_core.vhd": ["tb/test_core.py::test_core", *_PLB],
+    "stepramp_core.vhd": [
+        "tb/test_core.py::test_core",
+        *_PLB,
+        # (ESTOP's stop from the filtered level: the aimed pulses, one clock either side of F)
+        "tb/test_inputs_rtl.py::test_inputs[stepramp_plb-estop_in_every_kind_of_motion]",
+    ],
     "stepramp_plb.vhd": _PLB,
     "stepramp_axil.vhd": _AXIL,
     "stepramp_inputs.vhd": [
