@@ -241,6 +241,20 @@ def _sim_stop_s(results_xml: Path) -> float | None:
     return max(stops) * 1e-9 if stops else None  # cocotb reports it in ns
 
 
+#: The modules whose assert statements cocotb has pytest rewrite (for the values in a failing assert's message): the
+#: benches' test modules and helpers. cocotb's default, every module imported after it starts, re-parsed the whole
+#: package and its libraries in every simulation (no byte-code cache with PYTHONDONTWRITEBYTECODE): about 1 s each.
+REWRITE_ASSERTIONS = "test_*.py *_bench.py *_tb.py tbutil.py session.py"
+
+
+def _sim_env(extra_env: Mapping[str, str] | None) -> dict[str, str]:
+    """The simulation's extra environment: the assertion rewriting's modules (unless the caller's environment sets
+    COCOTB_REWRITE_ASSERTION_FILES), then extra_env."""
+    key = "COCOTB_REWRITE_ASSERTION_FILES"
+    env = {} if key in os.environ else {key: REWRITE_ASSERTIONS}
+    return {**env, **dict(extra_env or {})}
+
+
 def run_cocotb(
     toplevel: str,
     test_module: str,
@@ -285,7 +299,7 @@ def run_cocotb(
             test_module=test_module,
             build_dir=build_dir,
             test_dir=build_dir,
-            extra_env={**dict(extra_env or {}), "STEPRAMP_NETLIST": "1", "STEPRAMP_COVERAGE_DIR": ""},
+            extra_env={**_sim_env(extra_env), "STEPRAMP_NETLIST": "1", "STEPRAMP_COVERAGE_DIR": ""},
             testcase=testcase,
             log_file=log_file,
         )
@@ -309,7 +323,7 @@ def run_cocotb(
         parameters=dict(parameters or {}),
         build_dir=lib,
         test_dir=build_dir,
-        extra_env=dict(extra_env or {}),
+        extra_env=_sim_env(extra_env),
         testcase=testcase,
         log_file=log_file,
     )
