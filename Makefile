@@ -12,7 +12,7 @@ VHDL  := $(wildcard hdl/*.vhd)
 BACKEND = GHDL_BACKEND=$${GHDL_BACKEND:-$$(test -x /usr/bin/ghdl-llvm && echo llvm || echo mcode)}
 
 .DEFAULT_GOAL := test
-.PHONY: setup test check coverage mutate soak lint synth-check bench synth demo shell waves vitis-driver clean help
+.PHONY: setup prefetch test check coverage mutate soak lint synth-check bench synth demo shell waves vitis-driver clean help
 
 help:
 	@echo "make test         lint, synthesis check and the whole regression (pytest -n $(JOBS))"
@@ -47,11 +47,21 @@ synth-check: setup
 # tests longest first, each sw/tests module as one unit (tb/conftest.py), so that they end together.
 COVERAGE := build/coverage
 DIST     := --dist loadgroup --no-loadscope-reorder
-test: lint
+test: prefetch lint
 	rm -rf $(COVERAGE)
 	STEPRAMP_COVERAGE_DIR=$(CURDIR)/$(COVERAGE) SCRIPT_SEED=$${SCRIPT_SEED:-1} $(BACKEND) \
 	  $(PY) -m pytest -n $(JOBS) $(DIST) -rA --durations=25
 	$(PY) -m stepramp.tools.coverage $(COVERAGE) --check
+
+# The size check's yosys run (tb/test_synth_size.py: about 40 s of one core) starts in the background before the
+# bootstrap and the lint, which leave a core idle, when GHDL and yosys are there; the test finds its result in the
+# content-keyed cache (or waits for it on the cache's lock; it runs it itself if this did not). System python3: the
+# synthesis script needs no package.
+prefetch:
+	@mkdir -p build/synth_size
+	@if command -v ghdl >/dev/null 2>&1 && command -v yosys >/dev/null 2>&1; then \
+	  (PYTHONPATH=sw python3 -m stepramp.tools.synth --size-cache build/synth_size stepramp_plb \
+	    >build/synth_size/prefetch.log 2>&1 &); fi
 
 # The quick tier for inner loops, never instead of `make test`: lint, every sw/tests test (the model, the planner, the
 # drivers, the tools) and the RTL's unit benches (prio_enc, timer, divider, next_delay: seconds each).

@@ -9,20 +9,14 @@ deliberate change in size): iCE40 LUT4 and FF of each entity as the top instanti
 
 from __future__ import annotations
 
-import fcntl
 import functools
-import hashlib
 import json
 import shutil
-import subprocess
-import tempfile
 from pathlib import Path
 
 import pytest
 
-from stepramp.sim.runner import HDL_DIR, HDL_FILES
-from stepramp.tools import synth as synth_tool
-from stepramp.tools.synth import BASELINE, entity_cells, ice40_summary, netlist
+from stepramp.tools.synth import BASELINE, entity_cells_cached, ice40_summary
 
 TOP = "stepramp_plb"
 REPO = Path(__file__).resolve().parents[1]
@@ -30,25 +24,10 @@ REPO = Path(__file__).resolve().parents[1]
 
 @functools.cache
 def _synthesised() -> dict[str, dict[str, int]]:
-    """The synthesis, once per regression: keyed by the RTL's and the synthesis script's contents and the yosys
-    version, under a file lock, so that the tests of this module share one yosys run whichever worker runs them (an
-    xdist worker also tears module fixtures down whenever its queue runs empty)."""
-    digest = hashlib.sha256()
-    for path in (*(HDL_DIR / name for name in HDL_FILES), Path(synth_tool.__file__)):
-        digest.update(path.read_bytes())
-    digest.update(subprocess.run(["yosys", "-V"], capture_output=True, text=True, check=False).stdout.encode())
-    folder = REPO / "build" / "synth_size"
-    folder.mkdir(parents=True, exist_ok=True)
-    cache = folder / f"{TOP}-{digest.hexdigest()[:20]}.json"
-    with (folder / "lock").open("w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        if cache.exists():
-            cells: dict[str, dict[str, int]] = json.loads(cache.read_text())
-            return cells
-        out = Path(tempfile.mkdtemp(prefix="synth_size_"))
-        cells = entity_cells(TOP, netlist(TOP, out), out)  # both raise on a latch
-        cache.write_text(json.dumps(cells))
-        return cells
+    """The synthesis, once per regression (stepramp.tools.synth.entity_cells_cached: keyed by the RTL's and the
+    synthesis script's contents and the yosys version, under a file lock, so that the tests of this module share one
+    yosys run whichever worker runs them, and `make test` can start it while the bootstrap runs)."""
+    return entity_cells_cached(TOP, REPO / "build" / "synth_size")
 
 
 @pytest.fixture(scope="module")

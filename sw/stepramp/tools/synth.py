@@ -28,6 +28,8 @@ Resources table) from the PLB-like top's figures.
 from __future__ import annotations
 
 import argparse
+import fcntl
+import hashlib
 import json
 import re
 import shutil
@@ -39,7 +41,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
-from stepramp.sim.runner import HDL_FILES, SYNTH_TOPS
+from stepramp.sim.runner import HDL_DIR, HDL_FILES, SYNTH_TOPS
 from stepramp.tools.rtlcheck import analyse, synth
 
 #: The recorded size the regression holds the tops to.
@@ -149,6 +151,28 @@ def entity_cells(top: str, verilog: Path, out: Path) -> dict[str, dict[str, int]
     if any("LATCH" in name.upper() for cells in result.values() for name in cells):
         raise RuntimeError(f"{top}: latch cells after synth_ice40 -noflatten")
     return result
+
+
+def entity_cells_cached(top: str, folder: Path) -> dict[str, dict[str, int]]:
+    """entity_cells of top's ghdl synth netlist, once per content: kept in folder under a key of the RTL's and this
+    module's contents and the yosys version, computed under a file lock (so that the size check's tests, whichever
+    xdist worker runs them, and `make test`'s prefetch during the bootstrap share one yosys run). Raises on a latch
+    (nothing is kept then)."""
+    digest = hashlib.sha256()
+    for path in (*(HDL_DIR / name for name in HDL_FILES), Path(__file__)):
+        digest.update(path.read_bytes())
+    digest.update(subprocess.run(["yosys", "-V"], capture_output=True, text=True, check=False).stdout.encode())
+    folder.mkdir(parents=True, exist_ok=True)
+    cache = folder / f"{top}-{digest.hexdigest()[:20]}.json"
+    with (folder / "lock").open("w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if cache.exists():
+            cells: dict[str, dict[str, int]] = json.loads(cache.read_text())
+            return cells
+        out = Path(tempfile.mkdtemp(prefix="synth_size_"))
+        cells = entity_cells(top, netlist(top, out), out)
+        cache.write_text(json.dumps(cells))
+        return cells
 
 
 def ice40_summary(cells: dict[str, int]) -> dict[str, int]:
@@ -441,8 +465,18 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--no-pnr", action="store_true", help="skip nextpnr (no fmax)")
     parser.add_argument("--record", action="store_true", help=f"record the iCE40 sizes in {BASELINE.name}")
     parser.add_argument("--docs", action="store_true", help="rewrite the entity rows of docs/*.md from the report")
+    parser.add_argument(
+        "--size-cache",
+        type=Path,
+        default=None,
+        help="only the per-entity iCE40 cells of each top into this cache folder (tb/test_synth_size.py's), then stop",
+    )
     parser.add_argument("tops", nargs="*", default=list(REPORT_TOPS))
     args = parser.parse_args(argv)
+    if args.size_cache is not None:
+        for top in args.tops:
+            entity_cells_cached(top, args.size_cache.resolve())
+        return 0
     missing = [t for t in ("yosys", *(() if args.no_pnr else ("nextpnr-ice40",))) if shutil.which(t) is None]
     if missing:
         print(f"synth: {', '.join(missing)} not found (Debian: apt-get install yosys nextpnr-ice40)", file=sys.stderr)
