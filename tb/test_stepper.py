@@ -15,6 +15,7 @@ e - 1 (so edge e samples them); "high after edge e" is the cycle after it.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
@@ -826,7 +827,8 @@ def assert_fails(dut: Any, mon: Any, what: str) -> None:
 async def monitors_fail_on_wrong_settings(dut) -> None:
     """Each monitor, told a setting other than the one programmed, reports violations (and passes with the right
     one on the same run): width + 1, exact width - 1, setup + 1, hold + 1, a position off by one, the wrong mode, the
-    wrong ustep_log2 for the PWM duty, and a bridge whose inputs are both '1'."""
+    wrong ustep_log2 for the PWM duty, and a bridge whose inputs are both '1'; and MotionMonitors, whose one STEP
+    coroutine does the width, DIR and position work, with the right settings and with each of four wrong ones."""
     cfg = replace(OUTPUTS, mode="half", step_width=9, dir_setup=30, dir_hold=25)
     eng = await setup(dut, cfg)
     await run_move(dut, eng, 3, 0)
@@ -845,6 +847,15 @@ async def monitors_fail_on_wrong_settings(dut) -> None:
         "mode full instead of half": ElectricalMonitor(
             dut.clk, dut.step, dut.dir, (dut.a1, dut.a2, dut.b1, dut.b2), 2, position=3
         ),
+    }
+    # the same checks through MotionMonitors, whose one STEP coroutine does the width, DIR and position work
+    hub = functools.partial(MotionMonitors, dut, mode=3)
+    right += [hub(step_width=w, dir_setup=s, dir_hold=h, position=3)]
+    wrong |= {
+        "all four, width + 1": hub(step_width=w + 1, dir_setup=s, dir_hold=h, position=3),
+        "all four, setup + 1": hub(step_width=w, dir_setup=s + 1, dir_hold=h, position=3),
+        "all four, hold + 1": hub(step_width=w, dir_setup=s, dir_hold=h + 1, position=3),
+        "all four, position + 1": hub(step_width=w, dir_setup=s, dir_hold=h, position=4),
     }
     for m in [*right, *wrong.values()]:
         m.start()
