@@ -90,7 +90,7 @@ _reports: dict[str, float] = {}
 
 
 def pytest_runtest_logreport(report: pytest.TestReport) -> None:
-    _reports[report.nodeid.split("@")[0]] = _reports.get(report.nodeid.split("@")[0], 0.0) + report.duration
+    _reports[report.nodeid] = _reports.get(report.nodeid, 0.0) + report.duration
 
 
 def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:

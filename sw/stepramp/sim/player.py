@@ -7,8 +7,8 @@ register writes from `prep` clocks before it, then a CTRL (or the multi-axis top
 register file samples it exactly at `at`. The player calibrates the bus's latency once (the clocks from a write's
 call to the edge the register file samples it), issues each commit that many clocks early, and checks, from the
 register file's write strobe (WriteLog, which also sets the clock period all of it counts in), that it landed on
-its clock; a commit that lands elsewhere fails the run, so that what
-the RTL did is compared with the model on the model's own clocks.
+its clock; a commit that lands elsewhere fails the run, so that what the RTL did is compared with the model on the
+model's own clocks.
 """
 
 from __future__ import annotations

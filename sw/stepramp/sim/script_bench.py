@@ -37,7 +37,6 @@ from stepramp.sim.clocking import (
 from stepramp.sim.coverage import watch_core
 from stepramp.sim.ipif import IpifMaster
 from stepramp.sim.monitors import EstopMonitor
-from stepramp.sim.player import WriteLog
 
 CTRL = offset("CTRL")
 INPUT_CFG = REGISTERS_BY_NAME["INPUT_CFG"]
@@ -178,7 +177,7 @@ async def _play(dut: Any, top: str, script: dict[str, Any]) -> dict[str, Any]:
         await bus.write(offset("INPUT_CFG"), cfg)
     rec = _Recorder(dut, clk)
     regfile = dut.core_inst.regfile_inst
-    log = WriteLog(regfile.wr, regfile.waddr)
+    log = player.WriteLog(regfile.wr, regfile.waddr)
     latency = await player.calibrate(bus, clk, log, CTRL)
     origin = now_cycles(CLK_PERIOD_PS) + LEAD_CLOCKS
     # docs/algorithm.md, "Machine inputs": no STEP rising edge more than 2 clocks after the filtered ESTOP edge
@@ -290,7 +289,7 @@ async def _play_multi(dut: Any, top: str, script: dict[str, Any]) -> dict[str, A
         await bus.write(base + offset("INPUT_CFG"), cfg)
     rec = _MultiRecorder(dut, axes)
     # the top's write strobes (stepramp_multi's wr and waddr: an axis takes a write at the edge the top samples it)
-    log = WriteLog(dut.multi_inst.wr, dut.multi_inst.waddr)
+    log = player.WriteLog(dut.multi_inst.wr, dut.multi_inst.waddr)
     latency = await player.calibrate(bus, clk, log, axis_base(0) + CTRL)  # (axis 0's interrupt enables: all off)
     origin = now_cycles(CLK_PERIOD_PS) + LEAD_CLOCKS
     driver = cocotb.start_soon(_drive_multi_pins(dut, origin, script.get("pins", [])))
