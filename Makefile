@@ -10,6 +10,10 @@ VHDL  := $(wildcard hdl/*.vhd)
 # The LLVM back end runs simulations about twice as fast: bootstrap installs it when it can, and the recipes
 # pick it when it is there (decided when the recipe runs, after bootstrap). GHDL_BACKEND=mcode make test forces.
 BACKEND = GHDL_BACKEND=$${GHDL_BACKEND:-$$(test -x /usr/bin/ghdl-llvm && echo llvm || echo mcode)}
+# Python keeps the byte code it compiles (in __pycache__, which git ignores) even where the caller's environment says
+# PYTHONDONTWRITEBYTECODE: without it, each of the regression's ~150 simulations parsed the package, the benches and
+# pytest's assertion rewrites from source again (about 0.2 s of CPU each).
+unexport PYTHONDONTWRITEBYTECODE
 
 .DEFAULT_GOAL := test
 .PHONY: setup prefetch test check coverage mutate soak lint synth-check bench synth demo shell waves vitis-driver clean help
@@ -28,7 +32,7 @@ help:
 	@echo "make bench        the change latency of CTRL.CHANGE per ramp phase, and the simulation speed (clocks/s)"
 	@echo "make synth        size and fmax: yosys iCE40 / xc7, nextpnr HX8K / UP5K -> build/synth/report.json"
 	@echo "make vitis-driver the Vitis driver folder (drivers/stepramp_v1_0 + sw/c/src) in build/vitis/drivers/"
-	@echo "make clean        remove build/ (keeps .venv)"
+	@echo "make clean        remove build/ and the byte code caches (keeps .venv)"
 
 setup:
 	@scripts/bootstrap.sh $(VENV)
@@ -114,3 +118,4 @@ vitis-driver: setup
 
 clean:
 	rm -rf build .pytest_cache
+	find sw tb scripts -name __pycache__ -prune -exec rm -rf {} +
