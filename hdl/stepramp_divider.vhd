@@ -42,6 +42,9 @@ architecture rtl of stepramp_divider is
   constant C_ALIGN : std_logic_vector(1 downto 0) := "01";
   constant C_ITER  : std_logic_vector(1 downto 0) := "10";
 
+  -- No bit pair selected (the select's AND-OR of the step is zero).
+  constant C_NO_PAIR : std_logic_vector(C_PAIRS - 1 downto 0) := (others => '0');
+
   signal state  : std_logic_vector(1 downto 0);
   signal num_r  : unsigned(2 * C_PAIRS - 1 downto 0);
   signal den_r  : unsigned(G_DEN_WIDTH - 1 downto 0);
@@ -153,30 +156,36 @@ begin
           lo_v(C_PAIRS - 1) := '0';
 
           pair := "00";
-          if (unsigned(hi_v) /= 0) then
+          if (hi_v /= C_NO_PAIR) then
             pair(1) := '1';
           end if;
-          if (unsigned(lo_v) /= 0) then
+          if (lo_v /= C_NO_PAIR) then
             pair(0) := '1';
           end if;
           pair_r <= pair;
 
+          -- The three trial differences are three subtractors side by side in hardware; a simulator computes
+          -- trial - 2 D only when 3 D does not fit, and trial - D only when 2 D does not either.
           trial := '0' & rem_r & pair_r;
-          d1    := csel_sub(trial, "000" & den_r);
-          d2    := csel_sub(trial, "00" & den_r & '0');
           d3    := csel_sub(trial, '0' & den3_r);
           if (d3(G_DEN_WIDTH + 2) = '0') then
             rem_r <= d3(G_DEN_WIDTH - 1 downto 0);
             quo_r <= quo_r(G_WIDTH - 3 downto 0) & "11";
-          elsif (d2(G_DEN_WIDTH + 2) = '0') then
-            rem_r <= d2(G_DEN_WIDTH - 1 downto 0);
-            quo_r <= quo_r(G_WIDTH - 3 downto 0) & "10";
-          elsif (d1(G_DEN_WIDTH + 2) = '0') then
-            rem_r <= d1(G_DEN_WIDTH - 1 downto 0);
-            quo_r <= quo_r(G_WIDTH - 3 downto 0) & "01";
           else
-            rem_r <= trial(G_DEN_WIDTH - 1 downto 0);
-            quo_r <= quo_r(G_WIDTH - 3 downto 0) & "00";
+            d2 := csel_sub(trial, "00" & den_r & '0');
+            if (d2(G_DEN_WIDTH + 2) = '0') then
+              rem_r <= d2(G_DEN_WIDTH - 1 downto 0);
+              quo_r <= quo_r(G_WIDTH - 3 downto 0) & "10";
+            else
+              d1 := csel_sub(trial, "000" & den_r);
+              if (d1(G_DEN_WIDTH + 2) = '0') then
+                rem_r <= d1(G_DEN_WIDTH - 1 downto 0);
+                quo_r <= quo_r(G_WIDTH - 3 downto 0) & "01";
+              else
+                rem_r <= trial(G_DEN_WIDTH - 1 downto 0);
+                quo_r <= quo_r(G_WIDTH - 3 downto 0) & "00";
+              end if;
+            end if;
           end if;
 
           if (sel_r(0) = '1') then

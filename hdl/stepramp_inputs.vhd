@@ -44,14 +44,15 @@ architecture rtl of stepramp_inputs is
 
   type cnt_array_t is array (0 to 3) of unsigned(G_FILTER_BITS - 1 downto 0);
 
-  signal sync1   : std_logic_vector(3 downto 0);
-  signal sync2   : std_logic_vector(3 downto 0);
-  signal level_r : std_logic_vector(3 downto 0);
-  signal rise_r  : std_logic_vector(3 downto 0);
-  signal fall_r  : std_logic_vector(3 downto 0);
-  signal cnt     : cnt_array_t;
-  signal last    : unsigned(G_FILTER_BITS - 1 downto 0);
-  signal last_c  : unsigned(G_FILTER_BITS - 1 downto 0);
+  signal pins_pol : std_logic_vector(3 downto 0);
+  signal sync1    : std_logic_vector(3 downto 0);
+  signal sync2    : std_logic_vector(3 downto 0);
+  signal level_r  : std_logic_vector(3 downto 0);
+  signal rise_r   : std_logic_vector(3 downto 0);
+  signal fall_r   : std_logic_vector(3 downto 0);
+  signal cnt      : cnt_array_t;
+  signal last     : unsigned(G_FILTER_BITS - 1 downto 0);
+  signal last_c   : unsigned(G_FILTER_BITS - 1 downto 0);
   -- TIME counts every clock: its low 16 bits are an integer (a simulator adds it natively, not bit by bit), the
   -- high 48 bits step when the low part wraps (a 64-bit counter in hardware all the same).
   signal time_lo   : natural range 0 to 2 ** 16 - 1;
@@ -71,12 +72,15 @@ begin
         sync1 <= (others => '0');
         sync2 <= (others => '0');
       else
-        sync1 <= pins xor pol;
+        sync1 <= pins_pol;
         sync2 <= sync1;
       end if;
     end if;
 
   end process sync_proc;
+
+  -- The pins made active high (a concurrent statement: a simulator evaluates it when a pin or POL changes).
+  pins_pol <= pins xor pol;
 
   -- The count a mismatch must reach: FILTER - 1 (0 for FILTER 0 and 1), registered off the compare's path (the
   -- subtraction a concurrent statement, which a simulator evaluates when FILTER changes, not every clock).

@@ -89,23 +89,21 @@ package body stepramp_pkg is
     constant C_W  : positive := trial'length;
     constant C_LO : positive := (C_W + 1) / 2;
 
-    alias    a   : unsigned(C_W - 1 downto 0) is trial;
-    alias    b   : unsigned(C_W - 1 downto 0) is sub;
-    variable lo  : unsigned(C_LO downto 0);            -- the low bits' difference and its borrow
-    variable hi0 : unsigned(C_W - C_LO - 1 downto 0);  -- the bits above without a borrow from below
-    variable hi1 : unsigned(C_W - C_LO - 1 downto 0);  -- and with one (a - b - 1 = a + not b)
+    alias    a  : unsigned(C_W - 1 downto 0) is trial;
+    alias    b  : unsigned(C_W - 1 downto 0) is sub;
+    variable lo : unsigned(C_LO downto 0); -- the low bits' difference and its borrow
 
   begin
 
-    lo  := ('0' & a(C_LO - 1 downto 0)) - ('0' & b(C_LO - 1 downto 0));
-    hi0 := a(C_W - 1 downto C_LO) - b(C_W - 1 downto C_LO);
-    hi1 := a(C_W - 1 downto C_LO) + not b(C_W - 1 downto C_LO);
+    lo := ('0' & a(C_LO - 1 downto 0)) - ('0' & b(C_LO - 1 downto 0));
 
+    -- The bits above with a borrow from below (a - b - 1 = a + not b) and without one: two subtractors and a
+    -- multiplexer in hardware, as if both were computed first; a simulator evaluates only the one it returns.
     if (lo(C_LO) = '1') then
-      return hi1 & lo(C_LO - 1 downto 0);
+      return (a(C_W - 1 downto C_LO) + not b(C_W - 1 downto C_LO)) & lo(C_LO - 1 downto 0);
     end if;
 
-    return hi0 & lo(C_LO - 1 downto 0);
+    return (a(C_W - 1 downto C_LO) - b(C_W - 1 downto C_LO)) & lo(C_LO - 1 downto 0);
 
   end function csel_sub;
 
