@@ -4,6 +4,23 @@
 formulas, fresh msb(x) + L(C x) + L(C (x + 1)) + 3 or continued L(radicand) + 2, and the continuation rule), with
 busy, ans_valid and the held answer checked in every clock of every request.
 
+How the bench checks every clock without waking at every clock (Bench): a monitor on each output (busy, ans_valid,
+ans_value, ans_rem, ans_ovf) logs its every change with the simulated time, and the bench, which wakes only where it
+reads the outputs or drives the inputs (Timers), fails on any logged change where none may come; an output that does
+not change holds. A request is driven at a falling edge, sampled by the next rising edge e, and read at the falling
+edge after e: busy '1', ans_valid '0', the previous answer held. From there any change of an output before edge
+e + latency (the model's) fails, and so does a change away from a rising edge; the answer's cycle is read at its falling
+edge: ans_valid '1', busy '0', the model's value, rem and ovf. The cycle after it (the next request's first, or an
+idle one) is read too: ans_valid '0' again. An idle gap is read at its first falling edge (busy '0', ans_valid '0',
+the answer held), and no output may change from there to its end.
+
+What is driven when: a request at the falling edge before its sampling edge e; random values on all six request inputs
+and on req at the falling edge after e, and again at one random falling edge between it and the answer's edge (the
+model's latency); random request inputs with req '0' at the start of an idle gap. So from edge e + 1 to the answer the
+inputs differ from the request's (a unit that reads one while busy, in whichever cycle, computes with garbage), req is
+'1' at the answer's edge in about half of the requests, and the inputs change once more mid-computation. The garbage
+has a random generator of its own (garbage_rng, from the test's seed): the requests a test draws do not depend on it.
+
 * random_requests: random requests (accel and decel, plain, seed and alternative; x of every bit length with 0 and
   2^31 - 1; C = m 4^e as seed words, of every bit length up to 2^72 with 0, 2^48 - 1, the driver's largest
   2^72 - 2^36 and the unit's (2^60 - 1) 4^6, whose value at x = 0 overflows, and now and then a scale of 7 .. 15,
@@ -25,12 +42,13 @@ import random
 from dataclasses import dataclass, replace
 from typing import Any
 
-from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge
+from cocotb.triggers import ClockCycles, FallingEdge, RisingEdge, Timer
+from cocotb.utils import get_sim_time
 
 from stepramp.models import exact
 from stepramp.models.exact_unit import FRESH_WORST, ExactRequest, NextDelayExact, fresh_latency
 from stepramp.sim.runner import run_cocotb
-from tbutil import build_dir, cocotb, env_int, start_clock_and_reset
+from tbutil import CLK_PERIOD_NS, build_dir, cocotb, env_int, start_clock_and_reset
 
 SEED_ENV = "NEXT_DELAY_EXACT_SEED"
 X_BITS = 31
@@ -48,6 +66,9 @@ N_REQUESTS = env_int("N_REQUESTS", 1500)
 ANSWER_LIMIT = FRESH_WORST + 8
 #: Simulated time of a request at the longest latency with the longest pause (10 ns clock), in us.
 US_PER_REQUEST = (ANSWER_LIMIT + 6) * 10 / 1000
+#: The clock period and its half and quarter, in ps.
+PERIOD = CLK_PERIOD_NS * 1000
+HALF, QUARTER = PERIOD // 2, PERIOD // 4
 
 
 @dataclass(frozen=True)
@@ -111,8 +132,22 @@ def flags(dut: Any) -> tuple[int, int]:
     return int(dut.busy.value), int(dut.ans_valid.value)
 
 
+def now_ps() -> int:
+    """Simulated time in ps."""
+    return round(get_sim_time("ps"))
+
+
+def garbage_rng(seed: int, test: str) -> random.Random:
+    """The garbage's own generator: the requests a test draws do not depend on how much garbage the bench drew."""
+    return random.Random(f"{SEED_ENV}={seed} {test} garbage")
+
+
 class Bench:
-    """The unit, its model, and the answer it holds."""
+    """The unit, its model, and the answer it holds. rng draws the garbage and the cycles it is driven in.
+
+    Every change of an output (busy, ans_valid, ans_value, ans_rem, ans_ovf) is logged by a monitor of its own, with
+    its simulated time; the bench reads the outputs at a falling edge, and between two reads it takes the log since
+    the first one (new_changes) and fails on any change there that is not allowed."""
 
     def __init__(self, dut: Any, rng: random.Random) -> None:
         self.dut = dut
@@ -121,34 +156,68 @@ class Bench:
         self.held = (0, 0)  # ans_value and ans_ovf after reset: 0
         self.failures: list[str] = []
         self.counts = {"answers": 0, "continued": 0, "held_req": 0, "max_latency": 0, "ovf": 0}
+        self.changes: list[tuple[int, str]] = []
 
     def fail(self, text: str) -> None:
         self.failures.append(text)
 
     async def reset(self) -> None:
+        """Clock and reset, ending at a falling edge; then the monitors start."""
         self.dut.req.value = 0
         self.dut.flush.value = 0
         drive(self.dut, ExactRequest(False, 0, 0, 0))
         await start_clock_and_reset(self.dut.clk, self.dut.rst)
         await FallingEdge(self.dut.clk)
+        for name in ("busy", "ans_valid", "ans_value", "ans_rem", "ans_ovf"):
+            cocotb.start_soon(self._monitor(name, getattr(self.dut, name)))
 
-    async def idle(self, cycles: int) -> None:
-        """req '0' for this many cycles (from a falling edge to a falling edge): nothing moves."""
+    async def _monitor(self, name: str, signal: Any) -> None:
+        while True:
+            await signal.value_change
+            self.changes.append((now_ps(), name))
+
+    def new_changes(self) -> list[tuple[int, str]]:
+        """The outputs' changes (time in ps, name) since the last call, oldest first."""
+        new, self.changes = self.changes, []
+        return new
+
+    def holding(self) -> bool:
+        """The outputs of an idle unit: busy '0', ans_valid '0', the answer held."""
+        return flags(self.dut) == (0, 0) and answer_now(self.dut) == (self.held[0], 0, self.held[1])
+
+    async def idle(self, cycles: int, last: bool = False) -> None:
+        """req '0' (and random request inputs, driven once) for this many cycles, from a falling edge to a falling
+        edge: nothing moves. The outputs are read at the first falling edge (ans_valid '0' again after an answer);
+        after it no output may change. Waits with a Timer to the falling edge's time (the outputs read the same
+        whether the simulator runs it before or after the clock's fall there: they change only at rising edges);
+        last: a single cycle that ends on the FallingEdge trigger itself (play's last), so that a caller's next
+        `await FallingEdge` is the one after it, whatever order the simulator runs a Timer and the clock in."""
         self.dut.req.value = 0
-        for _ in range(cycles):
-            drive_garbage(self.dut, self.rng)
+        drive_garbage(self.dut, self.rng)
+        self.new_changes()  # (read before: the caller's)
+        if last:
+            await Timer(PERIOD - QUARTER, unit="ps")
             await FallingEdge(self.dut.clk)
-            if flags(self.dut) != (0, 0) or answer_now(self.dut) != (self.held[0], 0, self.held[1]):
-                self.fail(f"idle: busy, ans_valid {flags(self.dut)}, answer {answer_now(self.dut)} (held {self.held})")
+        else:
+            await Timer(PERIOD, unit="ps")
+        if not self.holding():
+            self.fail(f"idle: busy, ans_valid {flags(self.dut)}, answer {answer_now(self.dut)} (held {self.held})")
+        self.new_changes()  # the edge before the read: covered by the read
+        if cycles > 1 and not last:
+            t_first = now_ps() - HALF  # the gap's first edge
+            await Timer((cycles - 1) * PERIOD, unit="ps")
+            for t, name in self.new_changes():
+                self.fail(f"idle: {name} changed {where(t - t_first)} from the gap's first edge (of {cycles})")
 
     async def play(self, steps: list[Step]) -> list[bool]:
         """Play the requests from a falling edge with the unit idle; returns the model's verdict on each (continued
         or fresh: what the request tests; the RTL's path shows in its latency, which must be the model's).
 
         Request i is driven at a falling edge and sampled by the next rising edge e. In the cycle after edge e + k,
-        busy must be '1', ans_valid '0' and the previous answer held for k < latency; at k = latency ans_valid is
-        '1' (one cycle), busy '0', and the answer the model's. A request with gap 0 is driven in that cycle (req
-        held high), so the next edge samples it.
+        busy must be '1', ans_valid '0' and the previous answer held for k < latency (read at k = 0, then no output
+        may change before edge e + latency); at k = latency ans_valid is '1' (one cycle), busy '0', and the answer
+        the model's. A request with gap 0 is driven in that cycle (req held high), so the next edge samples it.
+        Random inputs while busy: at k = 0 and at one random k before the model's latency.
         """
         dut = self.dut
         continued: list[bool] = []
@@ -162,18 +231,32 @@ class Bench:
             drive(dut, step.req)
             dut.req.value = 1
             expect = self.model.request(step.req)
-            await RisingEdge(dut.clk)  # the sampling edge e
-            latency = None
-            for k in range(ANSWER_LIMIT):
-                await FallingEdge(dut.clk)  # the cycle after edge e + k
-                busy, valid = flags(dut)
-                if valid:
-                    latency = k
-                    break
-                if not busy or answer_now(dut) != (self.held[0], 0, self.held[1]):
-                    self.fail(f"{step.req}, cycle after e + {k}: busy {busy}, answer {answer_now(dut)} not held")
+            stops = sorted({self.rng.randint(1, expect.latency - 1), expect.latency} if expect.latency > 1 else {1})
+            self.new_changes()  # (read before)
+            await Timer(PERIOD, unit="ps")  # the falling edge after the sampling edge e
+            t_e = now_ps() - HALF
+            if flags(dut) != (1, 0) or answer_now(dut) != (self.held[0], 0, self.held[1]):
+                self.fail(f"{step.req}, cycle after e: busy, ans_valid {flags(dut)}, answer {answer_now(dut)} not held")
+            self.new_changes()  # edge e (busy rises, ans_valid falls after an answer): covered by the read
+            k = 0  # the falling edge after e + k
+            for stop in stops:
                 drive_garbage(dut, self.rng)
                 dut.req.value = self.rng.getrandbits(1)
+                await Timer((stop - k) * PERIOD, unit="ps")
+                k = stop
+                for t, name in self.new_changes():  # none before the answer's edge
+                    if t != t_e + expect.latency * PERIOD:
+                        self.fail(
+                            f"{step.req}: {name} changed {where(t - t_e)} from e (answer due at + {expect.latency})"
+                        )
+            latency: int | None = k
+            while not flags(dut)[1]:  # no answer: where is it (a failure already)
+                if k >= ANSWER_LIMIT - 1:
+                    latency = None
+                    break
+                await Timer(PERIOD, unit="ps")
+                k += 1
+                latency = k
             if latency is None:
                 self.fail(f"{step.req}: no answer within {ANSWER_LIMIT} edges (model: {expect})")
                 break
@@ -193,8 +276,15 @@ class Bench:
             dut.req.value = 0
             if len(self.failures) > 20:
                 break
-        await self.idle(1)
+        await self.idle(1, last=True)
         return continued
+
+
+def where(dt: int) -> str:
+    """A time after a rising edge, as the edges from it: "at + 3", or between edges."""
+    if dt % PERIOD:
+        return f"{dt} ps (not at a rising edge)"
+    return f"at + {dt // PERIOD}"
 
 
 def random_step(model: NextDelayExact, rng: random.Random) -> Step:
@@ -216,7 +306,7 @@ async def random_requests(dut) -> None:
     seed = int(os.environ[SEED_ENV])
     dut._log.info("%s=%d", SEED_ENV, seed)
     rng = random.Random(seed)
-    bench = Bench(dut, rng)
+    bench = Bench(dut, garbage_rng(seed, "random_requests"))
     await bench.reset()
     planner = NextDelayExact()  # the model ahead of the bench's, to draw requests that continue
     steps = []
@@ -266,7 +356,7 @@ async def long_runs(dut) -> None:
     """Runs of 200 indices up and down, alternatives interleaved: every answer after a run's first is continued."""
     seed = int(os.environ[SEED_ENV])
     rng = random.Random(seed + 1)
-    bench = Bench(dut, rng)
+    bench = Bench(dut, garbage_rng(seed, "long_runs"))
     await bench.reset()
     # (C of the run, the first index, kind): a ramp from rest, a run up to the top of the index range, a run down to
     # 0, one down from the top, one up from a random index; C small, random and the largest
@@ -303,7 +393,7 @@ async def flush_drops_the_request(dut) -> None:
     a pause, is answered fresh."""
     seed = int(os.environ[SEED_ENV])
     rng = random.Random(seed + 2)
-    bench = Bench(dut, rng)
+    bench = Bench(dut, garbage_rng(seed, "flush_drops_the_request"))
     await bench.reset()
     cases = 0
     for trial in range(40):
