@@ -10,7 +10,8 @@ library ieee;
 
 entity stepramp_inputs is
   generic (
-    -- Width of the filter counter: INPUT_FILTER holds up to 2^G_FILTER_BITS - 1 clocks.
+    -- Width of the filter counter: INPUT_FILTER holds up to 2^G_FILTER_BITS - 1 clocks (1 .. 31: the counters are
+    -- integers).
     G_FILTER_BITS : positive := 20
   );
   port (
@@ -42,7 +43,13 @@ end entity stepramp_inputs;
 
 architecture rtl of stepramp_inputs is
 
-  type cnt_array_t is array (0 to 3) of unsigned(G_FILTER_BITS - 1 downto 0);
+  -- The largest filter count, 2^G_FILTER_BITS - 1 (written so that 2^31 is never formed).
+  constant C_CNT_MAX : natural := 2 ** (G_FILTER_BITS - 1) - 1 + 2 ** (G_FILTER_BITS - 1);
+
+  -- The filter counters are integers: one signal each for a simulator (a vector is one per bit, each assigned at every
+  -- clock), the same registers and comparators in hardware.
+
+  type cnt_array_t is array (0 to 3) of natural range 0 to C_CNT_MAX;
 
   signal pins_pol : std_logic_vector(3 downto 0);
   signal sync1    : std_logic_vector(3 downto 0);
@@ -51,15 +58,37 @@ architecture rtl of stepramp_inputs is
   signal rise_r   : std_logic_vector(3 downto 0);
   signal fall_r   : std_logic_vector(3 downto 0);
   signal cnt      : cnt_array_t;
-  signal last     : unsigned(G_FILTER_BITS - 1 downto 0);
-  signal last_c   : unsigned(G_FILTER_BITS - 1 downto 0);
-  -- TIME counts every clock: its low 16 bits are an integer (a simulator adds it natively, not bit by bit), the
-  -- high 48 bits step when the low part wraps (a 64-bit counter in hardware all the same).
-  signal time_lo   : natural range 0 to 2 ** 16 - 1;
+  signal last     : natural range 0 to C_CNT_MAX;
+  signal last_c   : natural range 0 to C_CNT_MAX;
+  -- TIME counts every clock: its low 4 bits and the 12 above them are integers (a simulator adds them natively and
+  -- converts 4 bits at each clock, 12 at every 16th), the high 48 bits step when the 16 below wrap (a 64-bit counter
+  -- in hardware all the same).
+  signal time_lo   : natural range 0 to 15;
+  signal time_mid  : natural range 0 to 2 ** 12 - 1;
   signal time_hi   : unsigned(47 downto 0);
   signal latched_r : std_logic;
   signal lpos_r    : std_logic_vector(31 downto 0);
   signal ltime_r   : unsigned(63 downto 0);
+
+  -- FILTER - 1, and 0 for FILTER 0 and 1 (and for an undefined FILTER, before the register file's reset).
+
+  function last_count (
+    f : std_logic_vector(G_FILTER_BITS - 1 downto 0)
+  ) return natural is
+
+    variable n : natural range 0 to C_CNT_MAX;
+
+  begin
+
+    n := to_integer(unsigned(f));
+
+    if (n = 0) then
+      return 0;
+    end if;
+
+    return n - 1;
+
+  end function last_count;
 
 begin
 
@@ -84,8 +113,7 @@ begin
 
   -- The count a mismatch must reach: FILTER - 1 (0 for FILTER 0 and 1), registered off the compare's path (the
   -- subtraction a concurrent statement, which a simulator evaluates when FILTER changes, not every clock).
-  last_c <= (others => '0') when unsigned(filter) = 0 else
-            unsigned(filter) - 1;
+  last_c <= last_count(filter);
 
   -- (No reset: the filter does not read it until its synchronisers, which are reset, can differ from the filtered
   -- level, two clocks after reset, and by then it follows FILTER's reset value.)
@@ -114,12 +142,12 @@ begin
             level_r(i) <= sync2(i);
             rise_r(i)  <= sync2(i);
             fall_r(i)  <= not sync2(i);
-            cnt(i)     <= (others => '0');
+            cnt(i)     <= 0;
           else
             cnt(i) <= cnt(i) + 1;
           end if;
         else
-          cnt(i) <= (others => '0');
+          cnt(i) <= 0;
         end if;
 
       end loop;
@@ -131,7 +159,7 @@ begin
 
         for i in 0 to 3 loop
 
-          cnt(i) <= (others => '0');
+          cnt(i) <= 0;
 
         end loop;
 
@@ -149,11 +177,15 @@ begin
   begin
 
     if rising_edge(clk) then
-      if (time_lo = 2 ** 16 - 1) then
-        time_lo <= 0;
-        time_hi <= time_hi + 1;
-      else
+      if (time_lo /= 15) then
         time_lo <= time_lo + 1;
+      elsif (time_mid /= 2 ** 12 - 1) then
+        time_lo  <= 0;
+        time_mid <= time_mid + 1;
+      else
+        time_lo  <= 0;
+        time_mid <= 0;
+        time_hi  <= time_hi + 1;
       end if;
       hit := '0';
 
@@ -185,11 +217,12 @@ begin
       if (hit = '1' and (latched_r = '0' or latch_clr = '1')) then
         latched_r <= '1';
         lpos_r    <= position;
-        ltime_r   <= time_hi & to_unsigned(time_lo, 16);
+        ltime_r   <= time_hi & to_unsigned(time_mid, 12) & to_unsigned(time_lo, 4);
       end if;
 
       if (rst = '1') then
         time_lo   <= 0;
+        time_mid  <= 0;
         time_hi   <= (others => '0');
         latched_r <= '0';
         lpos_r    <= (others => '0');
@@ -205,13 +238,14 @@ begin
   latched    <= latched_r;
   latch_pos  <= lpos_r;
   latch_time <= std_logic_vector(ltime_r);
-  -- TIME to the port in two parts, so that a simulator converts and assigns the 16 low bits at each clock and the 48
-  -- high bits only when they step.
-  time_count(15 downto 0)  <= std_logic_vector(to_unsigned(time_lo, 16));
+  -- TIME to the port in three parts, so that a simulator converts and assigns 4 bits at each clock, the 12 above them
+  -- at every 16th and the high 48 bits only when they step.
+  time_count(3 downto 0)   <= std_logic_vector(to_unsigned(time_lo, 4));
+  time_count(15 downto 4)  <= std_logic_vector(to_unsigned(time_mid, 12));
   time_count(63 downto 16) <= std_logic_vector(time_hi);
 
-  assert G_FILTER_BITS >= 1 and G_FILTER_BITS <= 32
-    report "stepramp_inputs: G_FILTER_BITS must be 1 .. 32"
+  assert G_FILTER_BITS >= 1 and G_FILTER_BITS <= 31
+    report "stepramp_inputs: G_FILTER_BITS must be 1 .. 31"
     severity failure;
 
 end architecture rtl;

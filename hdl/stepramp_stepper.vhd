@@ -70,7 +70,9 @@ architecture rtl of stepramp_stepper is
   constant C_LG : natural  := log2_ceil(G_MICROSTEPS);
   constant C_EW : positive := C_LG + 2;
 
-  type t_mag_table is array (natural range <>) of unsigned(G_DUTY_BITS downto 0);
+  -- (Integers: a table read is one signal for a simulator, not one per bit; the same ROM in hardware.)
+
+  type t_mag_table is array (natural range <>) of natural range 0 to 2 ** G_DUTY_BITS;
 
   -- Quarter-wave magnitude table: C_COS(k) = floor(2^G_DUTY_BITS * cos(pi * k / (2 * G_MICROSTEPS)) + 0.5),
   -- k = 0 .. G_MICROSTEPS (C_COS(0) = 2^G_DUTY_BITS, C_COS(G_MICROSTEPS) = 0), computed at elaboration.
@@ -84,12 +86,12 @@ architecture rtl of stepramp_stepper is
     for k in 0 to G_MICROSTEPS loop
 
       v_x      := cos(MATH_PI * real(k) / real(2 * G_MICROSTEPS));
-      v_tab(k) := to_unsigned(integer(floor(real(2 ** G_DUTY_BITS) * v_x + 0.5)), G_DUTY_BITS + 1);
+      v_tab(k) := integer(floor(real(2 ** G_DUTY_BITS) * v_x + 0.5));
 
     end loop;
 
     -- cos(pi / 2) is not exactly 0 in floating point; the table must end at 0 (winding off).
-    v_tab(G_MICROSTEPS) := (others => '0');
+    v_tab(G_MICROSTEPS) := 0;
     return v_tab;
 
   end function make_cos_table;
@@ -152,32 +154,41 @@ architecture rtl of stepramp_stepper is
   signal lvl_b2   : std_logic;
 
   -- PWM: electrical index at full resolution, table stage, duty stage, carrier.
-  signal u_shift   : natural range 0 to C_LG;
-  signal e_idx     : unsigned(C_EW - 1 downto 0);
-  signal quad      : std_logic_vector(1 downto 0);
-  signal frac_idx  : natural range 0 to G_MICROSTEPS - 1;
-  signal cos_f     : unsigned(G_DUTY_BITS downto 0);
-  signal cos_g     : unsigned(G_DUTY_BITS downto 0);
-  signal swap1     : std_logic;
-  signal neg_a1    : std_logic;
-  signal neg_b1    : std_logic;
-  signal mag_a     : unsigned(G_DUTY_BITS downto 0);
-  signal mag_b     : unsigned(G_DUTY_BITS downto 0);
-  signal mul_cnt   : natural range 0 to G_DUTY_BITS + 2;
-  signal mul_p     : unsigned(15 downto 0);
-  signal acc_a     : unsigned(15 downto 0);
-  signal acc_b     : unsigned(15 downto 0);
+  signal u_shift  : natural range 0 to C_LG;
+  signal e_idx    : unsigned(C_EW - 1 downto 0);
+  signal quad     : std_logic_vector(1 downto 0);
+  signal frac_idx : natural range 0 to G_MICROSTEPS - 1;
+  signal cos_f    : natural range 0 to 2 ** G_DUTY_BITS;
+  signal cos_g    : natural range 0 to 2 ** G_DUTY_BITS;
+  signal swap1    : std_logic;
+  signal neg_a1   : std_logic;
+  signal neg_b1   : std_logic;
+  signal mag_a    : natural range 0 to 2 ** G_DUTY_BITS;
+  signal mag_b    : natural range 0 to 2 ** G_DUTY_BITS;
+  signal mul_cnt  : natural range 0 to G_DUTY_BITS + 2;
+  -- The multipliers' accumulators and period, the duties, the carrier and its last value are integers: one signal
+  -- each for a simulator (a vector is one per bit, and these are assigned at every clock), the same registers in
+  -- hardware. (The shift registers q stay vectors: as integers they cost more LUTs.)
+  signal mul_p     : natural range 0 to 2 ** 16 - 1;
+  signal acc_a     : natural range 0 to 2 ** 16 - 1;
+  signal acc_b     : natural range 0 to 2 ** 16 - 1;
   signal q_a       : unsigned(G_DUTY_BITS downto 0);
   signal q_b       : unsigned(G_DUTY_BITS downto 0);
   signal neg_a2    : std_logic;
   signal neg_b2    : std_logic;
-  signal duty_a    : unsigned(15 downto 0);
-  signal duty_b    : unsigned(15 downto 0);
+  signal duty_a    : natural range 0 to 2 ** 16 - 1;
+  signal duty_b    : natural range 0 to 2 ** 16 - 1;
   signal neg_a     : std_logic;
   signal neg_b     : std_logic;
-  signal carrier   : unsigned(15 downto 0);
-  signal period_m1 : unsigned(15 downto 0);
+  signal carrier   : natural range 0 to 2 ** 16 - 1;
+  signal period_m1 : natural range 0 to 2 ** 16 - 1;
   signal pwm_run   : std_logic;
+
+  -- The bit of 0 and 1 (the sum's LSB shifted into q).
+
+  type t_bit_table is array (0 to 1) of std_logic;
+
+  constant C_BIT : t_bit_table := ('0', '1');
 
   -- Output registers.
   signal enable_r : std_logic;
@@ -423,7 +434,8 @@ begin
   quad     <= std_logic_vector(e_idx(C_EW - 1 downto C_EW - 2));
   frac_idx <= to_integer(e_idx and to_unsigned(G_MICROSTEPS - 1, C_EW));
 
-  period_m1 <= unsigned(pwm_period) - 1;
+  -- (pwm_period - 1 wraps to 2^16 - 1 for 0, when pwm_run holds the carrier at 0; an undefined period reads 0)
+  period_m1 <= to_integer(unsigned(pwm_period) - 1);
   pwm_run   <= '1' when unsigned(pwm_period) >= 2 else
                '0';
 
@@ -454,53 +466,68 @@ begin
   --   mul_cnt = BITS + 2:          product = acc * 2^(BITS + 1) + q; duty = product / 2^BITS rounded (bit BITS - 1)
   mul_proc : process (clk) is
 
-    variable v_sum_a : unsigned(16 downto 0);
-    variable v_sum_b : unsigned(16 downto 0);
+    variable v_sum_a : natural range 0 to 2 ** 17 - 1;
+    variable v_sum_b : natural range 0 to 2 ** 17 - 1;
+
+    -- The rounded duty of a finished product acc * 2^(BITS + 1) + q: its bits BITS + 15 .. BITS (acc's low 15 bits and
+    -- q's top bit), plus q's bit BITS - 1 (once per round).
+
+    function rounded (
+      acc : natural;
+      q   : unsigned(G_DUTY_BITS downto 0)
+    ) return natural is
+
+      variable v_acc : unsigned(15 downto 0);
+
+    begin
+
+      v_acc := to_unsigned(acc, 16);
+
+      if (q(G_DUTY_BITS - 1) = '1') then
+        return to_integer((v_acc(14 downto 0) & q(G_DUTY_BITS)) + 1);
+      end if;
+
+      return to_integer(v_acc(14 downto 0) & q(G_DUTY_BITS));
+
+    end function rounded;
 
   begin
 
     if rising_edge(clk) then
       if (rst = '1') then
         mul_cnt <= 0;
-        duty_a  <= (others => '0');
-        duty_b  <= (others => '0');
+        duty_a  <= 0;
+        duty_b  <= 0;
         neg_a   <= '0';
         neg_b   <= '0';
       elsif (mul_cnt = 0) then
-        q_a     <= mag_a;
-        q_b     <= mag_b;
+        q_a     <= to_unsigned(mag_a, G_DUTY_BITS + 1);
+        q_b     <= to_unsigned(mag_b, G_DUTY_BITS + 1);
         neg_a2  <= neg_a1;
         neg_b2  <= neg_b1;
-        mul_p   <= unsigned(pwm_period);
-        acc_a   <= (others => '0');
-        acc_b   <= (others => '0');
+        mul_p   <= to_integer(unsigned(pwm_period));
+        acc_a   <= 0;
+        acc_b   <= 0;
         mul_cnt <= 1;
       elsif (mul_cnt <= G_DUTY_BITS + 1) then
-        v_sum_a := '0' & acc_a;
+        -- {acc, q} shifted right by one, acc + pwm_period (17 bits) taking q's LSB's place
+        v_sum_a := acc_a;
         if (q_a(0) = '1') then
           v_sum_a := v_sum_a + mul_p;
         end if;
-        v_sum_b := '0' & acc_b;
+        v_sum_b := acc_b;
         if (q_b(0) = '1') then
           v_sum_b := v_sum_b + mul_p;
         end if;
-        acc_a   <= v_sum_a(16 downto 1);
-        q_a     <= v_sum_a(0) & q_a(G_DUTY_BITS downto 1);
-        acc_b   <= v_sum_b(16 downto 1);
-        q_b     <= v_sum_b(0) & q_b(G_DUTY_BITS downto 1);
+        acc_a   <= v_sum_a / 2;
+        q_a     <= C_BIT(v_sum_a mod 2) & q_a(G_DUTY_BITS downto 1);
+        acc_b   <= v_sum_b / 2;
+        q_b     <= C_BIT(v_sum_b mod 2) & q_b(G_DUTY_BITS downto 1);
         mul_cnt <= mul_cnt + 1;
       else
         -- product < 2^(BITS + 16), so acc(15) = '0' and the duty fits 16 bits
-        if (q_a(G_DUTY_BITS - 1) = '1') then
-          duty_a <= (acc_a(14 downto 0) & q_a(G_DUTY_BITS)) + 1;
-        else
-          duty_a <= acc_a(14 downto 0) & q_a(G_DUTY_BITS);
-        end if;
-        if (q_b(G_DUTY_BITS - 1) = '1') then
-          duty_b <= (acc_b(14 downto 0) & q_b(G_DUTY_BITS)) + 1;
-        else
-          duty_b <= acc_b(14 downto 0) & q_b(G_DUTY_BITS);
-        end if;
+        duty_a  <= rounded(acc_a, q_a);
+        duty_b  <= rounded(acc_b, q_b);
         neg_a   <= neg_a2;
         neg_b   <= neg_b2;
         mul_cnt <= 0;
@@ -515,7 +542,7 @@ begin
 
     if rising_edge(clk) then
       if (rst = '1' or pwm_run = '0' or carrier >= period_m1) then
-        carrier <= (others => '0');
+        carrier <= 0;
       else
         carrier <= carrier + 1;
       end if;
