@@ -70,6 +70,29 @@ architecture rtl of stepramp_inputs is
   signal lpos_r    : std_logic_vector(31 downto 0);
   signal ltime_r   : unsigned(63 downto 0);
 
+  -- The 4-bit vector of each count 0 .. 15 (a table read, where to_unsigned converts bit by bit at each clock; wires
+  -- in hardware).
+
+  type t_nibbles is array (0 to 15) of std_logic_vector(3 downto 0);
+
+  function make_nibbles return t_nibbles is
+
+    variable v : t_nibbles;
+
+  begin
+
+    for i in v'range loop
+
+      v(i) := std_logic_vector(to_unsigned(i, 4));
+
+    end loop;
+
+    return v;
+
+  end function make_nibbles;
+
+  constant C_NIBBLE : t_nibbles := make_nibbles;
+
   -- FILTER - 1, and 0 for FILTER 0 and 1 (and for an undefined FILTER, before the register file's reset).
 
   function last_count (
@@ -240,7 +263,7 @@ begin
   latch_time <= std_logic_vector(ltime_r);
   -- TIME to the port in three parts, so that a simulator converts and assigns 4 bits at each clock, the 12 above them
   -- at every 16th and the high 48 bits only when they step.
-  time_count(3 downto 0)   <= std_logic_vector(to_unsigned(time_lo, 4));
+  time_count(3 downto 0)   <= C_NIBBLE(time_lo);
   time_count(15 downto 4)  <= std_logic_vector(to_unsigned(time_mid, 12));
   time_count(63 downto 16) <= std_logic_vector(time_hi);
 
