@@ -213,10 +213,13 @@ begin
   width_m1 <= (others => '0') when unsigned(step_width) = 0 else
               unsigned(step_width) - 1;
 
+  -- (One process for the pulse and the registered shortest gap below: a simulator wakes one process per clock edge.)
   step_proc : process (clk) is
   begin
 
     if rising_edge(clk) then
+      min_gap_r <= min_gap_c;
+
       if (rst = '1') then
         -- A pulse in progress keeps its width; otherwise STEP is low from the first reset edge on.
         if (step_r = '1' and width_cnt /= 0) then
@@ -246,18 +249,10 @@ begin
 
   end process step_proc;
 
-  -- The shortest distance between two STEP rising edges (step_space: the STEP low time, 0 acts as 1), registered.
+  -- The shortest distance between two STEP rising edges (step_space: the STEP low time, 0 acts as 1), registered
+  -- (min_gap_r, in step_proc).
   min_gap_c <= to_integer(width_m1) + 2 when unsigned(step_space) = 0 else
                to_integer(width_m1) + 1 + to_integer(unsigned(step_space));
-
-  gap_proc : process (clk) is
-  begin
-
-    if rising_edge(clk) then
-      min_gap_r <= min_gap_c;
-    end if;
-
-  end process gap_proc;
 
   eng_min_gap <= std_logic_vector(to_unsigned(min_gap_r, 17));
 
@@ -439,32 +434,20 @@ begin
   pwm_run   <= '1' when unsigned(pwm_period) >= 2 else
                '0';
 
-  -- Stage 1: the two table reads (registered: a ROM).
-  table_proc : process (clk) is
-  begin
-
-    if rising_edge(clk) then
-      cos_f  <= C_COS(frac_idx);
-      cos_g  <= C_COS(G_MICROSTEPS - frac_idx);
-      swap1  <= quad(0);
-      neg_a1 <= quad(1) xor quad(0);
-      neg_b1 <= quad(1);
-    end if;
-
-  end process table_proc;
-
   mag_a <= cos_f when swap1 = '0' else
            cos_g;
   mag_b <= cos_g when swap1 = '0' else
            cos_f;
 
+  -- The PWM datapath in one clocked process (a simulator wakes one process per clock edge, not three): the table
+  -- reads (stage 1), the multipliers and the carrier; mag_a and mag_b above pick from the table stage.
   -- Duty = floor((|value| * pwm_period + 2^(G_DUTY_BITS - 1)) / 2^G_DUTY_BITS), at most pwm_period, for both
   -- windings by one serial shift-add multiplier each (no wide multiplier: iCE40 has no DSP). A round takes
   -- C_ROUND = G_DUTY_BITS + 3 clocks and rounds follow each other without pause:
   --   mul_cnt = 0:                 load |A|, |B|, signs and pwm_period; clear the accumulators;
   --   mul_cnt = 1 .. BITS + 1:     A + (pwm_period if the multiplier's LSB is '1'), shift {acc, q} right;
   --   mul_cnt = BITS + 2:          product = acc * 2^(BITS + 1) + q; duty = product / 2^BITS rounded (bit BITS - 1)
-  mul_proc : process (clk) is
+  pwm_proc : process (clk) is
 
     variable v_sum_a : natural range 0 to 2 ** 17 - 1;
     variable v_sum_b : natural range 0 to 2 ** 17 - 1;
@@ -494,6 +477,14 @@ begin
   begin
 
     if rising_edge(clk) then
+      -- Stage 1: the two table reads (registered: a ROM).
+      cos_f  <= C_COS(frac_idx);
+      cos_g  <= C_COS(G_MICROSTEPS - frac_idx);
+      swap1  <= quad(0);
+      neg_a1 <= quad(1) xor quad(0);
+      neg_b1 <= quad(1);
+
+      -- The multipliers.
       if (rst = '1') then
         mul_cnt <= 0;
         duty_a  <= 0;
@@ -532,15 +523,8 @@ begin
         neg_b   <= neg_b2;
         mul_cnt <= 0;
       end if;
-    end if;
 
-  end process mul_proc;
-
-  -- Carrier 0 .. pwm_period - 1, free running (a shorter new period wraps at once).
-  carrier_proc : process (clk) is
-  begin
-
-    if rising_edge(clk) then
+      -- Carrier 0 .. pwm_period - 1, free running (a shorter new period wraps at once).
       if (rst = '1' or pwm_run = '0' or carrier >= period_m1) then
         carrier <= 0;
       else
@@ -548,7 +532,7 @@ begin
       end if;
     end if;
 
-  end process carrier_proc;
+  end process pwm_proc;
 
   ---------------------------------------------------------------------------------------------------------------------
   -- Outputs: one register per pin. Bridge encoding: current + : IN1 = 1 (or PWM), IN2 = 0; current - : IN1 = 0,
