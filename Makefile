@@ -57,15 +57,12 @@ test: prefetch lint
 	  $(PY) -m pytest -n $(JOBS) $(DIST) -rA --durations=25
 	$(PY) -m stepramp.tools.coverage $(COVERAGE) --check
 
-# The size check's yosys run (tb/test_synth_size.py: about 40 s of one core) starts in the background before the
-# bootstrap and the lint, which leave a core idle, when GHDL and yosys are there; the test finds its result in the
-# content-keyed cache (or waits for it on the cache's lock; it runs it itself if this did not). System python3: the
-# synthesis script needs no package.
+# The size check's yosys run (tb/test_synth_size.py: about 45 s of one core) starts in the background before the
+# bootstrap and the lint, which leave a core idle; the test finds its result in the content-keyed cache (or waits for
+# it on the cache's lock; it runs it itself if this did not). Where GHDL or yosys is still missing, the bootstrap
+# starts it once it has installed them (scripts/prefetch.sh).
 prefetch:
-	@mkdir -p build/synth_size
-	@if command -v ghdl >/dev/null 2>&1 && command -v yosys >/dev/null 2>&1; then \
-	  (PYTHONPATH=sw python3 -m stepramp.tools.synth --size-cache build/synth_size stepramp_plb \
-	    >build/synth_size/prefetch.log 2>&1 &); fi
+	@scripts/prefetch.sh
 
 # The quick tier for inner loops, never instead of `make test`: lint, every sw/tests test (the model, the planner, the
 # drivers, the tools) and the RTL's unit benches (prio_enc, timer, divider, next_delay: seconds each).

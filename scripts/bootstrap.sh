@@ -39,6 +39,11 @@ if [ ${#need_apt[@]} -gt 0 ]; then
   fi
 fi
 
+# `make test` asked for the size check's yosys run before GHDL or yosys was here: start it now, beside the venv.
+if [ -f build/synth_size/prefetch.wanted ]; then
+  scripts/prefetch.sh
+fi
+
 if [ "$want_llvm" = 1 ]; then
   echo "bootstrap: installing Debian's ghdl-llvm (faster simulation; optional)"
   export DEBIAN_FRONTEND=noninteractive
