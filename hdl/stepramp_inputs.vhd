@@ -115,17 +115,11 @@ architecture rtl of stepramp_inputs is
 
 begin
 
-  -- The block's registers in one clocked process (a simulator wakes one process per clock edge, not four), in four
-  -- parts: the synchronisers, FILTER - 1, the filters, TIME and the latch. Each part reads the others' registers
-  -- (signals), as separate processes would.
-  inputs_proc : process (clk) is
-
-    variable hit : std_logic;
-
+  -- The ASYNC_REG-style pair: sync1 is the only flip-flop that sees a pin.
+  sync_proc : process (clk) is
   begin
 
     if rising_edge(clk) then
-      -- The ASYNC_REG-style pair: sync1 is the only flip-flop that sees a pin.
       if (rst = '1') then
         sync1 <= (others => '0');
         sync2 <= (others => '0');
@@ -133,13 +127,34 @@ begin
         sync1 <= pins_pol;
         sync2 <= sync1;
       end if;
+    end if;
 
-      -- (No reset: the filter does not read it until its synchronisers, which are reset, can differ from the filtered
-      -- level, two clocks after reset, and by then it follows FILTER's reset value.)
+  end process sync_proc;
+
+  -- The pins made active high (a concurrent statement: a simulator evaluates it when a pin or POL changes).
+  pins_pol <= pins xor pol;
+
+  -- The count a mismatch must reach: FILTER - 1 (0 for FILTER 0 and 1), registered off the compare's path (the
+  -- subtraction a concurrent statement, which a simulator evaluates when FILTER changes, not every clock).
+  last_c <= last_count(filter);
+
+  -- (No reset: the filter does not read it until its synchronisers, which are reset, can differ from the filtered
+  -- level, two clocks after reset, and by then it follows FILTER's reset value.)
+  last_proc : process (clk) is
+  begin
+
+    if rising_edge(clk) then
       last <= last_c;
+    end if;
 
-      -- The filter: a synchronised level that differs from the filtered one for FILTER edges in a row replaces it; any
-      -- sample that agrees restarts the count (a bounce).
+  end process last_proc;
+
+  -- The filter: a synchronised level that differs from the filtered one for FILTER edges in a row replaces it; any
+  -- sample that agrees restarts the count (a bounce).
+  filter_proc : process (clk) is
+  begin
+
+    if rising_edge(clk) then
       rise_r <= (others => '0');
       fall_r <= (others => '0');
 
@@ -172,9 +187,19 @@ begin
         end loop;
 
       end if;
+    end if;
 
-      -- TIME and the latch: the first selected edge of the source since the last clear takes POSITION and TIME, both as
-      -- they are in the clock after the filtered level changed (docs/stepramp_inputs.md, "Latch timing").
+  end process filter_proc;
+
+  -- TIME and the latch: the first selected edge of the source since the last clear takes POSITION and TIME, both as
+  -- they are in the clock after the filtered level changed (docs/stepramp_inputs.md, "Latch timing").
+  latch_proc : process (clk) is
+
+    variable hit : std_logic;
+
+  begin
+
+    if rising_edge(clk) then
       if (time_lo /= 15) then
         time_lo <= time_lo + 1;
       elsif (time_mid /= 2 ** 12 - 1) then
@@ -228,14 +253,7 @@ begin
       end if;
     end if;
 
-  end process inputs_proc;
-
-  -- The pins made active high (a concurrent statement: a simulator evaluates it when a pin or POL changes).
-  pins_pol <= pins xor pol;
-
-  -- The count a mismatch must reach: FILTER - 1 (0 for FILTER 0 and 1), registered off the compare's path (the
-  -- subtraction a concurrent statement, which a simulator evaluates when FILTER changes, not every clock).
-  last_c <= last_count(filter);
+  end process latch_proc;
 
   level      <= level_r;
   rise       <= rise_r;
