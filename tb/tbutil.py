@@ -6,6 +6,7 @@ benches that take them from here)."""
 from __future__ import annotations
 
 import os
+import random
 import re
 from collections.abc import Sequence
 from pathlib import Path
@@ -45,13 +46,37 @@ def edges_differ(got: Sequence[int], want: Sequence[int]) -> str:
     )
 
 
+#: The clock period and its half and quarter, in ps (the output-log benches' Timers: tb/test_next_delay_exact.py,
+#: tb/test_isqrt.py).
+PERIOD = CLK_PERIOD_NS * 1000
+HALF, QUARTER = PERIOD // 2, PERIOD // 4
+
+
+def where(dt: int) -> str:
+    """A time after a rising edge, as the edges from it: "at + 3", or between edges."""
+    if dt % PERIOD:
+        return f"{dt} ps (not at a rising edge)"
+    return f"at + {dt // PERIOD}"
+
+
+def garbage_rng(seed_env: str, seed: int, test: str) -> random.Random:
+    """A bench's own generator for the random inputs it drives while a unit is busy: the cases a test draws (from
+    the seed in seed_env) do not depend on how much garbage the bench drew."""
+    return random.Random(f"{seed_env}={seed} {test} garbage")
+
+
 __all__ = [
     "CLK_PERIOD_NS",
+    "HALF",
+    "PERIOD",
+    "QUARTER",
     "build_dir",
     "cocotb",
     "edges_differ",
     "env_int",
     "first_mismatch",
+    "garbage_rng",
     "now_cycles",
     "start_clock_and_reset",
+    "where",
 ]

@@ -53,16 +53,13 @@ from cocotb.utils import get_sim_steps, get_sim_time
 
 from stepramp.models.exact_unit import isqrt
 from stepramp.sim.runner import run_cocotb
-from tbutil import CLK_PERIOD_NS, build_dir, cocotb, env_int, start_clock_and_reset
+from tbutil import HALF, PERIOD, QUARTER, build_dir, cocotb, env_int, garbage_rng, start_clock_and_reset, where
 
 SEED_ENV = "ISQRT_SEED"
 #: Random radicands per bit length at the wide widths.
 PER_LENGTH = env_int("ISQRT_PER_LENGTH", 24)
 #: The simulated-time limit of a run of isqrt_against_model (the pytest wrapper sizes it to the width and the count).
 LIMIT_US = env_int("ISQRT_LIMIT_US", 5000)
-#: The clock period and its half and quarter, in ps.
-PERIOD = CLK_PERIOD_NS * 1000
-HALF, QUARTER = PERIOD // 2, PERIOD // 4
 
 
 def radicands(width: int, rng: random.Random) -> list[int]:
@@ -115,13 +112,6 @@ def max_extra(dut: Any) -> int:
     return len(dut.root) - 1 - len(dut.radicand) // 2
 
 
-def where(dt: int) -> str:
-    """A time after a rising edge, as the edges from it: "at + 3", or between edges."""
-    if dt % PERIOD:
-        return f"{dt} ps (not at a rising edge)"
-    return f"at + {dt // PERIOD}"
-
-
 def edges(first: int, last: int) -> Callable[[int], bool]:
     """The rising edges from time first to time last (ps), both included."""
     return lambda t: first <= t <= last and (t - first) % PERIOD == 0
@@ -130,11 +120,6 @@ def edges(first: int, last: int) -> Callable[[int], bool]:
 def times(*ts: int) -> Callable[[int], bool]:
     """These times (ps) only."""
     return lambda t: t in ts
-
-
-def garbage_rng(seed: int, test: str) -> random.Random:
-    """The garbage's own generator: the runs a test draws do not depend on how much garbage the bench drew."""
-    return random.Random(f"{SEED_ENV}={seed} {test} garbage")
 
 
 class Bench:
@@ -329,7 +314,7 @@ async def isqrt_against_model(dut) -> None:
     width = len(dut.radicand)
     rng = random.Random(seed)
     values = radicands(width, rng)
-    bench = Bench(dut, garbage_rng(seed, "isqrt_against_model"))
+    bench = Bench(dut, garbage_rng(SEED_ENV, seed, "isqrt_against_model"))
     await bench.reset()
     await bench.play(draw_runs(values, width, bench.top_extra, rng))
     counts = bench.counts
@@ -348,7 +333,7 @@ async def reset_drops_the_run(dut) -> None:
     seed = int(os.environ[SEED_ENV])
     width = len(dut.radicand)
     rng = random.Random(seed + 1)
-    bench = Bench(dut, garbage_rng(seed, "reset_drops_the_run"))
+    bench = Bench(dut, garbage_rng(SEED_ENV, seed, "reset_drops_the_run"))
     await bench.reset()
     for trial in range(15):
         r = rng.getrandbits(width) | 1 << (width - 1)

@@ -48,7 +48,7 @@ from cocotb.utils import get_sim_time
 from stepramp.models import exact
 from stepramp.models.exact_unit import FRESH_WORST, ExactRequest, NextDelayExact, fresh_latency
 from stepramp.sim.runner import run_cocotb
-from tbutil import CLK_PERIOD_NS, build_dir, cocotb, env_int, start_clock_and_reset
+from tbutil import HALF, PERIOD, QUARTER, build_dir, cocotb, env_int, garbage_rng, start_clock_and_reset, where
 
 SEED_ENV = "NEXT_DELAY_EXACT_SEED"
 X_BITS = 31
@@ -66,9 +66,6 @@ N_REQUESTS = env_int("N_REQUESTS", 1500)
 ANSWER_LIMIT = FRESH_WORST + 8
 #: Simulated time of a request at the longest latency with the longest pause (10 ns clock), in us.
 US_PER_REQUEST = (ANSWER_LIMIT + 6) * 10 / 1000
-#: The clock period and its half and quarter, in ps.
-PERIOD = CLK_PERIOD_NS * 1000
-HALF, QUARTER = PERIOD // 2, PERIOD // 4
 
 
 @dataclass(frozen=True)
@@ -135,11 +132,6 @@ def flags(dut: Any) -> tuple[int, int]:
 def now_ps() -> int:
     """Simulated time in ps."""
     return round(get_sim_time("ps"))
-
-
-def garbage_rng(seed: int, test: str) -> random.Random:
-    """The garbage's own generator: the requests a test draws do not depend on how much garbage the bench drew."""
-    return random.Random(f"{SEED_ENV}={seed} {test} garbage")
 
 
 class Bench:
@@ -280,13 +272,6 @@ class Bench:
         return continued
 
 
-def where(dt: int) -> str:
-    """A time after a rising edge, as the edges from it: "at + 3", or between edges."""
-    if dt % PERIOD:
-        return f"{dt} ps (not at a rising edge)"
-    return f"at + {dt // PERIOD}"
-
-
 def random_step(model: NextDelayExact, rng: random.Random) -> Step:
     """A random request; about half of them the next index of the kept run (with the run's constant)."""
     decel = rng.random() < 0.5
@@ -306,7 +291,7 @@ async def random_requests(dut) -> None:
     seed = int(os.environ[SEED_ENV])
     dut._log.info("%s=%d", SEED_ENV, seed)
     rng = random.Random(seed)
-    bench = Bench(dut, garbage_rng(seed, "random_requests"))
+    bench = Bench(dut, garbage_rng(SEED_ENV, seed, "random_requests"))
     await bench.reset()
     planner = NextDelayExact()  # the model ahead of the bench's, to draw requests that continue
     steps = []
@@ -356,7 +341,7 @@ async def long_runs(dut) -> None:
     """Runs of 200 indices up and down, alternatives interleaved: every answer after a run's first is continued."""
     seed = int(os.environ[SEED_ENV])
     rng = random.Random(seed + 1)
-    bench = Bench(dut, garbage_rng(seed, "long_runs"))
+    bench = Bench(dut, garbage_rng(SEED_ENV, seed, "long_runs"))
     await bench.reset()
     # (C of the run, the first index, kind): a ramp from rest, a run up to the top of the index range, a run down to
     # 0, one down from the top, one up from a random index; C small, random and the largest
@@ -393,7 +378,7 @@ async def flush_drops_the_request(dut) -> None:
     a pause, is answered fresh."""
     seed = int(os.environ[SEED_ENV])
     rng = random.Random(seed + 2)
-    bench = Bench(dut, garbage_rng(seed, "flush_drops_the_request"))
+    bench = Bench(dut, garbage_rng(SEED_ENV, seed, "flush_drops_the_request"))
     await bench.reset()
     cases = 0
     for trial in range(40):
