@@ -36,6 +36,11 @@ architecture rtl of stepramp_divider is
   -- The radix-4 step's trial differences (G_DEN_WIDTH + 3 bits) are carry-select subtractors (stepramp_pkg's
   -- csel_sub), so that no borrow ripples through the whole width in the step (the divider's clock).
   constant C_TW : positive := G_DEN_WIDTH + 3;
+  -- The subtractors' split: a low part of C_LO bits, whose borrow picks the high part (C_HI bits) computed without
+  -- and with it. The parts are integers in the step (GHDL evaluates an integer in a few instructions, a vector bit
+  -- by bit), converted from and to the registers' bits, which is wiring in hardware.
+  constant C_LO : positive := (C_TW + 1) / 2;
+  constant C_HI : positive := C_TW - C_LO;
 
   -- State encoding as constants (not an enum) so that GHDL's VPI shows it as a plain vector.
   constant C_IDLE  : std_logic_vector(1 downto 0) := "00";
@@ -59,6 +64,23 @@ architecture rtl of stepramp_divider is
   signal dz_r     : std_logic;
   signal num_msb  : std_logic_vector(C_IDX_W - 1 downto 0);
   signal num_zero : std_logic;
+  -- The numerator's bits 2 i + 1 and 2 i at place i (wires: the pairs' high and low bits).
+  signal num_odd  : std_logic_vector(C_PAIRS - 1 downto 0);
+  signal num_even : std_logic_vector(C_PAIRS - 1 downto 0);
+  -- D, 2 D and 3 D split as the trial is: the low part, the high part and its complement (not d = 2 ** C_HI - 1 - d:
+  -- trial - d - 1 is trial + not d less 2 ** C_HI). Wires from den_r and den3_r, which change once per division.
+  signal d1   : unsigned(C_TW - 1 downto 0);
+  signal d2   : unsigned(C_TW - 1 downto 0);
+  signal d3   : unsigned(C_TW - 1 downto 0);
+  signal d1_l : natural range 0 to 2 ** C_LO - 1;
+  signal d2_l : natural range 0 to 2 ** C_LO - 1;
+  signal d3_l : natural range 0 to 2 ** C_LO - 1;
+  signal d1_h : natural range 0 to 2 ** C_HI - 1;
+  signal d2_h : natural range 0 to 2 ** C_HI - 1;
+  signal d3_h : natural range 0 to 2 ** C_HI - 1;
+  signal d1_n : natural range 0 to 2 ** C_HI - 1;
+  signal d2_n : natural range 0 to 2 ** C_HI - 1;
+  signal d3_n : natural range 0 to 2 ** C_HI - 1;
 
 begin
 
@@ -66,9 +88,35 @@ begin
     report "stepramp_divider: G_WIDTH must be in 3 .. 64"
     severity failure;
 
-  assert G_DEN_WIDTH >= 1 and G_DEN_WIDTH <= G_WIDTH
-    report "stepramp_divider: G_DEN_WIDTH must be in 1 .. G_WIDTH"
+  -- (At most 57: the step's parts, C_LO and C_HI bits, and their sums fit an integer.)
+  assert G_DEN_WIDTH >= 1 and G_DEN_WIDTH <= G_WIDTH and G_DEN_WIDTH <= 57
+    report "stepramp_divider: G_DEN_WIDTH must be in 1 .. G_WIDTH and at most 57"
     severity failure;
+
+  pairs_proc : process (num_r) is
+  begin
+
+    for i in 0 to C_PAIRS - 1 loop
+
+      num_odd(i)  <= num_r(2 * i + 1);
+      num_even(i) <= num_r(2 * i);
+
+    end loop;
+
+  end process pairs_proc;
+
+  d1   <= "000" & den_r;
+  d2   <= "00" & den_r & '0';
+  d3   <= '0' & den3_r;
+  d1_l <= to_integer(d1(C_LO - 1 downto 0));
+  d2_l <= to_integer(d2(C_LO - 1 downto 0));
+  d3_l <= to_integer(d3(C_LO - 1 downto 0));
+  d1_h <= to_integer(d1(C_TW - 1 downto C_LO));
+  d2_h <= to_integer(d2(C_TW - 1 downto C_LO));
+  d3_h <= to_integer(d3(C_TW - 1 downto C_LO));
+  d1_n <= to_integer(not d1(C_TW - 1 downto C_LO));
+  d2_n <= to_integer(not d2(C_TW - 1 downto C_LO));
+  d3_n <= to_integer(not d3(C_TW - 1 downto C_LO));
 
   num_enc_inst : entity work.stepramp_prio_enc
     generic map (
@@ -82,15 +130,48 @@ begin
 
   div_proc : process (clk) is
 
-    variable pair : unsigned(1 downto 0);
+    variable pair  : unsigned(1 downto 0);
+    variable first : natural range 0 to 2 ** (C_IDX_W - 1) - 1;
     -- The selected pair's high and low bit, one place per pair (all zero but the selected one).
     variable hi_v : std_logic_vector(C_PAIRS - 1 downto 0);
     variable lo_v : std_logic_vector(C_PAIRS - 1 downto 0);
     -- 4 * remainder + pair, below 4 D, with one spare bit: the sign of the trial differences below.
     variable trial : unsigned(C_TW - 1 downto 0);
-    variable d1    : unsigned(C_TW - 1 downto 0); -- trial - D
-    variable d2    : unsigned(C_TW - 1 downto 0); -- trial - 2 D
-    variable d3    : unsigned(C_TW - 1 downto 0); -- trial - 3 D
+    variable t_lo  : natural range 0 to 2 ** C_LO - 1;
+    variable t_hi  : natural range 0 to 2 ** C_HI - 1;
+    -- trial - m D: the low part with its borrow on top, and the high part with that borrow (trial + not d: its top
+    -- bit says m D fits) or without it (its top bit says m D does not fit); whether m D fits, and the difference.
+    variable lo   : signed(C_LO downto 0);
+    variable hb   : unsigned(C_HI downto 0);
+    variable hn   : signed(C_HI downto 0);
+    variable fits : boolean;
+    variable diff : unsigned(C_TW - 1 downto 0);
+
+    -- trial - m D, its parts (d_l, d_h) and not d_h (d_n): the low part's borrow picks the high part computed with
+    -- it or without (a carry-select subtractor; a simulator computes only the high part it picks, the hardware both).
+
+    procedure trial_sub (
+      d_l : in natural;
+      d_h : in natural;
+      d_n : in natural
+    ) is
+    begin
+
+      lo := to_signed(t_lo - d_l, C_LO + 1);
+
+      if (lo(C_LO) = '1') then
+        hb                         := to_unsigned(t_hi + d_n, C_HI + 1);
+        fits                       := hb(C_HI) = '1';
+        diff(C_TW - 1 downto C_LO) := hb(C_HI - 1 downto 0);
+      else
+        hn                         := to_signed(t_hi - d_h, C_HI + 1);
+        fits                       := hn(C_HI) = '0';
+        diff(C_TW - 1 downto C_LO) := unsigned(hn(C_HI - 1 downto 0));
+      end if;
+
+      diff(C_LO - 1 downto 0) := unsigned(lo(C_LO - 1 downto 0));
+
+    end procedure trial_sub;
 
   begin
 
@@ -115,11 +196,12 @@ begin
           sel_r                                                <= (others => '0');
           sel_r(to_integer(shift_right(unsigned(num_msb), 1))) <= '1';
           -- The first pair: the one that holds the numerator's top bit (an AND-OR over the pairs, like the steps').
-          pair := "00";
+          pair  := "00";
+          first := to_integer(unsigned(num_msb(C_IDX_W - 1 downto 1)));
 
           for i in 0 to C_PAIRS - 1 loop
 
-            if (to_unsigned(i, C_IDX_W - 1) = unsigned(num_msb(C_IDX_W - 1 downto 1))) then
+            if (i = first) then
               pair := pair or num_r(2 * i + 1 downto 2 * i);
             end if;
 
@@ -145,15 +227,8 @@ begin
           -- One radix-4 step per clock, from the selected bit pair down to pair 0: the largest of 3 D, 2 D, D that
           -- fits. The pair of the next step comes through an AND-OR of the one-hot select shifted by one (a
           -- register), not a multiplexer decoded from a counter, and is registered in pair_r.
-          for i in 0 to C_PAIRS - 2 loop
-
-            hi_v(i) := sel_r(i + 1) and num_r(2 * i + 1);
-            lo_v(i) := sel_r(i + 1) and num_r(2 * i);
-
-          end loop;
-
-          hi_v(C_PAIRS - 1) := '0';
-          lo_v(C_PAIRS - 1) := '0';
+          hi_v := ('0' & sel_r(C_PAIRS - 1 downto 1)) and num_odd;
+          lo_v := ('0' & sel_r(C_PAIRS - 1 downto 1)) and num_even;
 
           pair := "00";
           if (hi_v /= C_NO_PAIR) then
@@ -167,26 +242,27 @@ begin
           -- The three trial differences are three subtractors side by side in hardware; a simulator computes
           -- trial - 2 D only when 3 D does not fit, and trial - D only when 2 D does not either.
           trial := '0' & rem_r & pair_r;
-          d3    := csel_sub(trial, '0' & den3_r);
-          if (d3(G_DEN_WIDTH + 2) = '0') then
-            rem_r <= d3(G_DEN_WIDTH - 1 downto 0);
+          t_lo  := to_integer(trial(C_LO - 1 downto 0));
+          t_hi  := to_integer(trial(C_TW - 1 downto C_LO));
+          trial_sub(d3_l, d3_h, d3_n);
+          if (fits) then
             quo_r <= quo_r(G_WIDTH - 3 downto 0) & "11";
           else
-            d2 := csel_sub(trial, "00" & den_r & '0');
-            if (d2(G_DEN_WIDTH + 2) = '0') then
-              rem_r <= d2(G_DEN_WIDTH - 1 downto 0);
+            trial_sub(d2_l, d2_h, d2_n);
+            if (fits) then
               quo_r <= quo_r(G_WIDTH - 3 downto 0) & "10";
             else
-              d1 := csel_sub(trial, "000" & den_r);
-              if (d1(G_DEN_WIDTH + 2) = '0') then
-                rem_r <= d1(G_DEN_WIDTH - 1 downto 0);
+              trial_sub(d1_l, d1_h, d1_n);
+              if (fits) then
                 quo_r <= quo_r(G_WIDTH - 3 downto 0) & "01";
               else
-                rem_r <= trial(G_DEN_WIDTH - 1 downto 0);
+                -- (nothing fits: the trial, below D, is the remainder)
+                diff  := trial;
                 quo_r <= quo_r(G_WIDTH - 3 downto 0) & "00";
               end if;
             end if;
           end if;
+          rem_r <= diff(G_DEN_WIDTH - 1 downto 0);
 
           if (sel_r(0) = '1') then
             done_r <= '1';
