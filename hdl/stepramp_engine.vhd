@@ -92,6 +92,9 @@ architecture rtl of stepramp_engine is
 
   -- L = N - 1 of a move of N = 0 (modulo 2^31).
   constant C_L_OF_N0 : unsigned(30 downto 0) := (others => '1');
+  -- An interval of one tick, and cnt_hi = 0 (compared as plain vectors: numeric_std's "=" is slow in a simulator).
+  constant C_D_ONE    : std_logic_vector(32 downto 0) := (0 => '1', others => '0');
+  constant C_CNT_HI_0 : std_logic_vector(16 downto 0) := (others => '0');
 
   -- Latched move parameters (data: no reset): the active copy (the register file holds the staging copy).
   signal p_l           : unsigned(30 downto 0); -- L = N - 1, the number of intervals
@@ -121,17 +124,25 @@ architecture rtl of stepramp_engine is
   signal p_n0_sa : unsigned(31 downto 0);
 
   -- Move sequencer and outputs.
-  signal phase        : std_logic_vector(1 downto 0);
-  signal idle_r       : std_logic; -- phase = C_PH_IDLE
-  signal busy_r       : std_logic;
-  signal done_r       : std_logic;
-  signal error_r      : std_logic;
-  signal err_code_r   : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
-  signal step_r       : std_logic;
-  signal dir_r        : std_logic;
-  signal state_r      : std_logic_vector(1 downto 0);
+  signal phase      : std_logic_vector(1 downto 0);
+  signal idle_r     : std_logic; -- phase = C_PH_IDLE
+  signal busy_r     : std_logic;
+  signal done_r     : std_logic;
+  signal error_r    : std_logic;
+  signal err_code_r : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
+  signal step_r     : std_logic;
+  signal dir_r      : std_logic;
+  signal state_r    : std_logic_vector(1 downto 0);
+  -- The pulse counters POSITION (32 bits), ELEC_POS (9) and STEP_COUNT (31): plain counters in hardware, held as
+  -- integers so that a simulator counts natively (docs/conventions.md): POSITION and STEP_COUNT as their low 16 bits
+  -- (pos_lo, stc_lo) and their high bits (pos_hi, stc_hi), which step on the low part's carry (or borrow), the carry
+  -- chain split in two; position_r and step_count_r are the whole values (concurrent statements).
+  signal pos_lo       : natural range 0 to 2 ** 16 - 1;
+  signal pos_hi       : unsigned(15 downto 0);
+  signal elec_pos_r   : natural range 0 to 2 ** 9 - 1;
+  signal stc_lo       : natural range 0 to 2 ** 16 - 1;
+  signal stc_hi       : unsigned(14 downto 0);
   signal position_r   : unsigned(31 downto 0);
-  signal elec_pos_r   : unsigned(8 downto 0);
   signal step_count_r : unsigned(30 downto 0);
   signal cur_delay_r  : unsigned(31 downto 0);
   signal chk_code     : std_logic_vector(C_STATUS_ERR_CODE_W - 1 downto 0);
@@ -143,6 +154,10 @@ architecture rtl of stepramp_engine is
   signal n_one_c  : std_logic;
   -- Clocks until a pulse keeps min_gap from the previous pulse of the move (0: it may come).
   signal gap_left : natural range 0 to 2 ** 17 - 1;
+  -- min_gap as an integer, min_gap /= 0 and min_gap > 1: concurrent, evaluated when min_gap changes (not each pulse).
+  signal min_gap_i  : natural range 0 to 2 ** 17 - 1;
+  signal min_gap_nz : std_logic;
+  signal min_gap_gt : std_logic;
   -- A soft stop request waits for its pulse p (the first pulse edge after the edge that sampled it).
   signal sreq : std_logic;
   -- Take-over: chg_pend_r an accepted change waits for its pulse P; chg_hit STEP_COUNT = P (registered: pulse P - 1
@@ -530,9 +545,20 @@ begin
   tk       <= chg_hit and chg_pend_r;
   pc_latch <= d_latch or tk;
 
+  -- (Concurrent: evaluated when min_gap changes, read at each pulse by seq_proc.)
+  min_gap_i  <= to_integer(unsigned(min_gap));
+  min_gap_nz <= '1' when unsigned(min_gap) /= 0 else
+                '0';
+  min_gap_gt <= '1' when unsigned(min_gap(16 downto 1)) /= 0 else
+                '0';
+
   seq_proc : process (clk) is
 
-    variable v_dir_all : unsigned(31 downto 0);
+    variable v_dir_all : unsigned(15 downto 0);
+    -- A low part plus one (or minus one: plus all ones), its carry in bit 16; the addend of POSITION, of ELEC_POS.
+    variable v_sum    : natural range 0 to 2 ** 17 - 1;
+    variable v_step   : natural range 1 to 2 ** 16 - 1;
+    variable v_step_e : natural range 1 to 2 ** 9 - 1;
 
     -- The move inputs (the staging registers) become the active copy: at a start, and at a take-over.
 
@@ -583,7 +609,7 @@ begin
       cnt_hi  <= unsigned(d(32 downto 16));
       cnt_one <= '0';
 
-      if (unsigned(d) = 1) then
+      if (d = C_D_ONE) then
         cnt_one <= '1';
       end if;
 
@@ -596,7 +622,6 @@ begin
   begin
 
     if rising_edge(clk) then
-      v_dir_all := (others => dir_r);
       -- Strobes are low unless set below.
       step_r      <= '0';
       done_r      <= '0';
@@ -604,74 +629,67 @@ begin
       tmr_restart <= '0';
       adv_r       <= d_load;
       alt_r       <= d_alt;
-      taken_r     <= d_load or d_alt;
-      chk_code    <= chk_c;
-      n_zero      <= n_zero_c;
-      n_one       <= n_one_c;
+      -- (d_load or d_alt, as a test: a simulator then calls no std_logic "or".)
+      if (d_load = '1' or d_alt = '1') then
+        taken_r <= '1';
+      else
+        taken_r <= '0';
+      end if;
+      chk_code <= chk_c;
+      n_zero   <= n_zero_c;
+      n_one    <= n_one_c;
 
-      case phase is
-
-        when C_PH_IDLE =>
-
-          if (d_latch = '1') then
-            loaded <= '1';
-            latch_move;
+      -- (An if chain, not a case, with the hot path first: a simulator compares phase once a clock while running
+      -- instead of three times; a metavalue (before the reset) goes idle as a case's others would. Compares with
+      -- the constants only, so that synthesis still recodes phase as a state machine.)
+      if (phase = C_PH_RUN) then
+        if (tick = '1' and cnt_one = '0') then
+          if (cnt_lo = 0) then
+            cnt_lo <= 2 ** 16 - 1;
+            cnt_hi <= cnt_hi - 1;
+          else
+            cnt_lo <= cnt_lo - 1;
           end if;
-
-          if (start = '1') then
-            dir_r        <= direction;
-            busy_r       <= '1';
-            err_code_r   <= C_ERR_NONE;
-            cur_err      <= C_ERR_NONE;
-            step_count_r <= (others => '0');
-            tmr_restart  <= '1';
-            sreq         <= '0';
-            phase        <= C_PH_SETUP;
-            idle_r       <= '0';
-            loaded       <= '0';
+          if (cnt_lo = 2 and std_logic_vector(cnt_hi) = C_CNT_HI_0) then
+            cnt_one <= '1';
           end if;
+        end if;
+      elsif (phase = C_PH_IDLE) then
+        if (d_latch = '1') then
+          loaded <= '1';
+          latch_move;
+        end if;
 
-        when C_PH_SETUP =>
-
-          -- The parameter check (check_proc) sees the latched parameters from this edge on: chk_code, n_zero and
-          -- n_one are read at edge 2. The precompute prepares interval 1 (c_first) at this edge.
-          phase <= C_PH_FIRST;
-
-        when C_PH_FIRST =>
-
-          if (d_load = '1') then
-            phase <= C_PH_RUN;
-          end if;
-
-        when C_PH_RUN =>
-
-          if (tick = '1' and cnt_one = '0') then
-            if (cnt_lo = 0) then
-              cnt_lo <= 2 ** 16 - 1;
-              cnt_hi <= cnt_hi - 1;
-            else
-              cnt_lo <= cnt_lo - 1;
-            end if;
-            if (cnt_lo = 2 and cnt_hi = 0) then
-              cnt_one <= '1';
-            end if;
-          end if;
-
-        when others =>
-
-          phase  <= C_PH_IDLE;
-          idle_r <= '1';
-
-      end case;
+        if (start = '1') then
+          dir_r       <= direction;
+          busy_r      <= '1';
+          err_code_r  <= C_ERR_NONE;
+          cur_err     <= C_ERR_NONE;
+          stc_lo      <= 0;
+          stc_hi      <= (others => '0');
+          tmr_restart <= '1';
+          sreq        <= '0';
+          phase       <= C_PH_SETUP;
+          idle_r      <= '0';
+          loaded      <= '0';
+        end if;
+      elsif (phase = C_PH_SETUP) then
+        -- The parameter check (check_proc) sees the latched parameters from this edge on: chk_code,
+        -- n_zero and n_one are read at edge 2. The precompute prepares interval 1 (c_first) at this edge.
+        phase <= C_PH_FIRST;
+      elsif (phase = C_PH_FIRST) then
+        if (d_load = '1') then
+          phase <= C_PH_RUN;
+        end if;
+      else
+        phase  <= C_PH_IDLE;
+        idle_r <= '1';
+      end if;
 
       -- Step spacing: gap_left is 0 once min_gap clocks have passed since the last pulse (none before pulse 0).
-      if (d_pulse = '1' and unsigned(min_gap) /= 0) then
-        gap_left <= to_integer(unsigned(min_gap)) - 1;
-        if (unsigned(min_gap(16 downto 1)) /= 0) then
-          gap_nz <= '1';
-        else
-          gap_nz <= '0';
-        end if;
+      if (d_pulse = '1' and min_gap_nz = '1') then
+        gap_left <= min_gap_i - 1;
+        gap_nz   <= min_gap_gt;
       elsif (gap_nz = '1') then
         gap_left <= gap_left - 1;
         if (gap_left = 1) then
@@ -680,11 +698,29 @@ begin
       end if;
 
       if (d_pulse = '1') then
-        step_r       <= '1';
-        step_count_r <= step_count_r + 1;
-        -- +1 or -1 (all ones) through one adder each.
-        position_r <= position_r + (v_dir_all(31 downto 1) & '1');
-        elec_pos_r <= elec_pos_r + (v_dir_all(8 downto 1) & '1');
+        step_r <= '1';
+        -- STEP_COUNT + 1: the low part's carry (bit 16 of its sum) steps the high part.
+        v_sum  := stc_lo + 1;
+        stc_lo <= v_sum mod 2 ** 16;
+        if (v_sum / 2 ** 16 = 1) then
+          stc_hi <= stc_hi + 1;
+        end if;
+        -- POSITION and ELEC_POS + 1 or - 1 (+ all ones) through one adder each. POSITION's high part adds all ones
+        -- and the low part's carry when counting down (it steps down without a carry), 0 and the carry when counting
+        -- up (it steps up with one).
+        v_step   := 1;
+        v_step_e := 1;
+        if (dir_r = '1') then
+          v_step   := 2 ** 16 - 1;
+          v_step_e := 2 ** 9 - 1;
+        end if;
+        v_sum  := pos_lo + v_step;
+        pos_lo <= v_sum mod 2 ** 16;
+        if ((v_sum / 2 ** 16 = 1) /= (dir_r = '1')) then
+          v_dir_all := (others => dir_r);
+          pos_hi    <= pos_hi + (v_dir_all(15 downto 1) & '1');
+        end if;
+        elec_pos_r <= (elec_pos_r + v_step_e) mod 2 ** 9;
       end if;
 
       -- Pulse edge: the next interval starts; only register copies here.
@@ -766,7 +802,8 @@ begin
       -- Position preset while stopped (a start at the same edge still sees the new position). The electrical
       -- position stays: a preset (homing) must not move the motor's field.
       if (pos_load = '1' and idle_r = '1') then
-        position_r <= unsigned(pos_value);
+        pos_lo <= to_integer(unsigned(pos_value(15 downto 0)));
+        pos_hi <= unsigned(pos_value(31 downto 16));
       end if;
 
       if (rst = '1') then
@@ -782,9 +819,11 @@ begin
         step_r        <= '0';
         dir_r         <= '0';
         state_r       <= C_ST_STOP;
-        position_r    <= (others => '0');
-        elec_pos_r    <= (others => '0');
-        step_count_r  <= (others => '0');
+        pos_lo        <= 0;
+        pos_hi        <= (others => '0');
+        elec_pos_r    <= 0;
+        stc_lo        <= 0;
+        stc_hi        <= (others => '0');
         cur_delay_r   <= (others => '0');
         tmr_restart   <= '0';
         adv_r         <= '0';
@@ -805,6 +844,10 @@ begin
 
   end process seq_proc;
 
+  -- The pulse counters as vectors (concurrent: evaluated at a pulse, not every clock).
+  position_r   <= pos_hi & to_unsigned(pos_lo, 16);
+  step_count_r <= stc_hi & to_unsigned(stc_lo, 16);
+
   -- (A concurrent compare: evaluated when STEP_COUNT or CHANGE_AT changes, registered every clock in seq_proc.)
   chg_eq <= '1' when step_count_r = unsigned(change_at) else
             '0';
@@ -818,9 +861,11 @@ begin
   error       <= error_r;
   err_code    <= err_code_r;
   state       <= state_r;
-  position    <= std_logic_vector(position_r);
-  elec_pos    <= std_logic_vector(elec_pos_r);
-  step_count  <= std_logic_vector(step_count_r);
-  cur_delay   <= std_logic_vector(cur_delay_r);
+  -- (From the parts directly, not through position_r and step_count_r: the ports change in the delta after the
+  -- registers, as a register's port does, which the benches' samplers at a value change rely on.)
+  position   <= std_logic_vector(pos_hi & to_unsigned(pos_lo, 16));
+  elec_pos   <= std_logic_vector(to_unsigned(elec_pos_r, 9));
+  step_count <= std_logic_vector(stc_hi & to_unsigned(stc_lo, 16));
+  cur_delay  <= std_logic_vector(cur_delay_r);
 
 end architecture rtl;

@@ -57,18 +57,41 @@ architecture rtl of stepramp_next_delay is
   signal div_den   : std_logic_vector(C_DEN_W - 1 downto 0);
   signal div_q     : std_logic_vector(C_W - 1 downto 0);
   signal div_r     : std_logic_vector(C_DEN_W - 1 downto 0);
-  -- value -/+ quotient, one bit wider than the divider so that a borrow or a carry out of 48 bits is visible.
-  signal result : unsigned(C_W downto 0);
-  signal q_op   : unsigned(C_W downto 0);
   -- value -/+ quotient as a carry-select adder (the divider's last quotient digit -> the answer register and its
   -- range flag is a top path of the clock): the low C_SPLIT bits with the carry in, the bits above with and without
   -- the low part's carry, picked by it.
   constant C_SPLIT : positive := (C_W + 1) / 2;
 
-  signal value_x : unsigned(C_W downto 0);           -- the value, as wide as the sum
-  signal sum_lo  : unsigned(C_SPLIT + 1 downto 0);   -- the low bits & the extra low bit, and the carry out
-  signal sum_hi0 : unsigned(C_W - C_SPLIT downto 0); -- the bits above without a carry from below
-  signal sum_hi1 : unsigned(C_W - C_SPLIT downto 0); -- and with one
+  -- value + q (decel) or value - q = value + not q + 1 (accel), modulo 2^(C_W + 1) (one bit wider than the divider,
+  -- so that a borrow or a carry out of 48 bits is visible), through one carry-select adder: the operand is q inverted
+  -- when accelerating, and the + 1 enters as the carry of an extra low bit ('1' + '1'). Two adders for the bits above
+  -- and a multiplexer in hardware, as if both were computed first; a simulator evaluates only the one it returns, and
+  -- only at the edge that takes the answer (as concurrent statements they would follow the quotient at every clock
+  -- of a division).
+  function step_result (
+    value : unsigned(47 downto 0);
+    q     : unsigned(C_W - 1 downto 0);
+    decel : std_logic
+  ) return unsigned is
+
+    variable value_x : unsigned(C_W downto 0);         -- the value, as wide as the sum
+    variable q_op    : unsigned(C_W downto 0);         -- q, inverted when accelerating
+    variable sum_lo  : unsigned(C_SPLIT + 1 downto 0); -- the low bits & the extra low bit, and the carry out
+
+  begin
+
+    value_x := resize(value, C_W + 1);
+    q_op    := resize(q, C_W + 1) xor (C_W downto 0 => not decel);
+    -- value + q_op + (not decel): the carry in rides on an extra low bit ('1' + carry in).
+    sum_lo := ('0' & value_x(C_SPLIT - 1 downto 0) & '1') + ('0' & q_op(C_SPLIT - 1 downto 0) & not decel);
+
+    if (sum_lo(C_SPLIT + 1) = '1') then
+      return (value_x(C_W downto C_SPLIT) + q_op(C_W downto C_SPLIT) + 1) & sum_lo(C_SPLIT downto 1);
+    end if;
+
+    return (value_x(C_W downto C_SPLIT) + q_op(C_W downto C_SPLIT)) & sum_lo(C_SPLIT downto 1);
+
+  end function step_result;
 
 begin
 
@@ -86,17 +109,6 @@ begin
   -- (decel): just wiring.
   div_num <= req_num;
   div_den <= req_index & req_decel & '1';
-
-  -- value + q (decel) or value - q = value + not q + 1 (accel), modulo 2^(C_W + 1), through one carry-select adder:
-  -- the operand is q inverted when accelerating, and the + 1 enters as the carry of an extra low bit ('1' + '1').
-  q_op <= resize(unsigned(div_q), C_W + 1) xor (C_W downto 0 => not decel_r);
-  -- value + q_op + (not decel_r): the carry in rides on an extra low bit ('1' + carry in).
-  value_x <= resize(value_r, C_W + 1);
-  sum_lo  <= ('0' & value_x(C_SPLIT - 1 downto 0) & '1') + ('0' & q_op(C_SPLIT - 1 downto 0) & not decel_r);
-  sum_hi0 <= value_x(C_W downto C_SPLIT) + q_op(C_W downto C_SPLIT);
-  sum_hi1 <= value_x(C_W downto C_SPLIT) + q_op(C_W downto C_SPLIT) + 1;
-  result  <= sum_hi1 & sum_lo(C_SPLIT downto 1) when sum_lo(C_SPLIT + 1) = '1' else
-             sum_hi0 & sum_lo(C_SPLIT downto 1);
 
   divider_inst : entity work.stepramp_divider
     generic map (
@@ -117,6 +129,8 @@ begin
     );
 
   ctrl_proc : process (clk) is
+
+    variable v_result : unsigned(C_W downto 0);
 
     -- The answer, valid for one clock: a ramp value (Q32.16), its remainder and the out-of-range flag.
 
@@ -153,7 +167,8 @@ begin
         pending <= '0';
         -- The remainder is below den < 2^33. Out of the Q32.16 range (a borrow shows as the top bit): the engine
         -- stops with an error.
-        answer(result(47 downto 0), unsigned(div_r), to_sl(result(C_W downto 48) /= 0 or div_zero = '1'));
+        v_result := step_result(value_r, unsigned(div_q), decel_r);
+        answer(v_result(47 downto 0), unsigned(div_r), to_sl(v_result(C_W downto 48) /= 0 or div_zero = '1'));
       end if;
 
       if (rst = '1' or flush = '1') then

@@ -104,6 +104,31 @@ architecture rtl of stepramp_precompute is
 
   end function step_head;
 
+  -- The fractional-carry accumulator step s = acc + v (the one adder of C_PC_ADD and C_PC_ALT_ADD), with "s >> 32 = 0"
+  -- (no ticks) on top: zero & s. Carry-select: the fraction's sum and the integer part + 1 side by side, the
+  -- fraction's carry picking the integer part, so no carry ripples through all 65 bits; the zero flag follows from
+  -- the same carry and v's integer part. An incrementer, a zero test and multiplexers in hardware, as if all were
+  -- computed first; a simulator computes only the branch the carry picks, and only at the edge that keeps the
+  -- interval (as concurrent statements they would follow every change of v_r and acc).
+  function acc_step (
+    v        : unsigned(63 downto 0);
+    fraction : unsigned(31 downto 0)
+  ) return unsigned is
+
+    variable frac_sum : unsigned(32 downto 0); -- the fraction's sum and its carry
+
+  begin
+
+    frac_sum := ('0' & v(31 downto 0)) + ('0' & fraction);
+
+    if (frac_sum(32) = '1') then
+      return '0' & (('0' & v(63 downto 32)) + 1) & frac_sum(31 downto 0);
+    end if;
+
+    return to_sl(v(63 downto 32) = 0) & '0' & v(63 downto 32) & frac_sum(31 downto 0);
+
+  end function acc_step;
+
   -- The move, as numbers.
   signal p_l          : unsigned(30 downto 0);
   signal p_sa         : unsigned(30 downto 0);
@@ -160,8 +185,6 @@ architecture rtl of stepramp_precompute is
   signal rec_rem : unsigned(32 downto 0);
   signal v_r     : unsigned(63 downto 0); -- Q32.32 value of interval pc_j (then of the alternative)
   signal v_range : std_logic;             -- v_r came from a recurrence value out of the Q32.16 range (code RANGE)
-  -- The integer part of v_r is 0 (in parallel with the accumulator's carry chain).
-  signal v_int_zero : std_logic;
 
   -- Soft stop. stop_mode: a soft stop is in effect; the precompute then follows the stop's decel ramp,
   -- pc_m = L' - pc_j. While interval c counts down (ACCEL or RUN), the alternative "soft stop decided at pulse c"
@@ -175,8 +198,10 @@ architecture rtl of stepramp_precompute is
   signal cur_prod : unsigned(46 downto 0);
   signal prod_big : std_logic;
   -- cur_prod + stop_ratio and its sticky bit, registered every clock (cur_prod changes only at advance, and the next
-  -- advance is at least four clocks later), so that advance copies a register instead of waiting for the adder.
-  signal prod_next     : unsigned(46 downto 0);
+  -- advance is at least four clocks later), so that advance copies a register instead of waiting for the adder;
+  -- the register as two numbers, bits 23 .. 0 and 46 .. 24 (a simulator's transaction each, not one per bit).
+  signal prod_next_lo  : natural range 0 to 2 ** 24 - 1;
+  signal prod_next_hi  : natural range 0 to 2 ** 23 - 1;
   signal prod_next_big : std_logic;
   signal prod_step     : std_logic;             -- pc_j <= sa: the next pulse adds stop_ratio to cur_prod
   signal first_pend    : std_logic;             -- pulse 0 has not loaded interval 1 yet (it adds stop_ratio too)
@@ -185,6 +210,7 @@ architecture rtl of stepramp_precompute is
   signal alt_kind_r    : std_logic_vector(1 downto 0);
   signal alt_one_r     : std_logic;             -- m = 1
   signal stop_mm1      : unsigned(30 downto 0); -- m - 1 (stop_m is held from IDX to the next pulse)
+  signal run_m         : unsigned(30 downto 0); -- the m of a soft stop in RUN, L - sd + 1 (the move's)
   signal alt_ok_r      : std_logic;
   signal alt_d_r       : unsigned(32 downto 0);
   signal alt_acc       : unsigned(31 downto 0);
@@ -201,19 +227,24 @@ architecture rtl of stepramp_precompute is
   signal nd_req_value : std_logic_vector(47 downto 0);
   signal nd_req_num   : std_logic_vector(G_DIV_WIDTH - 1 downto 0);
   -- 2 * rec_val + rec_rem, the numerator of the next recurrence step, registered every clock (rec_val and rec_rem
-  -- are set at least one clock before the request that reads it), so that the divider loads a flip-flop.
-  signal rec_num   : unsigned(G_DIV_WIDTH - 1 downto 0);
-  signal rec_num_c : unsigned(G_DIV_WIDTH - 1 downto 0);
-  -- cur_prod + stop_ratio; the accumulator step's fraction sum (with its carry), integer part + 1, and result.
-  signal prod_sum : unsigned(47 downto 0);
-  signal frac_sum : unsigned(32 downto 0);
-  signal int_inc  : unsigned(32 downto 0);
-  signal acc_sum  : unsigned(64 downto 0);
-  signal nd_busy  : std_logic;
-  signal nd_valid : std_logic;
-  signal nd_value : std_logic_vector(47 downto 0);
-  signal nd_rem   : std_logic_vector(32 downto 0);
-  signal nd_ovf   : std_logic;
+  -- are set at least one clock before the request that reads it), so that the divider loads a flip-flop. The
+  -- register in three parts, bits 24 .. 0 and 48 .. 25 as numbers and the bits above as a vector (a simulator's
+  -- transaction per number, not one per bit).
+  signal rec_num_c     : unsigned(G_DIV_WIDTH - 1 downto 0);
+  signal rec_num_c_lo  : natural range 0 to 2 ** 25 - 1;
+  signal rec_num_c_mid : natural range 0 to 2 ** 24 - 1;
+  signal rec_num_lo    : natural range 0 to 2 ** 25 - 1;
+  signal rec_num_mid   : natural range 0 to 2 ** 24 - 1;
+  signal rec_num_top   : unsigned(G_DIV_WIDTH - 1 downto 49);
+  -- cur_prod + stop_ratio, and its two parts.
+  signal prod_sum    : unsigned(47 downto 0);
+  signal prod_sum_lo : natural range 0 to 2 ** 24 - 1;
+  signal prod_sum_hi : natural range 0 to 2 ** 23 - 1;
+  signal nd_busy     : std_logic;
+  signal nd_valid    : std_logic;
+  signal nd_value    : std_logic_vector(47 downto 0);
+  signal nd_rem      : std_logic_vector(32 downto 0);
+  signal nd_ovf      : std_logic;
 
 begin
 
@@ -237,13 +268,11 @@ begin
   p_stop_ratio <= unsigned(stop_ratio);
   state_r      <= cur_state;
 
-  v_int_zero <= '1' when v_r(63 downto 32) = 0 else
-                '0';
-
   lt_sa <= le_sa and not eq_sa;
   lt_sd <= le_sd and not eq_sd;
 
   stop_mm1 <= stop_m - 1;
+  run_m    <= p_l - p_sd + 1;
 
   -- A seed load carries its seed (the accel seed is already the running value, from latch); a recurrence step
   -- carries the running value (and its remainder); the first value of a soft stop's ramp is a step from D_m := D
@@ -252,7 +281,7 @@ begin
                   std_logic_vector(v_r(63 downto 16)) when req_alt_r = '1' else
                   std_logic_vector(rec_val);
   nd_req_num   <= std_logic_vector(resize(v_r(63 downto 16) & '0', G_DIV_WIDTH)) when req_alt_r = '1' else
-                  std_logic_vector(rec_num);
+                  std_logic_vector(rec_num_top & to_unsigned(rec_num_mid, 24) & to_unsigned(rec_num_lo, 25));
 
   avr446_gen : if G_RAMP = 0 generate
 
@@ -305,27 +334,22 @@ begin
 
   end generate exact_gen;
 
-  -- The adders pc_proc reads, as concurrent statements of the registers they add (the same logic as variables in the
-  -- process, but a simulator evaluates them when an operand changes, not every clock):
-  -- 2 * rec_val + rec_rem (registered in rec_num), the next running product (registered in prod_next), and the
-  -- fractional-carry accumulator step of the value in v_r (used by C_PC_ADD and C_PC_ALT_ADD: one adder),
-  -- carry-select: the fraction's sum and the integer part + 1 are computed side by side and the fraction's carry
-  -- picks the integer part, so no carry ripples through all 65 bits. "s >> 32 = 0" (no ticks) follows from the same
-  -- carry and v_r's integer part.
-  rec_num_c <= resize(rec_val & '0', G_DIV_WIDTH) + rec_rem;
-  prod_sum  <= ('0' & cur_prod) + p_stop_ratio;
-  frac_sum  <= ('0' & v_r(31 downto 0)) + ('0' & acc);
-  int_inc   <= ('0' & v_r(63 downto 32)) + 1;
-  acc_sum   <= int_inc & frac_sum(31 downto 0) when frac_sum(32) = '1' else
-               ('0' & v_r(63 downto 32)) & frac_sum(31 downto 0);
+  -- The adders pc_proc registers at every clock, as concurrent statements of the registers they add (the same logic
+  -- as variables in the process, but a simulator evaluates them when an operand changes, not every clock):
+  -- 2 * rec_val + rec_rem (registered in rec_num_*) and the next running product (registered in prod_next_*).
+  rec_num_c     <= resize(rec_val & '0', G_DIV_WIDTH) + rec_rem;
+  rec_num_c_lo  <= to_integer(rec_num_c(24 downto 0));
+  rec_num_c_mid <= to_integer(rec_num_c(48 downto 25));
+  prod_sum      <= ('0' & cur_prod) + p_stop_ratio;
+  prod_sum_lo   <= to_integer(prod_sum(23 downto 0));
+  prod_sum_hi   <= to_integer(prod_sum(46 downto 24));
 
   pc_proc : process (clk) is
 
-    variable v_sum  : unsigned(64 downto 0);
-    variable v_zero : std_logic;
     -- The index step of a pulse edge (advance or take_alt): the interval after the one that starts is prepared.
     variable v_idx      : boolean;
     variable v_pcm      : unsigned(30 downto 0); -- pc_m before the step
+    variable v_j        : unsigned(30 downto 0); -- pc_j after the step
     variable v_cur_prod : unsigned(46 downto 0); -- cur_prod after this edge
     variable v_prod_big : std_logic;
 
@@ -351,12 +375,16 @@ begin
       signal zero_f   : out std_logic;
       signal ok       : out std_logic
     ) is
+
+      variable v_sum : unsigned(65 downto 0);
+
     begin
 
+      v_sum    := acc_step(v_r, acc);
       ticks    <= v_sum(64 downto 32);
       fraction <= v_sum(31 downto 0);
       range_f  <= v_range;
-      zero_f   <= v_zero;
+      zero_f   <= v_sum(65);
       ok       <= '1';
 
     end procedure keep_interval;
@@ -451,15 +479,16 @@ begin
 
     if rising_edge(clk) then
       nd_flush      <= '0';
-      rec_num       <= rec_num_c;
+      rec_num_lo    <= rec_num_c_lo;
+      rec_num_mid   <= rec_num_c_mid;
+      rec_num_top   <= rec_num_c(G_DIV_WIDTH - 1 downto 49);
       v_idx         := false;
       v_pcm         := pc_m;
       v_cur_prod    := cur_prod;
       v_prod_big    := prod_big;
-      prod_next     <= prod_sum(46 downto 0);
+      prod_next_lo  <= prod_sum_lo;
+      prod_next_hi  <= prod_sum_hi;
       prod_next_big <= prod_big or prod_sum(47);
-      v_sum         := acc_sum;
-      v_zero        := v_int_zero and not frac_sum(32);
 
       -- Request handshake: the unit takes req at the first edge where it is not busy (always the first one in
       -- practice: it is flushed at start and serves at most one request per interval).
@@ -703,7 +732,7 @@ begin
         -- The interval loaded is pc_j (<= sa: the running product follows it). pc_j is 1 at pulse 0 (sa >= 1 there,
         -- the parameter check has passed: first_pend); any later pulse loads an interval whose DECIDE set prod_step.
         if (first_pend = '1' or prod_step = '1') then
-          v_cur_prod := prod_next;
+          v_cur_prod := to_unsigned(prod_next_hi, 23) & to_unsigned(prod_next_lo, 24);
           v_prod_big := prod_next_big;
         end if;
         cur_prod   <= v_cur_prod;
@@ -740,13 +769,14 @@ begin
         -- is below it, and sd never in an endless move: pc_j may wrap there).
         eq_sa <= '0';
         eq_sd <= '0';
-        if (pc_j + 1 = p_sa and le_sa = '1') then
+        v_j   := pc_j + 1;
+        if (le_sa = '1' and v_j = p_sa) then
           eq_sa <= '1';
         end if;
-        if (pc_j + 1 = p_sd and endless = '0') then
+        if (endless = '0' and v_j = p_sd) then
           eq_sd <= '1';
         end if;
-        pc_j <= pc_j + 1;
+        pc_j <= v_j;
         -- pc_m = 0 after this step (j = L: the last interval), as a flip-flop for DECIDE; an endless move counts
         -- only in a soft stop.
         if (endless = '0' or stop_mode_r = '1' or take_alt = '1') then
@@ -763,7 +793,7 @@ begin
           stop_m   <= unsigned(run_stop);
           stop_big <= '0';
         elsif (state_r = C_ST_RUN) then
-          stop_m   <= p_l - p_sd + 1;
+          stop_m   <= run_m;
           stop_big <= '0';
         elsif (head_down = '1' and nxt_head_r = '1') then
           stop_m   <= head_ctr;

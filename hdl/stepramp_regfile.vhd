@@ -186,6 +186,12 @@ architecture rtl of stepramp_regfile is
   signal locked : std_logic;
   -- STEPS' sign: the direction of the staged move (1: position counts down).
   signal direction_i : std_logic;
+  -- Combinational terms that bus_proc reads at every edge, as concurrent statements (a simulator evaluates them when
+  -- an operand changes, not every clock; the logic and its registers are the same): a START's direction (STEPS)
+  -- and the running move's (mv_dir) against an active limit, and the interrupt line before irq_r.
+  signal toward_c : std_logic;
+  signal lim_c    : std_logic;
+  signal irq_c    : std_logic;
 
   -- Word index of a byte offset.
   function word (
@@ -353,8 +359,6 @@ begin
     variable new_ctrl : std_logic_vector(31 downto 0);
     variable clr      : std_logic_vector(31 downto 0);
     variable start_v  : std_logic;
-    variable toward_v : std_logic;
-    variable cfg_v    : std_logic_vector(31 downto 0);
 
   begin
 
@@ -370,14 +374,13 @@ begin
       pos_load_r  <= '0';
       latch_clr_r <= '0';
       start_v     := '0';
-      mapped      := C_MAPPED_WORDS(w) = '1';
-      mapped_w    := C_MAPPED_WORDS(ww) = '1';
 
       -- Sticky flags: engine events (set) have priority over a W1C write in the same cycle (below).
-      clr := (others => '0');
+      clr := x"00000000";
 
       if (wr = '1') then
-        ack_r <= '1';
+        ack_r    <= '1';
+        mapped_w := C_MAPPED_WORDS(ww) = '1';
 
         if (not mapped_w) then
           err_r <= '1';
@@ -462,6 +465,7 @@ begin
       if (rd = '1') then
         ack_r     <= '1';
         ram_sel_r <= '0';
+        mapped    := C_MAPPED_WORDS(w) = '1';
 
         if (not mapped) then
           err_r <= '1';
@@ -546,21 +550,21 @@ begin
 
       -- A START (written, or the multi-axis top's) while idle: refused with STEPS = -2^31 (no 31-bit magnitude),
       -- during an ESTOP fault, or towards an active limit; it then ends at once (DONE and ERROR), nothing moves.
-      start_v  := start_v or ext_start;
-      cfg_v    := mem(word(C_REG_INPUT_CFG));
-      toward_v := against_limit(cfg_v, in_level, direction_i);
+      if (ext_start = '1') then
+        start_v := '1';
+      end if;
 
       if (start_v = '1') then
         start_r <= '1';
         if (eng_busy = '0') then
           mv_dir <= direction_i;
-          if (steps_bad = '1' or in_ev(3) = '1' or in_level(3) = '1' or toward_v = '1') then
+          if (steps_bad = '1' or in_ev(3) = '1' or in_level(3) = '1' or toward_c = '1') then
             start_r    <= '0';
             done_flag  <= '1';
             error_flag <= '1';
             if (steps_bad = '1') then
               err_code_r <= C_ERR_STEPS;
-            elsif (toward_v = '1') then
+            elsif (toward_c = '1') then
               err_code_r <= C_ERR_LIMIT;
             else
               err_code_r <= C_ERR_ESTOP;
@@ -577,9 +581,9 @@ begin
       -- active limit against its direction refuses it.
       if (eng_done = '1' and q_pend = '1') then
         q_pend  <= '0';
-        start_r <= not eng_error and not toward_v;
+        start_r <= not eng_error and not toward_c;
         mv_dir  <= direction_i;
-        if (eng_error = '0' and toward_v = '1') then
+        if (eng_error = '0' and toward_c = '1') then
           error_flag <= '1';
           err_code_r <= C_ERR_LIMIT;
         end if;
@@ -599,12 +603,12 @@ begin
       -- move; the move's own direction counts, mv_dir (1: position counting down, towards LIMIT_NEG).
       if (eng_busy = '0') then
         lim_hit <= '0';
-      elsif (lim_hit = '0' and against_limit(cfg_v, in_level, mv_dir) = '1') then
+      elsif (lim_hit = '0' and lim_c = '1') then
         lim_hit    <= '1';
         q_pend     <= '0';
         error_flag <= '1';
         err_code_r <= C_ERR_LIMIT;
-        if (cfg_v(C_INPUT_CFG_LIMIT_HARD_LSB) = '1') then
+        if (mem(word(C_REG_INPUT_CFG))(C_INPUT_CFG_LIMIT_HARD_LSB) = '1') then
           hard_stop_r <= '1';
         else
           soft_stop_r <= '1';
@@ -632,9 +636,7 @@ begin
         err_code_r <= C_ERR_ESTOP;
       end if;
 
-      irq_r <= (done_flag and irq_done_en) or (error_flag and irq_error_en) or
-               (in_ev(0) and irq_in_en(0)) or (in_ev(1) and irq_in_en(1)) or (in_ev(2) and irq_in_en(2)) or
-               (in_ev(3) and irq_in_en(3)) or (latched and irq_in_en(4));
+      irq_r <= irq_c;
 
       if (rst = '1') then
         ack_r        <= '0';
@@ -676,6 +678,13 @@ begin
     end if;
 
   end process bus_proc;
+
+  -- (Concurrent: see toward_c.)
+  toward_c <= against_limit(mem(word(C_REG_INPUT_CFG)), in_level, direction_i);
+  lim_c    <= against_limit(mem(word(C_REG_INPUT_CFG)), in_level, mv_dir);
+  irq_c    <= (done_flag and irq_done_en) or (error_flag and irq_error_en) or
+              (in_ev(0) and irq_in_en(0)) or (in_ev(1) and irq_in_en(1)) or (in_ev(2) and irq_in_en(2)) or
+              (in_ev(3) and irq_in_en(3)) or (latched and irq_in_en(4));
 
   -- The RAM's write port: the storage writes that bus_proc accepts into mem, with the same byte merge and mask. A
   -- word's first write since reset enables every lane, the disabled ones taking the reset value (what mem holds).
