@@ -183,21 +183,22 @@ class MotionBench:
     # DIR '1' (docs/algorithm.md "Electrical position": a POSITION write does not move it).
     elec_pos: int = 0
     _counting: bool = False
+    pins: StepWatch | None = None
 
     def _start_monitors(self, position: int) -> None:
         raise NotImplementedError
 
     def count_steps(self) -> None:
-        """Count the electrical position from the pins from now on (at reset: elec_pos = 0); once per bench."""
+        """Count the electrical position from the pins from now on (at reset: elec_pos = 0); once per bench, after
+        its StepWatch (`pins`) is made: counted at each STEP rising edge the StepWatch records."""
         self.elec_pos = 0
         if not self._counting:
             self._counting = True
-            cocotb.start_soon(self._count_steps())
+            assert self.pins is not None, "count_steps: the bench's StepWatch first"
+            self.pins.on_step.append(self._count_step)
 
-    async def _count_steps(self) -> None:
-        while True:
-            await RisingEdge(self.dut.step)
-            self.elec_pos += -1 if int(self.dut.dir.value) else 1
+    def _count_step(self) -> None:
+        self.elec_pos += -1 if int(self.dut.dir.value) else 1
 
     def finish(self) -> None:
         raise NotImplementedError

@@ -7,6 +7,7 @@ testbenches.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import cocotb
@@ -25,14 +26,19 @@ class StepWatch:
         self.period_ps = period_ps
         self.step_edges: list[int] = []
         self.start_edges: list[int] = []
-        cocotb.start_soon(self.watch(step, self.step_edges))
+        #: Functions called at each STEP rising edge, after it is recorded, in the same wake (a bench's step counter:
+        #: one task per pulse instead of two).
+        self.on_step: list[Callable[[], None]] = []
+        cocotb.start_soon(self.watch(step, self.step_edges, self.on_step))
         cocotb.start_soon(self.watch(busy, self.start_edges))
 
-    async def watch(self, signal: Any, edges: list[int]) -> None:
-        """Record the clock edge of every rising edge of a signal."""
+    async def watch(self, signal: Any, edges: list[int], hooks: list[Callable[[], None]] | None = None) -> None:
+        """Record the clock edge of every rising edge of a signal, and call `hooks` at each."""
         while True:
             await RisingEdge(signal)
             edges.append(now_cycles(self.period_ps))
+            for hook in hooks or ():
+                hook()
 
     def mark(self) -> tuple[int, int]:
         """Where the next move's records will start: pass to `since` once it is done."""
