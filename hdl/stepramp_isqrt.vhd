@@ -45,6 +45,27 @@ architecture rtl of stepramp_isqrt is
   -- The trial 4 rem + pair - (4 t + 1): both operands below 2^(C_RW + 2), one sign bit above them; a carry-select
   -- subtractor (stepramp_pkg's csel_sub), as in the divider.
   constant C_TW : positive := C_RW + 3;
+  -- The subtractor's split: a low part of C_LO bits, whose borrow picks the high part (C_HI bits) computed without
+  -- and with it. Up to 60 bits (G_WIDTH / 2 + G_EXTRA <= 56) the parts are integers in the iteration (GHDL evaluates
+  -- an integer in a few instructions, a vector bit by bit), converted from and to the registers' bits, which is
+  -- wiring in hardware; wider, csel_sub itself (C_LO and C_HI are then 1, unused).
+  constant C_INT : boolean := C_TW <= 60;
+
+  function int_part (
+    bits : positive
+  ) return positive is
+  begin
+
+    if (C_INT) then
+      return bits;
+    end if;
+
+    return 1;
+
+  end function int_part;
+
+  constant C_LO : positive := int_part((C_TW + 1) / 2);
+  constant C_HI : positive := int_part(C_TW - (C_TW + 1) / 2);
 
   -- State encoding as constants (not an enum) so that GHDL's VPI shows it as a plain vector.
   constant C_IDLE  : std_logic_vector(1 downto 0) := "00";
@@ -70,6 +91,11 @@ architecture rtl of stepramp_isqrt is
   signal pair_any : std_logic_vector(C_PAIRS - 1 downto 0);
   signal top_pair : std_logic_vector(C_IDX_W - 1 downto 0);
   signal rad_zero : std_logic;
+  -- The radicand's bits 2 j + 1 and 2 j at place j + 2 of the select (wires: the pairs' high and low bits).
+  signal rad_odd  : std_logic_vector(C_PAIRS + 1 downto 0);
+  signal rad_even : std_logic_vector(C_PAIRS + 1 downto 0);
+
+  constant C_NO_PAIR : std_logic_vector(C_PAIRS + 1 downto 0) := (others => '0');
 
 begin
 
@@ -82,8 +108,13 @@ begin
     severity failure;
 
   pairs_gen : for i in 0 to C_PAIRS - 1 generate
-    pair_any(i) <= rad_r(2 * i + 1) or rad_r(2 * i);
+    pair_any(i)     <= rad_r(2 * i + 1) or rad_r(2 * i);
+    rad_odd(i + 2)  <= rad_r(2 * i + 1);
+    rad_even(i + 2) <= rad_r(2 * i);
   end generate pairs_gen;
+
+  rad_odd(1 downto 0)  <= "00";
+  rad_even(1 downto 0) <= "00";
 
   pair_enc_inst : entity work.stepramp_prio_enc
     generic map (
@@ -97,12 +128,25 @@ begin
 
   sqrt_proc : process (clk) is
 
-    variable pair : unsigned(1 downto 0);
-    variable sel  : std_logic_vector(C_PAIRS + 1 downto 0);
+    variable pair  : unsigned(1 downto 0);
+    variable sel   : std_logic_vector(C_PAIRS + 1 downto 0);
+    variable first : natural range 0 to 2 ** C_IDX_W - 1;
     -- The next pair's high and low bit, one place per pair (all zero but the selected one).
     variable hi_v : std_logic_vector(C_PAIRS + 1 downto 0);
     variable lo_v : std_logic_vector(C_PAIRS + 1 downto 0);
-    variable d    : unsigned(C_TW - 1 downto 0);
+    -- The trial 4 rem + pair and 4 t + 1, one spare bit above them: the sign of the difference.
+    variable trial : unsigned(C_TW - 1 downto 0);
+    variable sub   : unsigned(C_TW - 1 downto 0);
+    variable d     : unsigned(C_TW - 1 downto 0);
+    variable t_lo  : natural range 0 to 2 ** C_LO - 1;
+    variable s_lo  : natural range 0 to 2 ** C_LO - 1;
+    variable t_hi  : natural range 0 to 2 ** C_HI - 1;
+    variable s_hi  : natural range 0 to 2 ** C_HI - 1; -- sub's high part, or not it (with the borrow)
+    -- trial - sub: the low part with its borrow on top, and the high part with that borrow (trial + not sub, less
+    -- 2 ** C_HI) or without it; the difference's top bit is its sign.
+    variable lo : signed(C_LO downto 0);
+    variable hb : unsigned(C_HI downto 0);
+    variable hn : signed(C_HI downto 0);
 
   begin
 
@@ -129,11 +173,12 @@ begin
           -- remainder and root are 0 until it. The select starts one pair higher, at a zero pair, whose iteration
           -- changes nothing (0 - 1 < 0) and fetches the top pair through the AND-OR: a clock instead of a
           -- multiplexer over all pairs decoded from the index (85 LUT4 at 80 bits).
-          sel := (others => '0');
+          sel   := (others => '0');
+          first := to_integer(unsigned(top_pair));
 
           for i in 0 to C_PAIRS - 1 loop
 
-            if (to_unsigned(i, C_IDX_W) = unsigned(top_pair)) then
+            if (i = first) then
               sel(i + 2) := '1';
             end if;
 
@@ -155,26 +200,41 @@ begin
           -- One root bit per clock (restoring): the trial 4 rem + pair - (4 t + 1) fits when it is not negative.
           -- The next pair comes through an AND-OR of the one-hot select (a register), not a multiplexer decoded
           -- from a counter; the zero pair below the radicand has no term.
-          hi_v := (others => '0');
-          lo_v := (others => '0');
-
-          for i in 2 to C_PAIRS + 1 loop
-
-            hi_v(i) := sel_r(i) and rad_r(2 * i - 3);
-            lo_v(i) := sel_r(i) and rad_r(2 * i - 4);
-
-          end loop;
+          hi_v := sel_r and rad_odd;
+          lo_v := sel_r and rad_even;
 
           pair := "00";
-          if (unsigned(hi_v) /= 0) then
+          if (hi_v /= C_NO_PAIR) then
             pair(1) := '1';
           end if;
-          if (unsigned(lo_v) /= 0) then
+          if (lo_v /= C_NO_PAIR) then
             pair(0) := '1';
           end if;
           pair_r <= pair;
 
-          d := csel_sub('0' & rem_r & pair_r, '0' & root_r & "01");
+          -- A carry-select subtractor in hardware (both high parts side by side); a simulator computes only the high
+          -- part the low part's borrow picks.
+          trial := '0' & rem_r & pair_r;
+          sub   := '0' & root_r & "01";
+          if (C_INT) then
+            t_lo := to_integer(trial(C_LO - 1 downto 0));
+            s_lo := to_integer(sub(C_LO - 1 downto 0));
+            t_hi := to_integer(trial(C_LO + C_HI - 1 downto C_LO));
+            lo   := to_signed(t_lo - s_lo, C_LO + 1);
+            if (lo(C_LO) = '1') then
+              s_hi                           := to_integer(not sub(C_LO + C_HI - 1 downto C_LO));
+              hb                             := to_unsigned(t_hi + s_hi, C_HI + 1);
+              d(C_LO + C_HI - 1 downto C_LO) := hb(C_HI - 1 downto 0);
+            else
+              s_hi                           := to_integer(sub(C_LO + C_HI - 1 downto C_LO));
+              hn                             := to_signed(t_hi - s_hi, C_HI + 1);
+              d(C_LO + C_HI - 1 downto C_LO) := unsigned(hn(C_HI - 1 downto 0));
+            end if;
+            d(C_LO - 1 downto 0) := unsigned(lo(C_LO - 1 downto 0));
+          else
+            d := csel_sub(trial, sub);
+          end if;
+
           if (d(C_TW - 1) = '0') then
             rem_r  <= d(C_RW - 1 downto 0);
             root_r <= root_r(C_RW - 2 downto 0) & '1';

@@ -98,6 +98,10 @@ architecture rtl of stepramp_stepper is
 
   constant C_COS : t_mag_table(0 to G_MICROSTEPS) := make_cos_table;
 
+  -- The multiplier's bit places BITS and BITS - 1 (constants: a simulator computes a generic's power at every use).
+  constant C_Q_TOP : positive := 2 ** G_DUTY_BITS;
+  constant C_Q_RND : positive := 2 ** (G_DUTY_BITS - 1);
+
   -- Modes.
   constant C_MODE_WAVE : std_logic_vector(2 downto 0) := "001";
   constant C_MODE_FULL : std_logic_vector(2 downto 0) := "010";
@@ -122,10 +126,10 @@ architecture rtl of stepramp_stepper is
   -- STEP pulse. The reset keeps a pulse in progress, so it reads step_r: both start at 0 at configuration (the
   -- flip-flops' power-up value), which lets the first reset decide in every simulator (a netlist's X would stay).
   -- vsg_off signal_007
-  signal step_r    : std_logic             := '0';
-  signal width_cnt : unsigned(15 downto 0) := (others => '0');
+  signal step_r    : std_logic                      := '0';
+  signal width_cnt : natural range 0 to 2 ** 16 - 1 := 0;
   -- vsg_on signal_007
-  signal width_m1 : unsigned(15 downto 0);
+  signal width_m1 : natural range 0 to 2 ** 16 - 1;
   -- The counters and comparisons that change every clock are integers (17-bit registers in hardware, as vectors
   -- would be): a simulator adds and compares them natively instead of bit by bit.
   signal since_step : natural range 0 to C_SINCE_MAX; -- edges since eng_step was last sampled '1' (saturating)
@@ -152,6 +156,9 @@ architecture rtl of stepramp_stepper is
   signal lvl_a2   : std_logic;
   signal lvl_b1   : std_logic;
   signal lvl_b2   : std_logic;
+  -- The mode decoded (wires; a simulator compares the vector when it changes, not at every clock).
+  signal mode_onoff : std_logic;
+  signal mode_pwm   : std_logic;
 
   -- PWM: electrical index at full resolution, table stage, duty stage, carrier.
   signal u_shift  : natural range 0 to C_LG;
@@ -168,12 +175,13 @@ architecture rtl of stepramp_stepper is
   signal mul_cnt  : natural range 0 to G_DUTY_BITS + 2;
   -- The multipliers' accumulators and period, the duties, the carrier and its last value are integers: one signal
   -- each for a simulator (a vector is one per bit, and these are assigned at every clock), the same registers in
-  -- hardware. (The shift registers q stay vectors: as integers they cost more LUTs.)
+  -- hardware. So are the multipliers' shift registers q (their shift q / 2 plus the new top bit: the same flip-flops,
+  -- no LUT more in yosys).
   signal mul_p     : natural range 0 to 2 ** 16 - 1;
   signal acc_a     : natural range 0 to 2 ** 16 - 1;
   signal acc_b     : natural range 0 to 2 ** 16 - 1;
-  signal q_a       : unsigned(G_DUTY_BITS downto 0);
-  signal q_b       : unsigned(G_DUTY_BITS downto 0);
+  signal q_a       : natural range 0 to 2 ** (G_DUTY_BITS + 1) - 1;
+  signal q_b       : natural range 0 to 2 ** (G_DUTY_BITS + 1) - 1;
   signal neg_a2    : std_logic;
   signal neg_b2    : std_logic;
   signal duty_a    : natural range 0 to 2 ** 16 - 1;
@@ -181,14 +189,9 @@ architecture rtl of stepramp_stepper is
   signal neg_a     : std_logic;
   signal neg_b     : std_logic;
   signal carrier   : natural range 0 to 2 ** 16 - 1;
+  signal period_i  : natural range 0 to 2 ** 16 - 1;
   signal period_m1 : natural range 0 to 2 ** 16 - 1;
   signal pwm_run   : std_logic;
-
-  -- The bit of 0 and 1 (the sum's LSB shifted into q).
-
-  type t_bit_table is array (0 to 1) of std_logic;
-
-  constant C_BIT : t_bit_table := ('0', '1');
 
   -- Output registers.
   signal enable_r : std_logic;
@@ -210,49 +213,13 @@ begin
   ---------------------------------------------------------------------------------------------------------------------
   -- STEP pulse: exactly max(step_width, 1) clocks high per eng_step; an eng_step during a pulse restarts the width.
   ---------------------------------------------------------------------------------------------------------------------
-  width_m1 <= (others => '0') when unsigned(step_width) = 0 else
-              unsigned(step_width) - 1;
-
-  -- (One process for the pulse and the registered shortest gap below: a simulator wakes one process per clock edge.)
-  step_proc : process (clk) is
-  begin
-
-    if rising_edge(clk) then
-      min_gap_r <= min_gap_c;
-
-      if (rst = '1') then
-        -- A pulse in progress keeps its width; otherwise STEP is low from the first reset edge on.
-        if (step_r = '1' and width_cnt /= 0) then
-          width_cnt <= width_cnt - 1;
-        else
-          step_r    <= '0';
-          width_cnt <= (others => '0');
-        end if;
-        since_step <= C_SINCE_MAX;
-      elsif (eng_step = '1') then
-        step_r     <= '1';
-        width_cnt  <= width_m1;
-        since_step <= 0;
-      else
-        if (step_r = '1') then
-          if (width_cnt = 0) then
-            step_r <= '0';
-          else
-            width_cnt <= width_cnt - 1;
-          end if;
-        end if;
-        if (since_step /= C_SINCE_MAX) then
-          since_step <= since_step + 1;
-        end if;
-      end if;
-    end if;
-
-  end process step_proc;
+  width_m1 <= 0 when to_integer(unsigned(step_width)) = 0 else
+              to_integer(unsigned(step_width)) - 1;
 
   -- The shortest distance between two STEP rising edges (step_space: the STEP low time, 0 acts as 1), registered
-  -- (min_gap_r, in step_proc).
-  min_gap_c <= to_integer(width_m1) + 2 when unsigned(step_space) = 0 else
-               to_integer(width_m1) + 1 + to_integer(unsigned(step_space));
+  -- (min_gap_r, in clk_proc).
+  min_gap_c <= width_m1 + 2 when unsigned(step_space) = 0 else
+               width_m1 + 1 + to_integer(unsigned(step_space));
 
   eng_min_gap <= std_logic_vector(to_unsigned(min_gap_r, 17));
 
@@ -300,13 +267,138 @@ begin
 
   end process gate_wait_proc;
 
-  gate_proc : process (clk) is
+  ---------------------------------------------------------------------------------------------------------------------
+  -- On/off modes: half-step index h, then AVR446 Table 2-1 (h = 0: A+, 1: A+B+, 2: B+, 3: A-B+, 4: A-, 5: A-B-,
+  -- 6: B-, 7: A+B-). Wave drive uses the even h, full step two-phase-on the odd h.
+  ---------------------------------------------------------------------------------------------------------------------
+  half_idx <= unsigned(eng_elec_pos(1 downto 0)) & '0' when mode = C_MODE_WAVE else
+              unsigned(eng_elec_pos(1 downto 0)) & '1' when mode = C_MODE_FULL else
+              unsigned(eng_elec_pos(2 downto 0));
+
+  mode_onoff <= '1' when mode = C_MODE_WAVE or mode = C_MODE_FULL or mode = C_MODE_HALF else
+                '0';
+  mode_pwm   <= '1' when mode = C_MODE_PWM else
+                '0';
+
+  lvl_a1 <= '1' when half_idx = 7 or half_idx = 0 or half_idx = 1 else
+            '0';
+  lvl_a2 <= '1' when half_idx = 3 or half_idx = 4 or half_idx = 5 else
+            '0';
+  lvl_b1 <= '1' when half_idx = 1 or half_idx = 2 or half_idx = 3 else
+            '0';
+  lvl_b2 <= '1' when half_idx = 5 or half_idx = 6 or half_idx = 7 else
+            '0';
+
+  ---------------------------------------------------------------------------------------------------------------------
+  -- PWM microstepping. e = position mod (4 * 2^u), scaled to the table's resolution: e_idx = e * G / 2^u.
+  -- Quadrant q = e_idx / G, f = e_idx mod G:
+  --   |A| = C_COS(f) for q = 0, 2 and C_COS(G - f) for q = 1, 3; A < 0 for q = 1, 2 (cos)
+  --   |B| = C_COS(G - f) for q = 0, 2 and C_COS(f) for q = 1, 3; B < 0 for q = 2, 3 (sin)
+  ---------------------------------------------------------------------------------------------------------------------
+  u_shift <= C_LG - to_integer(unsigned(ustep_log2)) when to_integer(unsigned(ustep_log2)) < C_LG else
+             0;
+
+  e_idx    <= shift_left(unsigned(eng_elec_pos(C_EW - 1 downto 0)), u_shift);
+  quad     <= std_logic_vector(e_idx(C_EW - 1 downto C_EW - 2));
+  frac_idx <= to_integer(e_idx and to_unsigned(G_MICROSTEPS - 1, C_EW));
+
+  -- (pwm_period - 1 wraps to 2^16 - 1 for 0, when pwm_run holds the carrier at 0; an undefined period reads 0)
+  period_i  <= to_integer(unsigned(pwm_period));
+  period_m1 <= to_integer(unsigned(pwm_period) - 1);
+  pwm_run   <= '1' when unsigned(pwm_period) >= 2 else
+               '0';
+
+  mag_a <= cos_f when swap1 = '0' else
+           cos_g;
+  mag_b <= cos_g when swap1 = '0' else
+           cos_f;
+
+  -- The PWM datapath (in clk_proc below): the table reads (stage 1), the multipliers and the carrier; mag_a and mag_b
+  -- above pick from the table stage.
+  -- Duty = floor((|value| * pwm_period + 2^(G_DUTY_BITS - 1)) / 2^G_DUTY_BITS), at most pwm_period, for both
+  -- windings by one serial shift-add multiplier each (no wide multiplier: iCE40 has no DSP). A round takes
+  -- C_ROUND = G_DUTY_BITS + 3 clocks and rounds follow each other without pause:
+  --   mul_cnt = 0:                 load |A|, |B|, signs and pwm_period; clear the accumulators;
+  --   mul_cnt = 1 .. BITS + 1:     A + (pwm_period if the multiplier's LSB is '1'), shift {acc, q} right;
+  --   mul_cnt = BITS + 2:          product = acc * 2^(BITS + 1) + q; duty = product / 2^BITS rounded (bit BITS - 1)
+
+  -- Outputs: one register per pin. Bridge encoding: current + : IN1 = 1 (or PWM), IN2 = 0; current - : IN1 = 0,
+  -- IN2 = 1 (or PWM); off: both 0. IN1 and IN2 are never both '1'.
+
+  ---------------------------------------------------------------------------------------------------------------------
+  -- The registers of all the blocks above (STEP pulse, start gate, PWM datapath, outputs) in one clocked process: a
+  -- simulator wakes one process per clock edge, not four; the same registers and logic in hardware.
+  ---------------------------------------------------------------------------------------------------------------------
+  clk_proc : process (clk) is
 
     variable v_next : std_logic_vector(1 downto 0);
+
+    variable v_sum_a : natural range 0 to 2 ** 17 - 1;
+    variable v_sum_b : natural range 0 to 2 ** 17 - 1;
+
+    -- The rounded duty of a finished product acc * 2^(BITS + 1) + q: its bits BITS + 15 .. BITS (acc's low 15 bits and
+    -- q's top bit), plus q's bit BITS - 1 (once per round).
+
+    function rounded (
+      acc : natural;
+      q   : natural
+    ) return natural is
+
+      variable v_dut : natural range 0 to 2 ** 16 - 1;
+
+    begin
+
+      -- (Integers: acc mod 2^15 is its low bits, times 2 a shift; the product's bit BITS fills the LSB it leaves 0.)
+      v_dut := (acc mod 2 ** 15) * 2;
+
+      if (q / C_Q_TOP = 1) then
+        v_dut := v_dut + 1;
+      end if;
+
+      if ((q / C_Q_RND) mod 2 = 1) then
+        return v_dut + 1;
+      end if;
+
+      return v_dut;
+
+    end function rounded;
+
+    variable v_on_a : std_logic;
+    variable v_on_b : std_logic;
 
   begin
 
     if rising_edge(clk) then
+      -- STEP pulse and the registered shortest gap.
+      min_gap_r <= min_gap_c;
+
+      if (rst = '1') then
+        -- A pulse in progress keeps its width; otherwise STEP is low from the first reset edge on.
+        if (step_r = '1' and width_cnt /= 0) then
+          width_cnt <= width_cnt - 1;
+        else
+          step_r    <= '0';
+          width_cnt <= 0;
+        end if;
+        since_step <= C_SINCE_MAX;
+      elsif (eng_step = '1') then
+        step_r     <= '1';
+        width_cnt  <= width_m1;
+        since_step <= 0;
+      else
+        if (step_r = '1') then
+          if (width_cnt = 0) then
+            step_r <= '0';
+          else
+            width_cnt <= width_cnt - 1;
+          end if;
+        end if;
+        if (since_step /= C_SINCE_MAX) then
+          since_step <= since_step + 1;
+        end if;
+      end if;
+
+      -- Start gate.
       if (rst = '1') then
         gstate      <= C_GS_IDLE;
         dir_r       <= '0';
@@ -391,92 +483,12 @@ begin
         -- its direction input is not wired to eng_direction). Sticky until the next accepted start_req.
         if (eng_step = '1' and eng_dir /= dir_r) then
           fault_r <= '1';
-        elsif (gstate = C_GS_IDLE and start_req = '1' and eng_busy = '0') then
+        elsif (start_req = '1' and eng_busy = '0' and gstate = C_GS_IDLE) then
           fault_r <= '0';
         end if;
       end if;
-    end if;
 
-  end process gate_proc;
-
-  ---------------------------------------------------------------------------------------------------------------------
-  -- On/off modes: half-step index h, then AVR446 Table 2-1 (h = 0: A+, 1: A+B+, 2: B+, 3: A-B+, 4: A-, 5: A-B-,
-  -- 6: B-, 7: A+B-). Wave drive uses the even h, full step two-phase-on the odd h.
-  ---------------------------------------------------------------------------------------------------------------------
-  half_idx <= unsigned(eng_elec_pos(1 downto 0)) & '0' when mode = C_MODE_WAVE else
-              unsigned(eng_elec_pos(1 downto 0)) & '1' when mode = C_MODE_FULL else
-              unsigned(eng_elec_pos(2 downto 0));
-
-  lvl_a1 <= '1' when half_idx = 7 or half_idx = 0 or half_idx = 1 else
-            '0';
-  lvl_a2 <= '1' when half_idx = 3 or half_idx = 4 or half_idx = 5 else
-            '0';
-  lvl_b1 <= '1' when half_idx = 1 or half_idx = 2 or half_idx = 3 else
-            '0';
-  lvl_b2 <= '1' when half_idx = 5 or half_idx = 6 or half_idx = 7 else
-            '0';
-
-  ---------------------------------------------------------------------------------------------------------------------
-  -- PWM microstepping. e = position mod (4 * 2^u), scaled to the table's resolution: e_idx = e * G / 2^u.
-  -- Quadrant q = e_idx / G, f = e_idx mod G:
-  --   |A| = C_COS(f) for q = 0, 2 and C_COS(G - f) for q = 1, 3; A < 0 for q = 1, 2 (cos)
-  --   |B| = C_COS(G - f) for q = 0, 2 and C_COS(f) for q = 1, 3; B < 0 for q = 2, 3 (sin)
-  ---------------------------------------------------------------------------------------------------------------------
-  u_shift <= C_LG - to_integer(unsigned(ustep_log2)) when to_integer(unsigned(ustep_log2)) < C_LG else
-             0;
-
-  e_idx    <= shift_left(unsigned(eng_elec_pos(C_EW - 1 downto 0)), u_shift);
-  quad     <= std_logic_vector(e_idx(C_EW - 1 downto C_EW - 2));
-  frac_idx <= to_integer(e_idx and to_unsigned(G_MICROSTEPS - 1, C_EW));
-
-  -- (pwm_period - 1 wraps to 2^16 - 1 for 0, when pwm_run holds the carrier at 0; an undefined period reads 0)
-  period_m1 <= to_integer(unsigned(pwm_period) - 1);
-  pwm_run   <= '1' when unsigned(pwm_period) >= 2 else
-               '0';
-
-  mag_a <= cos_f when swap1 = '0' else
-           cos_g;
-  mag_b <= cos_g when swap1 = '0' else
-           cos_f;
-
-  -- The PWM datapath in one clocked process (a simulator wakes one process per clock edge, not three): the table
-  -- reads (stage 1), the multipliers and the carrier; mag_a and mag_b above pick from the table stage.
-  -- Duty = floor((|value| * pwm_period + 2^(G_DUTY_BITS - 1)) / 2^G_DUTY_BITS), at most pwm_period, for both
-  -- windings by one serial shift-add multiplier each (no wide multiplier: iCE40 has no DSP). A round takes
-  -- C_ROUND = G_DUTY_BITS + 3 clocks and rounds follow each other without pause:
-  --   mul_cnt = 0:                 load |A|, |B|, signs and pwm_period; clear the accumulators;
-  --   mul_cnt = 1 .. BITS + 1:     A + (pwm_period if the multiplier's LSB is '1'), shift {acc, q} right;
-  --   mul_cnt = BITS + 2:          product = acc * 2^(BITS + 1) + q; duty = product / 2^BITS rounded (bit BITS - 1)
-  pwm_proc : process (clk) is
-
-    variable v_sum_a : natural range 0 to 2 ** 17 - 1;
-    variable v_sum_b : natural range 0 to 2 ** 17 - 1;
-
-    -- The rounded duty of a finished product acc * 2^(BITS + 1) + q: its bits BITS + 15 .. BITS (acc's low 15 bits and
-    -- q's top bit), plus q's bit BITS - 1 (once per round).
-
-    function rounded (
-      acc : natural;
-      q   : unsigned(G_DUTY_BITS downto 0)
-    ) return natural is
-
-      variable v_acc : unsigned(15 downto 0);
-
-    begin
-
-      v_acc := to_unsigned(acc, 16);
-
-      if (q(G_DUTY_BITS - 1) = '1') then
-        return to_integer((v_acc(14 downto 0) & q(G_DUTY_BITS)) + 1);
-      end if;
-
-      return to_integer(v_acc(14 downto 0) & q(G_DUTY_BITS));
-
-    end function rounded;
-
-  begin
-
-    if rising_edge(clk) then
+      -- PWM datapath.
       -- Stage 1: the two table reads (registered: a ROM).
       cos_f  <= C_COS(frac_idx);
       cos_g  <= C_COS(G_MICROSTEPS - frac_idx);
@@ -492,28 +504,28 @@ begin
         neg_a   <= '0';
         neg_b   <= '0';
       elsif (mul_cnt = 0) then
-        q_a     <= to_unsigned(mag_a, G_DUTY_BITS + 1);
-        q_b     <= to_unsigned(mag_b, G_DUTY_BITS + 1);
+        q_a     <= mag_a;
+        q_b     <= mag_b;
         neg_a2  <= neg_a1;
         neg_b2  <= neg_b1;
-        mul_p   <= to_integer(unsigned(pwm_period));
+        mul_p   <= period_i;
         acc_a   <= 0;
         acc_b   <= 0;
         mul_cnt <= 1;
       elsif (mul_cnt <= G_DUTY_BITS + 1) then
         -- {acc, q} shifted right by one, acc + pwm_period (17 bits) taking q's LSB's place
         v_sum_a := acc_a;
-        if (q_a(0) = '1') then
+        if (q_a mod 2 = 1) then
           v_sum_a := v_sum_a + mul_p;
         end if;
         v_sum_b := acc_b;
-        if (q_b(0) = '1') then
+        if (q_b mod 2 = 1) then
           v_sum_b := v_sum_b + mul_p;
         end if;
         acc_a   <= v_sum_a / 2;
-        q_a     <= C_BIT(v_sum_a mod 2) & q_a(G_DUTY_BITS downto 1);
+        q_a     <= q_a / 2 + (v_sum_a mod 2) * C_Q_TOP;
         acc_b   <= v_sum_b / 2;
-        q_b     <= C_BIT(v_sum_b mod 2) & q_b(G_DUTY_BITS downto 1);
+        q_b     <= q_b / 2 + (v_sum_b mod 2) * C_Q_TOP;
         mul_cnt <= mul_cnt + 1;
       else
         -- product < 2^(BITS + 16), so acc(15) = '0' and the duty fits 16 bits
@@ -530,22 +542,8 @@ begin
       else
         carrier <= carrier + 1;
       end if;
-    end if;
 
-  end process pwm_proc;
-
-  ---------------------------------------------------------------------------------------------------------------------
-  -- Outputs: one register per pin. Bridge encoding: current + : IN1 = 1 (or PWM), IN2 = 0; current - : IN1 = 0,
-  -- IN2 = 1 (or PWM); off: both 0. IN1 and IN2 are never both '1'.
-  ---------------------------------------------------------------------------------------------------------------------
-  out_proc : process (clk) is
-
-    variable v_on_a : std_logic;
-    variable v_on_b : std_logic;
-
-  begin
-
-    if rising_edge(clk) then
+      -- Outputs.
       if (rst = '1') then
         enable_r <= '0';
         a1_r     <= '0';
@@ -569,12 +567,12 @@ begin
         end if;
 
         if (ctrl_enable = '1') then
-          if (mode = C_MODE_WAVE or mode = C_MODE_FULL or mode = C_MODE_HALF) then
+          if (mode_onoff = '1') then
             a1_r <= lvl_a1;
             a2_r <= lvl_a2;
             b1_r <= lvl_b1;
             b2_r <= lvl_b2;
-          elsif (mode = C_MODE_PWM) then
+          elsif (mode_pwm = '1') then
             a1_r <= v_on_a and not neg_a;
             a2_r <= v_on_a and neg_a;
             b1_r <= v_on_b and not neg_b;
@@ -584,7 +582,7 @@ begin
       end if;
     end if;
 
-  end process out_proc;
+  end process clk_proc;
 
   step          <= step_r;
   dir           <= dir_r;

@@ -7,13 +7,14 @@
 #
 #     scripts/simcount.sh [TOP [RAMP [LINES]]]    TOP: stepramp_plb (default) ...; RAMP: 0 AVR446, 1 exact
 #
-# STEPRAMP_HDL_DIR=<a copy of hdl/> measures that copy instead (its own build).
+# STEPRAMP_HDL_DIR=<a copy of hdl/> measures that copy instead (its own build); SIMCOUNT_OUT names the output folder
+# (default build/simcount/TOP-RAMP).
 set -eu
 top=${1:-stepramp_plb}
 ramp=${2:-0}
 lines=${3:-25}
 cd "$(dirname "$0")/.."
-out=build/simcount/$top-$ramp
+out=${SIMCOUNT_OUT:-build/simcount/$top-$ramp}
 rm -rf "$out" && mkdir -p "$out"
 exact=""
 [ "$ramp" = 1 ] && exact="$top"
