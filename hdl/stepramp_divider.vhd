@@ -33,8 +33,8 @@ architecture rtl of stepramp_divider is
   constant C_IDX_W : positive := clog2(G_WIDTH);
   -- The numerator as bit pairs: padded to an even width.
   constant C_PAIRS : positive := (G_WIDTH + 1) / 2;
-  -- The radix-4 step's trial differences (G_DEN_WIDTH + 3 bits) are carry-select subtractors (stepramp_pkg's
-  -- csel_sub), so that no borrow ripples through the whole width in the step (the divider's clock).
+  -- The radix-4 step's trial differences (G_DEN_WIDTH + 3 bits) are carry-select subtractors (as
+  -- stepramp_pkg's csel_sub), so that no borrow ripples through the whole width in the step (the divider's clock).
   constant C_TW : positive := G_DEN_WIDTH + 3;
   -- The subtractors' split: a low part of C_LO bits, whose borrow picks the high part (C_HI bits) computed without
   -- and with it. The parts are integers in the step (GHDL evaluates an integer in a few instructions, a vector bit

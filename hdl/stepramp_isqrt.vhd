@@ -43,7 +43,7 @@ architecture rtl of stepramp_isqrt is
   -- is used).
   constant C_RW : positive := C_PAIRS + G_EXTRA + 1;
   -- The trial 4 rem + pair - (4 t + 1): both operands below 2^(C_RW + 2), one sign bit above them; a carry-select
-  -- subtractor (stepramp_pkg's csel_sub), as in the divider.
+  -- subtractor (stepramp_pkg's csel_sub's structure), as in the divider.
   constant C_TW : positive := C_RW + 3;
   -- The subtractor's split: a low part of C_LO bits, whose borrow picks the high part (C_HI bits) computed without
   -- and with it. Up to 60 bits (G_WIDTH / 2 + G_EXTRA <= 56) the parts are integers in the iteration (GHDL evaluates
