@@ -34,7 +34,7 @@ architecture rtl of stepramp_divider is
   -- The numerator as bit pairs: padded to an even width.
   constant C_PAIRS : positive := (G_WIDTH + 1) / 2;
   -- The radix-4 step's trial differences (G_DEN_WIDTH + 3 bits) are carry-select subtractors (as
-  -- stepramp_pkg's csel_sub), so that no borrow ripples through the whole width in the step (the divider's clock).
+  -- stepramp_pkg's csel_sub_int), so that no borrow ripples through the whole width in the step (the divider's clock).
   constant C_TW : positive := G_DEN_WIDTH + 3;
   -- The subtractors' split: a low part of C_LO bits, whose borrow picks the high part (C_HI bits) computed without
   -- and with it. The parts are integers in the step (GHDL evaluates an integer in a few instructions, a vector bit
@@ -139,39 +139,9 @@ begin
     variable trial : unsigned(C_TW - 1 downto 0);
     variable t_lo  : natural range 0 to 2 ** C_LO - 1;
     variable t_hi  : natural range 0 to 2 ** C_HI - 1;
-    -- trial - m D: the low part with its borrow on top, and the high part with that borrow (trial + not d: its top
-    -- bit says m D fits) or without it (its top bit says m D does not fit); whether m D fits, and the difference.
-    variable lo   : signed(C_LO downto 0);
-    variable hb   : unsigned(C_HI downto 0);
-    variable hn   : signed(C_HI downto 0);
+    -- trial - m D (stepramp_pkg's csel_sub_int): whether m D fits, and the difference.
     variable fits : boolean;
     variable diff : unsigned(C_TW - 1 downto 0);
-
-    -- trial - m D, its parts (d_l, d_h) and not d_h (d_n): the low part's borrow picks the high part computed with
-    -- it or without (a carry-select subtractor; a simulator computes only the high part it picks, the hardware both).
-
-    procedure trial_sub (
-      d_l : in natural;
-      d_h : in natural;
-      d_n : in natural
-    ) is
-    begin
-
-      lo := to_signed(t_lo - d_l, C_LO + 1);
-
-      if (lo(C_LO) = '1') then
-        hb                         := to_unsigned(t_hi + d_n, C_HI + 1);
-        fits                       := hb(C_HI) = '1';
-        diff(C_TW - 1 downto C_LO) := hb(C_HI - 1 downto 0);
-      else
-        hn                         := to_signed(t_hi - d_h, C_HI + 1);
-        fits                       := hn(C_HI) = '0';
-        diff(C_TW - 1 downto C_LO) := unsigned(hn(C_HI - 1 downto 0));
-      end if;
-
-      diff(C_LO - 1 downto 0) := unsigned(lo(C_LO - 1 downto 0));
-
-    end procedure trial_sub;
 
   begin
 
@@ -244,15 +214,15 @@ begin
           trial := '0' & rem_r & pair_r;
           t_lo  := to_integer(trial(C_LO - 1 downto 0));
           t_hi  := to_integer(trial(C_TW - 1 downto C_LO));
-          trial_sub(d3_l, d3_h, d3_n);
+          csel_sub_int(t_lo, t_hi, d3_l, d3_h, d3_n, C_LO, C_HI, diff, fits);
           if (fits) then
             quo_r <= quo_r(G_WIDTH - 3 downto 0) & "11";
           else
-            trial_sub(d2_l, d2_h, d2_n);
+            csel_sub_int(t_lo, t_hi, d2_l, d2_h, d2_n, C_LO, C_HI, diff, fits);
             if (fits) then
               quo_r <= quo_r(G_WIDTH - 3 downto 0) & "10";
             else
-              trial_sub(d1_l, d1_h, d1_n);
+              csel_sub_int(t_lo, t_hi, d1_l, d1_h, d1_n, C_LO, C_HI, diff, fits);
               if (fits) then
                 quo_r <= quo_r(G_WIDTH - 3 downto 0) & "01";
               else

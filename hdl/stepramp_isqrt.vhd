@@ -138,15 +138,7 @@ begin
     variable trial : unsigned(C_TW - 1 downto 0);
     variable sub   : unsigned(C_TW - 1 downto 0);
     variable d     : unsigned(C_TW - 1 downto 0);
-    variable t_lo  : natural range 0 to 2 ** C_LO - 1;
-    variable s_lo  : natural range 0 to 2 ** C_LO - 1;
-    variable t_hi  : natural range 0 to 2 ** C_HI - 1;
-    variable s_hi  : natural range 0 to 2 ** C_HI - 1; -- sub's high part, or not it (with the borrow)
-    -- trial - sub: the low part with its borrow on top, and the high part with that borrow (trial + not sub, less
-    -- 2 ** C_HI) or without it; the difference's top bit is its sign.
-    variable lo : signed(C_LO downto 0);
-    variable hb : unsigned(C_HI downto 0);
-    variable hn : signed(C_HI downto 0);
+    variable fits  : boolean; -- (unused: the difference's top bit is its sign)
 
   begin
 
@@ -217,20 +209,9 @@ begin
           trial := '0' & rem_r & pair_r;
           sub   := '0' & root_r & "01";
           if (C_INT) then
-            t_lo := to_integer(trial(C_LO - 1 downto 0));
-            s_lo := to_integer(sub(C_LO - 1 downto 0));
-            t_hi := to_integer(trial(C_LO + C_HI - 1 downto C_LO));
-            lo   := to_signed(t_lo - s_lo, C_LO + 1);
-            if (lo(C_LO) = '1') then
-              s_hi                           := to_integer(not sub(C_LO + C_HI - 1 downto C_LO));
-              hb                             := to_unsigned(t_hi + s_hi, C_HI + 1);
-              d(C_LO + C_HI - 1 downto C_LO) := hb(C_HI - 1 downto 0);
-            else
-              s_hi                           := to_integer(sub(C_LO + C_HI - 1 downto C_LO));
-              hn                             := to_signed(t_hi - s_hi, C_HI + 1);
-              d(C_LO + C_HI - 1 downto C_LO) := unsigned(hn(C_HI - 1 downto 0));
-            end if;
-            d(C_LO - 1 downto 0) := unsigned(lo(C_LO - 1 downto 0));
+            csel_sub_int(to_integer(trial(C_LO - 1 downto 0)), to_integer(trial(C_LO + C_HI - 1 downto C_LO)),
+                         to_integer(sub(C_LO - 1 downto 0)), to_integer(sub(C_LO + C_HI - 1 downto C_LO)),
+                         to_integer(not sub(C_LO + C_HI - 1 downto C_LO)), C_LO, C_HI, d, fits);
           else
             d := csel_sub(trial, sub);
           end if;

@@ -10,6 +10,7 @@ library ieee;
   use ieee.numeric_std.all;
 
 library work;
+  use work.stepramp_pkg.all;
   use work.stepramp_regs_pkg.all;
   use work.stepramp_multi_pkg.all;
 
@@ -76,6 +77,22 @@ architecture rtl of stepramp_multi is
     return to_integer(unsigned(a(C_ADDR_BITS - 1 downto 2)));
 
   end function word;
+
+  -- The word of a global-window offset written with byte lane 0 (SYNC_START, SYNC_SOFT_STOP, IRQ_MASK take bits of
+  -- lane 0 only), else a word past every register.
+  function lane0_word (
+    a  : std_logic_vector(C_MULTI_ADDR_BITS - 1 downto 0);
+    be : std_logic_vector(3 downto 0)
+  ) return natural is
+  begin
+
+    if (window(a) = 0 and be(0) = '1') then
+      return word(a);
+    end if;
+
+    return 2 ** (C_ADDR_BITS - 2);
+
+  end function lane0_word;
 
   -- '1' for the offset of a global register (window 0, ID .. SYNC_SOFT_STOP); the global logic answers the rest
   -- with err.
@@ -169,61 +186,30 @@ begin
           addr;
 
   -- Window decode: axis i takes the strobes of window i + 1; the global logic answers window 0 and every window
-  -- past the last axis (with err).
-  decode_proc : process (wr, rd, addr, wsel) is
+  -- past the last axis (with err). SYNC_START: bit i of a write (byte lane 0) is a START of axis i at the edge that
+  -- samples the write, exactly as a CTRL.START written to every selected axis at that edge; SYNC_SOFT_STOP likewise
+  -- a CTRL.SOFT_STOP.
+  decode_proc : process (wr, rd, addr, wsel, wdata, be) is
+
+    -- A write the global logic takes.
+    variable glob_w : boolean;
+
   begin
+
+    glob_w  := wr = '1' and (window(wsel) = 0 or window(wsel) > G_AXES);
+    glob_wr <= to_sl(glob_w);
+    glob_rd <= to_sl(rd = '1' and (window(addr) = 0 or window(addr) > G_AXES));
 
     for i in 0 to G_AXES - 1 loop
 
-      axis_wr(i) <= '0';
-      axis_rd(i) <= '0';
-
-      if (wr = '1' and window(wsel) = i + 1) then
-        axis_wr(i) <= '1';
-      end if;
-
-      if (rd = '1' and window(addr) = i + 1) then
-        axis_rd(i) <= '1';
-      end if;
+      axis_wr(i)    <= to_sl(wr = '1' and window(wsel) = i + 1);
+      axis_rd(i)    <= to_sl(rd = '1' and window(addr) = i + 1);
+      sync_start(i) <= to_sl(glob_w and lane0_word(wsel, be) = C_MREG_SYNC_START / 4 and wdata(i) = '1');
+      sync_soft(i)  <= to_sl(glob_w and lane0_word(wsel, be) = C_MREG_SYNC_SOFT_STOP / 4 and wdata(i) = '1');
 
     end loop;
-
-    glob_wr <= '0';
-    glob_rd <= '0';
-
-    if (wr = '1' and (window(wsel) = 0 or window(wsel) > G_AXES)) then
-      glob_wr <= '1';
-    end if;
-
-    if (rd = '1' and (window(addr) = 0 or window(addr) > G_AXES)) then
-      glob_rd <= '1';
-    end if;
 
   end process decode_proc;
-
-  -- SYNC_START: bit i of a write (byte lane 0) is a START of axis i at the edge that samples the write, exactly as
-  -- a CTRL.START written to every selected axis at that edge; SYNC_SOFT_STOP likewise a CTRL.SOFT_STOP.
-  sync_proc : process (glob_wr, wsel, wdata, be) is
-  begin
-
-    for i in 0 to G_AXES - 1 loop
-
-      sync_start(i) <= '0';
-      sync_soft(i)  <= '0';
-
-      if (glob_wr = '1' and window(wsel) = 0 and word(wsel) = C_MREG_SYNC_START / 4 and be(0) = '1' and
-          wdata(i) = '1') then
-        sync_start(i) <= '1';
-      end if;
-
-      if (glob_wr = '1' and window(wsel) = 0 and word(wsel) = C_MREG_SYNC_SOFT_STOP / 4 and be(0) = '1' and
-          wdata(i) = '1') then
-        sync_soft(i) <= '1';
-      end if;
-
-    end loop;
-
-  end process sync_proc;
 
   -- The common start: while an axis of the group still waits for its own DIR hold / setup or STEP spacing, the
   -- others hold their starts; all fire at the edge at which none waits, the latest of their own start edges.
@@ -251,7 +237,7 @@ begin
         end if;
       end if;
 
-      if (glob_wr = '1' and window(wsel) = 0 and word(wsel) = C_MREG_IRQ_MASK / 4 and be(0) = '1') then
+      if (glob_wr = '1' and lane0_word(wsel, be) = C_MREG_IRQ_MASK / 4) then
         irq_mask <= wdata(G_AXES - 1 downto 0);
       end if;
 

@@ -1,6 +1,6 @@
 -- SPDX-License-Identifier: MIT
--- stepramp_pkg: helpers shared by the stepramp entities (log2_ceil, clog2, to_sl, csel_sub); compiled first
--- (docs/integration.md, "Compile order").
+-- stepramp_pkg: helpers shared by the stepramp entities (log2_ceil, clog2, to_sl, csel_sub, csel_sub_int); compiled
+-- first (docs/integration.md, "Compile order").
 
 library ieee;
   use ieee.std_logic_1164.all;
@@ -30,6 +30,26 @@ package stepramp_pkg is
     trial : unsigned;
     sub   : unsigned
   ) return unsigned;
+
+  -- csel_sub on integer parts, for widths up to 60 bits (the divider's step, the square root's trial): the operands
+  -- split into a low part of lo_w bits and a high part of hi_w bits, given as integers (t_lo, t_hi the trial's;
+  -- s_lo, s_hi the subtrahend's, s_not its high part inverted as bits: trial - sub - 1 is trial + not sub less
+  -- 2 ** hi_w). diff gets the lo_w + hi_w bits of trial - sub (its top bit is the sign when the operands have a spare
+  -- top bit), fits whether sub <= trial (the borrow out of the high part). A simulator evaluates an integer in a few
+  -- instructions, a vector bit by bit, and computes only the high part the low part's borrow picks; the conversions
+  -- from and to the bits are wiring in hardware.
+
+  procedure csel_sub_int (
+    t_lo  : in    natural;
+    t_hi  : in    natural;
+    s_lo  : in    natural;
+    s_hi  : in    natural;
+    s_not : in    natural;
+    lo_w  : in    positive;
+    hi_w  : in    positive;
+    diff  : out   unsigned;
+    fits  : out   boolean
+  );
 
 end package stepramp_pkg;
 
@@ -106,5 +126,39 @@ package body stepramp_pkg is
     return (a(C_W - 1 downto C_LO) - b(C_W - 1 downto C_LO)) & lo(C_LO - 1 downto 0);
 
   end function csel_sub;
+
+  procedure csel_sub_int (
+    t_lo  : in    natural;
+    t_hi  : in    natural;
+    s_lo  : in    natural;
+    s_hi  : in    natural;
+    s_not : in    natural;
+    lo_w  : in    positive;
+    hi_w  : in    positive;
+    diff  : out   unsigned;
+    fits  : out   boolean
+  ) is
+
+    variable lo : signed(lo_w downto 0);   -- the low part's difference, its borrow on top
+    variable hb : unsigned(hi_w downto 0); -- the high part with the borrow: trial + not sub, carry on top
+    variable hn : signed(hi_w downto 0);   -- the high part without it, borrow on top
+
+  begin
+
+    lo := to_signed(t_lo - s_lo, lo_w + 1);
+
+    if (lo(lo_w) = '1') then
+      hb                                                      := to_unsigned(t_hi + s_not, hi_w + 1);
+      fits                                                    := hb(hi_w) = '1';
+      diff(diff'low + lo_w + hi_w - 1 downto diff'low + lo_w) := hb(hi_w - 1 downto 0);
+    else
+      hn                                                      := to_signed(t_hi - s_hi, hi_w + 1);
+      fits                                                    := hn(hi_w) = '0';
+      diff(diff'low + lo_w + hi_w - 1 downto diff'low + lo_w) := unsigned(hn(hi_w - 1 downto 0));
+    end if;
+
+    diff(diff'low + lo_w - 1 downto diff'low) := unsigned(lo(lo_w - 1 downto 0));
+
+  end procedure csel_sub_int;
 
 end package body stepramp_pkg;

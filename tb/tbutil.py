@@ -1,19 +1,21 @@
 # SPDX-License-Identifier: MIT
-"""Shared helpers for the cocotb testbenches: build directories, integers from the environment, and how two lists of
-step edges differ. The clock, the reset and clock-edge numbers are stepramp.sim.clocking's (imported here for the
-benches that take them from here)."""
+"""Shared helpers for the cocotb testbenches: build directories, integers and random seeds from the environment, a
+run with the C driver library, and how two lists of step edges differ. The clock, the reset and clock-edge numbers
+are stepramp.sim.clocking's (imported here for the benches that take them from here)."""
 
 from __future__ import annotations
 
 import os
 import random
 import re
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import cocotb
 
 from stepramp.sim.clocking import CLK_PERIOD_NS, now_cycles, start_clock_and_reset
+from stepramp.sim.runner import run_cocotb
+from stepramp.tools import clib
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -30,6 +32,44 @@ def build_dir(name: str) -> Path:
 def env_int(name: str, default: int) -> int:
     """An integer handed to the simulation through the environment."""
     return int(os.environ.get(name, default))
+
+
+def random_seed(env: str, what: str) -> int:
+    """The seed of a random test: $env when set, else a fresh one; printed ("<what>: <env>=<seed>", shown with a
+    failure) so that the run can be replayed."""
+    seed = env_int(env, random.SystemRandom().randrange(1 << 32))
+    print(f"{what}: {env}={seed}")
+    return seed
+
+
+def run_seeded(top: str, module: str, seed_env: str, extra_env: Mapping[str, str] | None = None) -> None:
+    """run_cocotb of a unit bench that draws its cases from a seed: a random_seed handed to the simulation in
+    $seed_env; built in build_dir of the top's name without "stepramp_"."""
+    seed = random_seed(seed_env, top)
+    run_cocotb(
+        top, module, build_dir(top.removeprefix("stepramp_")), extra_env={seed_env: str(seed), **(extra_env or {})}
+    )
+
+
+#: The C driver library that the benches call through their bus model (stepramp.sim.cdriver; make -C sw/c lib),
+#: named to the simulation in $STEPRAMP_C_CB_LIB.
+C_CB_LIB = REPO / "sw" / "c" / "build" / "libstepramp_cb.so"
+
+
+def run_with_c_lib(
+    top: str,
+    module: str,
+    build: Path,
+    testcase: str | Sequence[str],
+    parameters: Mapping[str, object] | None = None,
+) -> None:
+    """run_cocotb with C_CB_LIB built first (make -C sw/c lib: a missing toolchain is a failure, not a skip) and
+    named in $STEPRAMP_C_CB_LIB."""
+    clib.build("lib")
+    assert C_CB_LIB.is_file(), f"make -C sw/c lib did not build {C_CB_LIB}"
+    run_cocotb(
+        top, module, build, parameters=parameters, testcase=testcase, extra_env={"STEPRAMP_C_CB_LIB": str(C_CB_LIB)}
+    )
 
 
 def first_mismatch(got: Sequence[int], want: Sequence[int]) -> int:
@@ -67,6 +107,7 @@ def garbage_rng(seed_env: str, seed: int, test: str) -> random.Random:
 
 __all__ = [
     "CLK_PERIOD_NS",
+    "C_CB_LIB",
     "HALF",
     "PERIOD",
     "QUARTER",
@@ -77,6 +118,9 @@ __all__ = [
     "first_mismatch",
     "garbage_rng",
     "now_cycles",
+    "random_seed",
+    "run_seeded",
+    "run_with_c_lib",
     "start_clock_and_reset",
     "where",
 ]

@@ -46,11 +46,7 @@ from stepramp.models.stepping import gate_timing
 from stepramp.sim.cdriver import CDriver
 from stepramp.sim.clocking import Cycles
 from stepramp.sim.profiles import EXACT_PROFILES, PROFILES_BY_NAME, Profile
-from stepramp.sim.runner import run_cocotb
-from stepramp.tools import clib
-from tbutil import REPO, build_dir, cocotb, edges_differ
-
-C_CB_LIB = REPO / "sw" / "c" / "build" / "libstepramp_cb.so"
+from tbutil import build_dir, cocotb, edges_differ, run_with_c_lib
 
 #: A trapezoid, a triangle with negative steps, a move starting in RUN, and one with PRESCALE > 1.
 POLLED = ("trap_basic", "triangle_negative", "run_start", "trap_prescale_4")
@@ -425,25 +421,15 @@ C_TESTS = [
 @pytest.mark.parametrize("top", TOPS)
 def test_c_driver_on_rtl(top: str) -> None:
     """The C driver's calls against each top (the library is built here: make -C sw/c lib)."""
-    clib.build("lib")
-    assert C_CB_LIB.is_file(), f"make -C sw/c lib did not build {C_CB_LIB}"
-    run_cocotb(
-        top,
-        "test_c_driver_rtl",
-        build_dir(f"{top}_c_driver"),
-        testcase=C_TESTS,
-        extra_env={"STEPRAMP_C_CB_LIB": str(C_CB_LIB)},
-    )
+    run_with_c_lib(top, "test_c_driver_rtl", build_dir(f"{top}_c_driver"), testcase=C_TESTS)
 
 
 def test_c_driver_exact_mode() -> None:
     """The C driver against stepramp_plb built with G_RAMP = 1 (the exact ramp)."""
-    clib.build("lib")
-    run_cocotb(
+    run_with_c_lib(
         "stepramp_plb",
         "test_c_driver_rtl",
         build_dir("plb_c_driver_exact"),
-        parameters={"G_RAMP": RAMP_EXACT},
         testcase="c_driver_exact",
-        extra_env={"STEPRAMP_C_CB_LIB": str(C_CB_LIB)},
+        parameters={"G_RAMP": RAMP_EXACT},
     )

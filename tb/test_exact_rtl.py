@@ -22,7 +22,6 @@ from __future__ import annotations
 import functools
 import json
 import os
-from typing import Any
 
 import pytest
 
@@ -38,6 +37,7 @@ from stepramp.sim.profiles import EXACT_CLOCK_FACTOR, EXACT_PROFILES
 from stepramp.sim.runner import run_cocotb
 from stepramp.sim.script_sim import simulate_planned
 from stepramp.sim.scripts import NAMED_SCRIPTS
+from stepramp.tools.golden import exact_script
 from tbutil import build_dir, cocotb, edges_differ, env_int
 
 EXACT = {"G_RAMP": RAMP_EXACT}
@@ -149,18 +149,6 @@ def test_exact_stops(top: str) -> None:
     run_cocotb(top, "test_exact_rtl", build_dir(f"exact_{top}_stops"), parameters=EXACT, testcase="exact_stops")
 
 
-def exact_script(obj: dict[str, Any], factor: int = EXACT_CLOCK_FACTOR) -> dict[str, Any]:
-    """A script in exact mode at `factor` times the clock and PRESCALE: the same ticks, every clock count (the
-    commands' edges, until, the input filter) `factor` times larger."""
-    out = {**obj, "ramp": "exact", "fclk": obj["fclk"] * factor, "prescale": obj.get("prescale", 1) * factor}
-    out["commands"] = [dict(cmd, at=cmd["at"] * factor) for cmd in obj["commands"]]
-    if obj.get("until") is not None:
-        out["until"] = obj["until"] * factor
-    if "inputs" in obj:
-        out["inputs"] = dict(obj["inputs"], filter=obj["inputs"].get("filter", 0) * factor)
-    return out
-
-
 #: The named scripts each top plays in exact mode (split between the tops: the simulation time of the regression).
 EXACT_SCRIPTS = {
     "stepramp_plb": ("change_in_accel", "retarget_behind", "jog_through_zero"),
@@ -171,7 +159,9 @@ EXACT_SCRIPTS = {
 @pytest.mark.parametrize("top", TOPS)
 def test_exact_scripts(top: str) -> None:
     names = EXACT_SCRIPTS[top]
-    planned = [plan_script(load_script(exact_script(NAMED_SCRIPTS[n]))) for n in names]
+    # each in exact mode at EXACT_CLOCK_FACTOR times the clock and PRESCALE (the same ticks, every clock count of the
+    # script that many times larger)
+    planned = [plan_script(load_script(exact_script(NAMED_SCRIPTS[n], EXACT_CLOCK_FACTOR))) for n in names]
     for name, p in zip(names, planned, strict=True):
         assert p.edges and not p.rejected and not p.errors, f"{name}: {p.rejected} {p.errors}"
     results = simulate_planned(planned, build_dir(f"exact_scripts_{top}"), top, ramp=RAMP_EXACT)

@@ -42,11 +42,7 @@ from stepramp.board.homing import LATCH_MARGIN, Homing, home
 from stepramp.sim.cdriver import CDriver, c_struct
 from stepramp.sim.clocking import CLK_PERIOD_PS, Cycles
 from stepramp.sim.mechanics import Bounce, Carriage, Crossing, Switch
-from stepramp.sim.runner import run_cocotb
-from stepramp.tools import clib
-from tbutil import REPO, build_dir, cocotb, env_int, now_cycles
-
-C_CB_LIB = REPO / "sw" / "c" / "build" / "libstepramp_cb.so"
+from tbutil import REPO, build_dir, cocotb, env_int, now_cycles, run_with_c_lib
 
 #: The driver's view of the clock and motor (the bench's clock runs at 100 MHz; only clock counts matter).
 FCLK, SPR, PRESCALE = 1e6, 200.0, 1
@@ -182,6 +178,18 @@ def report(dut: Any, top: str, who: str, done: list[Run]) -> None:
     )
 
 
+def check_all_runs(
+    dut: Any, top: str, who: str, done: list[Run], origins: set[int], bounds: tuple[int, int], problems: list[str]
+) -> None:
+    """After one driver's runs: their summary (report), the TIME origins their latches imply (check_origins against
+    the bounds of a TIME read), a run done unless HOMING_ONLY selected none, and no problem."""
+    report(dut, top, who, done)
+    dut._log.info("TIME origin: %s from the latches, %d .. %d from a TIME read", sorted(origins), *bounds)
+    check_origins(origins, bounds, problems)
+    assert done or ONLY is not None, "no run selected"
+    assert not problems, "\n".join(problems)
+
+
 async def place(tb: PeripheralTb, carriage: Carriage, run: Run) -> None:
     """Put the carriage at the run's start (the motor off), seed its bounce, let the filter settle, and go on at the
     next multiple of ALIGN clocks: every run starts in the same state and phase, so a seed replays alone."""
@@ -272,11 +280,7 @@ async def python_homing(dut) -> None:
             dut, run, carriage, first, shift0, result.left, result.seek, result.release, position, origins, problems
         )
         done.append(run)
-    report(dut, tb.top, "Python", done)
-    dut._log.info("TIME origin: %s from the latches, %d .. %d from a TIME read", sorted(origins), *bounds)
-    check_origins(origins, bounds, problems)
-    assert done or ONLY is not None, "no run selected"
-    assert not problems, "\n".join(problems)
+    check_all_runs(dut, tb.top, "Python", done, origins, bounds, problems)
     assert any(r.on_switch for r in done) or ONLY is not None or RUNS < 4, "no run started on the switch"
     assert any(r.bounces for r in done) or len(done) < 4, "no switch bounced"
     # the seek's fast latch moves with the bounce: the same check on it would fail, the release's exactness is no gift
@@ -399,11 +403,7 @@ async def c_homing(dut) -> None:
             problems,
         )
         done.append(run)
-    report(dut, tb.top, "C", done)
-    dut._log.info("TIME origin: %s from the latches, %d .. %d from a TIME read", sorted(origins), *bounds)
-    check_origins(origins, bounds, problems)
-    assert done or ONLY is not None, "no run selected"
-    assert not problems, "\n".join(problems)
+    check_all_runs(dut, tb.top, "C", done, origins, bounds, problems)
     tb.finish()
 
 
@@ -411,13 +411,5 @@ async def c_homing(dut) -> None:
 def test_homing(top: str) -> None:
     """The Python and the C driver's homing through each top (the C library is built here: make -C sw/c lib); a limit
     used as home on the PLB-like top (the inputs' logic is the same core behind either bus)."""
-    clib.build("lib")
-    assert C_CB_LIB.is_file(), f"make -C sw/c lib did not build {C_CB_LIB}"
     tests = ["python_homing", "c_homing"] + (["limit_homing"] if top == "stepramp_plb" else [])
-    run_cocotb(
-        top,
-        "test_homing_rtl",
-        build_dir(f"{top}_homing"),
-        testcase=tests,
-        extra_env={"STEPRAMP_C_CB_LIB": str(C_CB_LIB)},
-    )
+    run_with_c_lib(top, "test_homing_rtl", build_dir(f"{top}_homing"), testcase=tests)

@@ -53,7 +53,18 @@ from cocotb.utils import get_sim_steps, get_sim_time
 
 from stepramp.models.exact_unit import isqrt
 from stepramp.sim.runner import run_cocotb
-from tbutil import HALF, PERIOD, QUARTER, build_dir, cocotb, env_int, garbage_rng, start_clock_and_reset, where
+from tbutil import (
+    HALF,
+    PERIOD,
+    QUARTER,
+    build_dir,
+    cocotb,
+    env_int,
+    garbage_rng,
+    random_seed,
+    start_clock_and_reset,
+    where,
+)
 
 SEED_ENV = "ISQRT_SEED"
 #: Random radicands per bit length at the wide widths.
@@ -380,8 +391,7 @@ async def reset_drops_the_run(dut) -> None:
 @pytest.mark.parametrize(("width", "extra"), [(4, 0), (12, 0), (12, 3), (80, 0), (92, 6), (128, 0)])
 def test_isqrt(width: int, extra: int) -> None:
     """Both cocotb tests at one width and G_EXTRA; the seed is random unless ISQRT_SEED is set."""
-    seed = int(os.environ.get(SEED_ENV, random.SystemRandom().randrange(1 << 32)))
-    print(f"stepramp_isqrt width {width}, G_EXTRA {extra}: {SEED_ENV}={seed}")
+    seed = random_seed(SEED_ENV, f"stepramp_isqrt width {width}, G_EXTRA {extra}")
     # every run at the worst latency with the longest pause, and margin (10 ns clock)
     limit_us = len(radicands(width, random.Random(seed))) * (width // 2 + extra + 5 + 4) * 10 // 1000 + 100
     run_cocotb(

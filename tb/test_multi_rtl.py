@@ -54,7 +54,7 @@ from cocotb.utils import get_sim_time
 
 from peripheral_tb import AxilPort, BusError, BusPort, IpifPort
 from stepramp.board.change import Segment
-from stepramp.board.coord import plan_coordinated_info, plan_coordinated_stop
+from stepramp.board.coord import CoordInfo, plan_coordinated_info, plan_coordinated_stop
 from stepramp.board.driver import Outputs, StepRamp, plan_writes, segment_writes
 from stepramp.board.multi import (
     AXIS_WINDOW,
@@ -195,6 +195,13 @@ class MultiTb:
             await self.axis(i).set_enable(True)
             await self.axis(i).enable_irq(done=irq, error=irq)
             self.outputs[i] = outputs
+
+    def pins_before(self) -> tuple[list[int], list[int | None], list[int]]:
+        """Every axis's DIR now (0 after reset; the pins show each change), its last STEP rising edge (None: none since
+        reset) and its count of STEP rising edges: what the edges of the next moves start from (expected_sync)."""
+        dirs = [len(changes) % 2 for changes in self.dir_changes]
+        lasts: list[int | None] = [r[-1] if r else None for r in self.rises]
+        return dirs, lasts, [len(r) for r in self.rises]
 
     def expected(self, i: int, plan: Plan, write_edge: int, dir_before: int, last_rise: int | None) -> list[int]:
         """Axis i's STEP rising edges for `plan` started by a write sampled at `write_edge` (the gate's request one
@@ -535,26 +542,55 @@ async def axes_status_and_irq(dut) -> None:
     tb.check_pins()
 
 
+#: The coordinated tests' PRESCALE (a tick of 2 clocks).
+COORD_PRESCALE = 2
+
+
+@dataclasses.dataclass(frozen=True)
+class Lead:
+    """The lead axis of the coordinated tests' moves, designed in ticks at COORD_PRESCALE (design_args: its steps,
+    cruise period and ramp lengths): the path's accel, decel and speed (args), spr and fclk."""
+
+    design: dict[str, Any]
+
+    @classmethod
+    def of(cls, steps: int, period: float, n_a: float, n_d: float) -> Lead:
+        return cls(design_args(steps, period, n_a, n_d, prescale=COORD_PRESCALE))
+
+    @property
+    def args(self) -> tuple[float, float, float]:
+        return self.design["accel"], self.design["decel"], self.design["speed"]
+
+    def plan(self, steps: list[int]) -> tuple[list[Plan], CoordInfo]:
+        """plan_coordinated_info of a coordinated move of `steps` at the lead's accel, decel and speed."""
+        d = self.design
+        return plan_coordinated_info(steps, *self.args, spr=d["spr"], fclk=d["fclk"], prescale=COORD_PRESCALE)
+
+
+async def coordinated_bench(dut: Any, outputs: Outputs = OUTPUTS) -> MultiTb:
+    """A started multi-axis bench at COORD_PRESCALE, every axis configured with `outputs`."""
+    tb = await MultiTb.started(dut, prescale=COORD_PRESCALE)
+    await tb.configure(outputs)
+    return tb
+
+
 @cocotb.test(timeout_time=600, timeout_unit="us")
 async def coordinated_move(dut) -> None:
     """A coordinated linear move of three axes (one backwards) started by SYNC_START: every edge of every axis as the
     model says for its plan, and the last pulses within max(2 ticks, 0.01 c0 of the slowest axis) of each other."""
-    prescale = 2
-    tb = await MultiTb.started(dut, prescale=prescale)
-    await tb.configure()
-    lead = design_args(48, 60.0, 10.0, 10.0, prescale=prescale)
+    tb = await coordinated_bench(dut)
+    lead = Lead.of(48, 60.0, 10.0, 10.0)
     steps = [48, -29, 17]
-    args = (lead["accel"], lead["decel"], lead["speed"])
-    plans, info = plan_coordinated_info(steps, *args, spr=lead["spr"], fclk=lead["fclk"], prescale=prescale)
-    got = await tb.multi.move_coordinated(steps, *args)
+    plans, info = lead.plan(steps)
+    got = await tb.multi.move_coordinated(steps, *lead.args)
     assert got == plans, "the driver's plans are not plan_coordinated's"
     w = tb.write_edges[-1]
     await tb.multi.wait_done(range(3), idle=lambda: tb.idle(1000))
     _, wants = tb.expected_sync(plans, w)
-    await check_coordinated_ends(tb, wants, steps, info, prescale)
+    await check_coordinated_ends(tb, wants, steps, info)
 
 
-async def check_coordinated_ends(tb: Any, wants: list[list[int]], steps: list[int], info: Any, prescale: int) -> None:
+async def check_coordinated_ends(tb: Any, wants: list[list[int]], steps: list[int], info: Any) -> None:
     """Every axis's edges as the model's (wants) and its POSITION, the last pulses within max(2 ticks, 0.01 c0 of the
     slowest axis) of each other, and the pins' checks."""
     for i in range(3):
@@ -562,7 +598,7 @@ async def check_coordinated_ends(tb: Any, wants: list[list[int]], steps: list[in
         assert await tb.axis(i).position() == steps[i], f"axis {i}: POSITION"
     ends = [r[-1] for r in tb.rises]
     c0_slowest = max(move.c0 for move in info.infos)
-    tolerance = max(2.0, 0.01 * c0_slowest) * prescale  # clocks
+    tolerance = max(2.0, 0.01 * c0_slowest) * COORD_PRESCALE  # clocks
     spread = max(ends) - min(ends)
     assert spread <= tolerance, f"last pulses at {ends}: {spread} clocks apart, more than {tolerance}"
     tb.check_pins()
@@ -573,19 +609,16 @@ async def coordinated_dir_changes(dut) -> None:
     """A coordinated 3-axis move in which two axes change DIR (DIR setup 60 clocks): SYNC_START gives every axis its
     pulse 0 on one clock edge, the latest gate among them (sync_gate_timing); every edge as the model says, the last
     pulses within max(2 ticks, 0.01 c0 of the slowest axis) of each other, DIR setup kept on the pins."""
-    prescale = 2
-    tb = await MultiTb.started(dut, prescale=prescale)
-    await tb.configure(Outputs(step_width=4, dir_setup=60, dir_hold=0))
-    lead = design_args(40, 60.0, 8.0, 8.0, prescale=prescale)
+    tb = await coordinated_bench(dut, Outputs(step_width=4, dir_setup=60, dir_hold=0))
+    lead = Lead.of(40, 60.0, 8.0, 8.0)
     steps = [40, -23, -13]
-    args = (lead["accel"], lead["decel"], lead["speed"])
-    plans, info = plan_coordinated_info(steps, *args, spr=lead["spr"], fclk=lead["fclk"], prescale=prescale)
-    await tb.multi.move_coordinated(steps, *args)
+    plans, info = lead.plan(steps)
+    await tb.multi.move_coordinated(steps, *lead.args)
     w = tb.write_edges[-1]
     await tb.multi.wait_done(range(3), idle=lambda: tb.idle(1000))
     _, wants = tb.expected_sync(plans, w)
     assert len({want[0] for want in wants}) == 1, "the model's pulses 0 are not on one edge"
-    await check_coordinated_ends(tb, wants, steps, info, prescale)
+    await check_coordinated_ends(tb, wants, steps, info)
 
 
 @cocotb.test(timeout_time=400, timeout_unit="us")
@@ -594,18 +627,13 @@ async def coordinated_soft_stop(dut) -> None:
     soft-stopped at the edge that samples the write, each edge as the model says (edges_with_stop of each plan at
     that edge), and each axis at rest within the documented distance of the line (the lead's stop point times
     L_i / L_lead, multi.soft_stop_line_bound)."""
-    prescale = 2
-    tb = await MultiTb.started(dut, prescale=prescale)
-    await tb.configure()
-    lead = design_args(60, 60.0, 12.0, 12.0, prescale=prescale)
-    args = (lead["accel"], lead["decel"], lead["speed"])
+    tb = await coordinated_bench(dut)
+    lead = Lead.of(60, 60.0, 12.0, 12.0)
     position = [0, 0, 0]
     assert not any(tb.dir_changes)
     for steps, wait, phase in (([60, -37, 22], 6, "ACCEL"), ([-60, 41, -17], 25, "RUN")):
-        plans, info = plan_coordinated_info(steps, *args, spr=lead["spr"], fclk=lead["fclk"], prescale=prescale)
-        dirs = [len(tb.dir_changes[i]) % 2 for i in range(3)]  # DIR after reset is 0; the pins show each change
-        lasts: list[int | None] = [r[-1] if r else None for r in tb.rises]
-        n0 = [len(r) for r in tb.rises]
+        plans, info = lead.plan(steps)
+        dirs, lasts, n0 = tb.pins_before()
         await tb.axis(0).program(plans[0])
         await tb.axis(1).program(plans[1])
         await tb.axis(2).program(plans[2])
@@ -642,17 +670,12 @@ async def coordinated_stop_on_the_line(dut) -> None:
     move in its ACCEL, then of another in its RUN: one CHANGE per axis, each committed no later than the edge its
     take-over pulse was named for; every STEP edge of every axis equals the model's (change_edges of its plan and its
     segment), and every axis rests on its T_i, within half a step of the line point k_i R_L of the lead's rest."""
-    prescale = 2
-    tb = await MultiTb.started(dut, prescale=prescale)
-    await tb.configure()
-    lead = design_args(80, 40.0, 14.0, 10.0, prescale=prescale)
-    args = (lead["accel"], lead["decel"], lead["speed"])
+    tb = await coordinated_bench(dut)
+    lead = Lead.of(80, 40.0, 14.0, 10.0)
     position = [0, 0, 0]
     for steps, wait, phase in (([80, -53, 29], 4, "ACCEL"), ([-80, 61, -23], 35, "RUN")):
-        plans, info = plan_coordinated_info(steps, *args, spr=lead["spr"], fclk=lead["fclk"], prescale=prescale)
-        dirs = [len(tb.dir_changes[i]) % 2 for i in range(3)]
-        lasts: list[int | None] = [r[-1] if r else None for r in tb.rises]
-        n0 = [len(r) for r in tb.rises]
+        plans, info = lead.plan(steps)
+        dirs, lasts, n0 = tb.pins_before()
         for i in range(3):
             await tb.axis(i).program(plans[i])
         await tb.multi.sync_start(range(3))
@@ -660,7 +683,8 @@ async def coordinated_stop_on_the_line(dut) -> None:
         await tb.wait_rises(info.lead, n0[info.lead] + wait)
         now = tb.edge()
         commits = [now + 150 * (i + 1) for i in range(3)]  # (each axis's writes take well under 150 clocks)
-        stop = plan_coordinated_stop(plans, info, wants, commits, *args, lead["spr"], lead["fclk"], prescale)
+        d = lead.design
+        stop = plan_coordinated_stop(plans, info, wants, commits, *lead.args, d["spr"], d["fclk"], COORD_PRESCALE)
         assert stop.fallback is None and stop.changes == [0, 1, 2], f"{phase}: {stop}"
         p_lead = stop.axes[info.lead].pulse
         assert phase_of(plans[info.lead], p_lead) == phase, f"the lead takes over at {p_lead}, not in {phase}"
@@ -676,7 +700,7 @@ async def coordinated_stop_on_the_line(dut) -> None:
         for i, plan in enumerate(plans):
             axis = stop.axes[i]
             assert axis.change is not None
-            model = change_edges(Segment.of_move(plan), axis.pulse, axis.change.segment, prescale)
+            model = change_edges(Segment.of_move(plan), axis.pulse, axis.change.segment, COORD_PRESCALE)
             want = [edge0 + sm.STEP_LATENCY + e for e in model]
             got = tb.rises[i][n0[i] :]
             assert got == want, f"{phase} stop, axis {i}: {edges_differ(got, want)}"

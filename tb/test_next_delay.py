@@ -26,8 +26,7 @@ from typing import Any
 from cocotb.triggers import ClockCycles, FallingEdge, First, RisingEdge, Timer
 
 from stepramp.models.blocks import RAMP_VALUE_LIMIT, NextDelayAnswer, next_delay
-from stepramp.sim.runner import run_cocotb
-from tbutil import CLK_PERIOD_NS, build_dir, cocotb, env_int, now_cycles, start_clock_and_reset
+from tbutil import CLK_PERIOD_NS, cocotb, env_int, now_cycles, run_seeded, start_clock_and_reset
 
 SEED_ENV = "NEXT_DELAY_SEED"
 INDEX_BITS = 31
@@ -356,11 +355,4 @@ async def busy_until_the_answer(dut) -> None:
 
 def test_next_delay() -> None:
     """The three cocotb tests above in one simulation; the seed is random unless NEXT_DELAY_SEED is set."""
-    seed = int(os.environ.get(SEED_ENV, random.SystemRandom().randrange(1 << 32)))
-    print(f"stepramp_next_delay random requests: {SEED_ENV}={seed}")
-    run_cocotb(
-        "stepramp_next_delay",
-        "test_next_delay",
-        build_dir("next_delay"),
-        extra_env={SEED_ENV: str(seed), "N_REQUESTS": str(env_int("N_REQUESTS", 3000))},
-    )
+    run_seeded("stepramp_next_delay", "test_next_delay", SEED_ENV, {"N_REQUESTS": str(env_int("N_REQUESTS", 3000))})

@@ -47,8 +47,7 @@ from cocotb.utils import get_sim_time
 
 from stepramp.models import exact
 from stepramp.models.exact_unit import FRESH_WORST, ExactRequest, NextDelayExact, fresh_latency
-from stepramp.sim.runner import run_cocotb
-from tbutil import HALF, PERIOD, QUARTER, build_dir, cocotb, env_int, garbage_rng, start_clock_and_reset, where
+from tbutil import HALF, PERIOD, QUARTER, cocotb, env_int, garbage_rng, run_seeded, start_clock_and_reset, where
 
 SEED_ENV = "NEXT_DELAY_EXACT_SEED"
 X_BITS = 31
@@ -436,11 +435,4 @@ def _latency(model: NextDelayExact, req: ExactRequest) -> int:
 
 def test_next_delay_exact() -> None:
     """The three cocotb tests above in one simulation; the seed is random unless NEXT_DELAY_EXACT_SEED is set."""
-    seed = int(os.environ.get(SEED_ENV, random.SystemRandom().randrange(1 << 32)))
-    print(f"stepramp_next_delay_exact: {SEED_ENV}={seed}")
-    run_cocotb(
-        "stepramp_next_delay_exact",
-        "test_next_delay_exact",
-        build_dir("next_delay_exact"),
-        extra_env={SEED_ENV: str(seed), "N_REQUESTS": str(N_REQUESTS)},
-    )
+    run_seeded("stepramp_next_delay_exact", "test_next_delay_exact", SEED_ENV, {"N_REQUESTS": str(N_REQUESTS)})

@@ -83,8 +83,7 @@ from stepramp.models.engine import (
 from stepramp.models.engine import phases as model_phases
 from stepramp.sim.engine_bench import SEGMENT_INPUTS
 from stepramp.sim.profiles import PROFILES_BY_NAME, Profile
-from stepramp.sim.runner import run_cocotb
-from tbutil import CLK_PERIOD_NS, build_dir, cocotb, start_clock_and_reset
+from tbutil import CLK_PERIOD_NS, cocotb, run_seeded, start_clock_and_reset
 
 SEED_ENV = "PRECOMPUTE_SEED"
 #: Longest distance between two pulse edges in the bench (clocks); see the module docstring.
@@ -722,6 +721,4 @@ async def early_pulses(dut) -> None:
 
 def test_precompute() -> None:
     """The cocotb tests above in one simulation; the seed is random unless PRECOMPUTE_SEED is set."""
-    seed = int(os.environ.get(SEED_ENV, random.SystemRandom().randrange(1 << 32)))
-    print(f"stepramp_precompute: {SEED_ENV}={seed}")
-    run_cocotb("stepramp_precompute", "test_precompute", build_dir("precompute"), extra_env={SEED_ENV: str(seed)})
+    run_seeded("stepramp_precompute", "test_precompute", SEED_ENV)

@@ -96,36 +96,34 @@ def test_random_scripts(top: str, chunk: int) -> None:
         _check(f"SCRIPT_SEED={SEED} {top} chunk {chunk} script {i}: {json.dumps(scripts[i])}", planned[i], r)
 
 
-def test_cli_sim_and_model_agree(tmp_path: Path) -> None:
+def _cli_model_and_sim(tmp_path: Path, name: str, script: dict[str, Any], keys: tuple[str, ...]) -> dict[str, Any]:
+    """`stepramp model` and `stepramp sim` of the script (each exits 0), their JSON outputs' keys the same; returns the
+    model's output."""
     from stepramp.tools.cli import main
 
+    path = tmp_path / f"{name}.json"
+    path.write_text(json.dumps(script))
+    out = {}
+    for tool in ("model", "sim"):
+        target = tmp_path / f"{name}_{tool}.json"
+        extra = ["--build", str(build_dir(f"script_cli_{name}"))] if tool == "sim" else []
+        assert main([tool, "--script", str(path), "--json", str(target), *extra]) == 0, f"{tool} {name}"
+        out[tool] = json.loads(target.read_text())
+    for key in keys:
+        assert out["sim"][key] == out["model"][key], f"{name}: {key} of sim and model differ"
+    return out["model"]
+
+
+def test_cli_sim_and_model_agree(tmp_path: Path) -> None:
     for name in ("jog_through_zero", "retarget_behind"):
-        script = tmp_path / f"{name}.json"
-        script.write_text(json.dumps(NAMED_SCRIPTS[name]))
-        out = {}
-        for tool in ("model", "sim"):
-            target = tmp_path / f"{name}_{tool}.json"
-            extra = ["--build", str(build_dir(f"script_cli_{name}"))] if tool == "sim" else []
-            assert main([tool, "--script", str(script), "--json", str(target), *extra]) == 0, f"{tool} {name}"
-            out[tool] = json.loads(target.read_text())
-        for key in ("edges", "positions"):
-            assert out["sim"][key] == out["model"][key], f"{name}: {key} of sim and model differ"
-        assert out["model"]["edges"], f"{name}: no edges"
+        model = _cli_model_and_sim(tmp_path, name, NAMED_SCRIPTS[name], ("edges", "positions"))
+        assert model["edges"], f"{name}: no edges"
     # multi-axis scripts: one list of edges and positions per axis, and the same refusals and final errors (a limit
     # and ESTOP; a coordinated move stopped on the line)
     for name in ("three_axes_limit_and_estop", "coordinated_stop_on_the_line"):
-        script = tmp_path / f"{name}.json"
-        script.write_text(json.dumps(NAMED_MULTI_SCRIPTS[name]))
-        out = {}
-        for tool in ("model", "sim"):
-            target = tmp_path / f"{name}_{tool}.json"
-            extra = ["--build", str(build_dir(f"script_cli_{name}"))] if tool == "sim" else []
-            assert main([tool, "--script", str(script), "--json", str(target), *extra]) == 0, f"{tool} {name}"
-            out[tool] = json.loads(target.read_text())
-        for key in ("edges", "positions", "rejected"):
-            assert out["sim"][key] == out["model"][key], f"{name}: {key} of sim and model differ"
-        assert len(out["model"]["edges"]) == 3 and all(out["model"]["edges"])
-        reasons = {r["reason"] for r in out["model"]["rejected"]}
+        model = _cli_model_and_sim(tmp_path, name, NAMED_MULTI_SCRIPTS[name], ("edges", "positions", "rejected"))
+        assert len(model["edges"]) == 3 and all(model["edges"])
+        reasons = {r["reason"] for r in model["rejected"]}
         assert reasons == ({"the core flagged ESTOP"} if name.startswith("three") else set()), f"{name}: {reasons}"
 
 

@@ -258,9 +258,9 @@ def _random_change(rng: random.Random) -> dict[str, Any]:
     }
 
 
-def _compare(lib: ctypes.CDLL, cases: list[dict[str, Any]]) -> Counter[str]:
+def _compare(lib: ctypes.CDLL, cases: list[dict[str, Any]], what: str | None = None) -> Counter[str]:
     """Every case the same in C as in Python (a crash of change.py is a mismatch); returns the count of each kind of
-    outcome."""
+    outcome (printed as "<count> <what>: ..." when what is given)."""
     kinds: Counter[str] = Counter()
     mismatches: list[str] = []
     for case in cases:
@@ -269,7 +269,26 @@ def _compare(lib: ctypes.CDLL, cases: list[dict[str, Any]]) -> Counter[str]:
             mismatches.append(_mismatch(case, py, c))
         kinds[_kind(py)] += 1
     assert not mismatches, f"{len(mismatches)} of {len(cases)} changes differ:\n" + "\n".join(mismatches[:20])
+    if what is not None:
+        print(f"{len(cases)} {what}: {sorted(kinds.items())}")
     return kinds
+
+
+def _seeded(offset: int) -> random.Random:
+    """The generator of one random test, seeded SEED + offset (printed: STEPRAMP_SEED=SEED replays it)."""
+    print(f"seed {SEED + offset} (STEPRAMP_SEED={SEED} replays it)")
+    return random.Random(SEED + offset)
+
+
+#: The kinds of outcome of the random changes: every one at least 30 times.
+RANDOM_KINDS = {"up", "down", "stop", "at target", "up-jog", "down-jog", "STEPRAMP_ETOOFAST"}
+
+
+def _check_random_changes(lib: ctypes.CDLL, cases: list[dict[str, Any]], what: str) -> None:
+    """The random changes the same in C as in Python, every kind of RANDOM_KINDS (and no other) 30 times or more."""
+    kinds = _compare(lib, cases, what)
+    assert set(kinds) == RANDOM_KINDS, kinds
+    assert min(kinds.values()) >= 30, kinds
 
 
 def test_segment_struct_matches_python() -> None:
@@ -281,13 +300,8 @@ def test_segment_struct_matches_python() -> None:
 
 
 def test_random_changes_bit_for_bit(lib: ctypes.CDLL) -> None:
-    rng = random.Random(SEED)
-    print(f"seed {SEED} (STEPRAMP_SEED={SEED} replays it)")
-    kinds = _compare(lib, [_random_change(rng) for _ in range(RANDOM_COUNT)])
-    print(f"{RANDOM_COUNT} changes: {sorted(kinds.items())}")
-    expected = {"up", "down", "stop", "at target", "up-jog", "down-jog", "STEPRAMP_ETOOFAST"}
-    assert set(kinds) == expected, kinds
-    assert min(kinds.values()) >= 30, kinds
+    rng = _seeded(0)
+    _check_random_changes(lib, [_random_change(rng) for _ in range(RANDOM_COUNT)], "changes")
 
 
 def test_a_triangle_whose_boundaries_round_apart(lib: ctypes.CDLL) -> None:
@@ -313,19 +327,18 @@ _EXTREME: dict[str, tuple[float | int | None, ...]] = {
 }
 
 
+def _extreme(rng: random.Random, case: dict[str, Any]) -> dict[str, Any]:
+    """The case with one to three values replaced by extreme ones (_EXTREME)."""
+    for _ in range(rng.choice((1, 2, 3))):
+        name = rng.choice(list(_EXTREME))
+        case[name] = rng.choice(_EXTREME[name])
+    return case
+
+
 def test_extreme_changes_same_outcome(lib: ctypes.CDLL) -> None:
     """Random cases with one to three extreme values: the same fields, or the same error."""
-    rng = random.Random(SEED + 1)
-    print(f"seed {SEED + 1} (STEPRAMP_SEED={SEED} replays it)")
-    cases = []
-    for _ in range(3000):
-        case = _random_change(rng)
-        for _ in range(rng.choice((1, 2, 3))):
-            name = rng.choice(list(_EXTREME))
-            case[name] = rng.choice(_EXTREME[name])
-        cases.append(case)
-    kinds = _compare(lib, cases)
-    print(f"{len(cases)} extreme changes: {sorted(kinds.items())}")
+    rng = _seeded(1)
+    kinds = _compare(lib, [_extreme(rng, _random_change(rng)) for _ in range(3000)], "extreme changes")
     units = {"STEPRAMP_EACCEL_UNITS", "STEPRAMP_EDECEL_UNITS", "STEPRAMP_ESPEED_UNITS", "STEPRAMP_EFTICK"}
     assert units | {"STEPRAMP_ESEGMENT", "STEPRAMP_EOVERFLOW", "STEPRAMP_ETOOFAST"} <= set(kinds), kinds
 
@@ -468,33 +481,23 @@ def _random_exact_change(rng: random.Random) -> dict[str, Any]:
 def test_random_exact_changes_bit_for_bit(lib: ctypes.CDLL) -> None:
     """stepramp_plan_change_info_ramp in exact mode against plan_change(..., ramp=RAMP_EXACT): every field, every double
     behind a register (the c0 of each ramp constant), or the same error."""
-    rng = random.Random(SEED + 2)
-    print(f"seed {SEED + 2} (STEPRAMP_SEED={SEED} replays it)")
-    kinds = _compare(lib, [_random_exact_change(rng) for _ in range(EXACT_COUNT)])
-    print(f"{EXACT_COUNT} exact-mode changes: {sorted(kinds.items())}")
+    rng = _seeded(2)
     # (no EOVERFLOW: since the scaled ramp constant, c0 of 2^20 ticks or more at the slowest accels and the fastest
     # clock is in range; test_extreme_exact_changes_same_outcome draws constants out of range)
-    expected = {"up", "down", "stop", "at target", "up-jog", "down-jog", "STEPRAMP_ETOOFAST"}
-    assert set(kinds) == expected, kinds
-    assert min(kinds.values()) >= 30, kinds
+    _check_random_changes(lib, [_random_exact_change(rng) for _ in range(EXACT_COUNT)], "exact-mode changes")
 
 
 def test_extreme_exact_changes_same_outcome(lib: ctypes.CDLL) -> None:
     """Random exact-mode cases with one to three extreme values (or a ramp that is neither mode): the same fields, or
     the same error, the ramp constants out of range among them."""
-    rng = random.Random(SEED + 3)
-    print(f"seed {SEED + 3} (STEPRAMP_SEED={SEED} replays it)")
+    rng = _seeded(3)
     cases = []
     for _ in range(3000):
-        case = _random_exact_change(rng)
-        for _ in range(rng.choice((1, 2, 3))):
-            name = rng.choice(list(_EXTREME))
-            case[name] = rng.choice(_EXTREME[name])
+        case = _extreme(rng, _random_exact_change(rng))
         if rng.random() < 0.02:
             case["ramp"] = rng.choice((2, 7, 2**32 - 1))
         cases.append(case)
-    kinds = _compare(lib, cases)
-    print(f"{len(cases)} extreme exact-mode changes: {sorted(kinds.items())}")
+    kinds = _compare(lib, cases, "extreme exact-mode changes")
     units = {"STEPRAMP_EACCEL_UNITS", "STEPRAMP_EDECEL_UNITS", "STEPRAMP_ESPEED_UNITS", "STEPRAMP_EFTICK"}
     assert units | {"STEPRAMP_ESEGMENT", "STEPRAMP_EOVERFLOW", "STEPRAMP_ETOOFAST", "STEPRAMP_ERAMP"} <= set(kinds), (
         kinds

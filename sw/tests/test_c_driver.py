@@ -35,6 +35,7 @@ from stepramp.board.driver import MODES, NO_SEGMENT, Outputs, StepRamp, plan_wri
 from stepramp.board.plan import (
     MAX_PRESCALE,
     MAX_STEPS,
+    MIN_INTERVAL_CLKS,
     MIN_INTERVAL_CLKS_EXACT,
     RAMP_AVR446,
     RAMP_EXACT,
@@ -404,17 +405,16 @@ def random_jogs(seed: int, count: int, min_clks: int = 64) -> list[dict[str, Any
     return jogs
 
 
-def test_jog_like_the_python_driver(lib: ctypes.CDLL) -> None:
-    """stepramp_jog writes what StepRamp.jog writes (the plan's registers, the segment registers, START), and the
-    moves after it what StepRamp.move writes (the segment registers cleared once); or both fail alike, writing
-    nothing. The moves are slow enough for the STEP width + space (test_a_move_too_fast_for_the_step_gap)."""
-    seed = 2026_0512
+def _jogs_like_python(lib: ctypes.CDLL, seed: int, min_clks: int, ramp: int | None) -> Counter[str]:
+    """random_jogs(seed, RANDOM_COUNT, min_clks), each on a fresh Pair (with the ramp): the jog, then a move of -1000
+    and one of 3 steps at the jog's move accel, decel and speed; every call's result and writes the same in C as in
+    Python. Returns the count of each call's result ("jog OK", "move EGAP", ...)."""
     print(f"seed {seed}")
-    jogs = random_jogs(seed, RANDOM_COUNT)
+    jogs = random_jogs(seed, RANDOM_COUNT, min_clks)
     mismatches: list[str] = []
     results: Counter[str] = Counter()
     for jog in jogs:
-        pair = Pair(lib, *jog["init"])
+        pair = Pair(lib, *jog["init"], ramp=ramp)
         for name, *args in [("jog", *jog["jog"]), ("move", -1000, *jog["move"]), ("move", 3, *jog["move"])]:
             (py, py_writes), (c, c_writes) = pair.call(name, *args)
             if (py, py_writes) != (c, c_writes):
@@ -422,6 +422,14 @@ def test_jog_like_the_python_driver(lib: ctypes.CDLL) -> None:
             results[f"{name} {py.removeprefix('STEPRAMP_')}"] += 1
     print(sorted(results.items()))
     assert not mismatches, f"{len(mismatches)} calls differ:\n" + "\n".join(mismatches[:5])
+    return results
+
+
+def test_jog_like_the_python_driver(lib: ctypes.CDLL) -> None:
+    """stepramp_jog writes what StepRamp.jog writes (the plan's registers, the segment registers, START), and the
+    moves after it what StepRamp.move writes (the segment registers cleared once); or both fail alike, writing
+    nothing. The moves are slow enough for the STEP width + space (test_a_move_too_fast_for_the_step_gap)."""
+    results = _jogs_like_python(lib, 2026_0512, MIN_INTERVAL_CLKS, None)
     assert {"jog OK", "jog EGAP", "jog ETOOFAST", "jog EJOG_SPEED"} <= set(results), results
     assert results["jog OK"] >= RANDOM_COUNT // 2 and results["move OK"] >= RANDOM_COUNT
 
@@ -430,20 +438,7 @@ def test_exact_jog_like_the_python_driver(lib: ctypes.CDLL) -> None:
     """A driver set up for an exact-mode core (stepramp_init_ramp, StepRamp(..., ramp=RAMP_EXACT)): its jogs and the
     moves after them write what the Python driver's write, both planned in exact mode, or both fail alike, writing
     nothing (the jogs designed around the exact mode's 256-clock speed limit)."""
-    seed = 2026_0514
-    print(f"seed {seed}")
-    jogs = random_jogs(seed, RANDOM_COUNT, MIN_INTERVAL_CLKS_EXACT)
-    mismatches: list[str] = []
-    results: Counter[str] = Counter()
-    for jog in jogs:
-        pair = Pair(lib, *jog["init"], ramp=RAMP_EXACT)
-        for name, *args in [("jog", *jog["jog"]), ("move", -1000, *jog["move"]), ("move", 3, *jog["move"])]:
-            (py, py_writes), (c, c_writes) = pair.call(name, *args)
-            if (py, py_writes) != (c, c_writes):
-                mismatches.append(f"{jog} {name}{tuple(args)}: python {py} {py_writes}, C {c} {c_writes}")
-            results[f"{name} {py.removeprefix('STEPRAMP_')}"] += 1
-    print(sorted(results.items()))
-    assert not mismatches, f"{len(mismatches)} calls differ:\n" + "\n".join(mismatches[:5])
+    results = _jogs_like_python(lib, 2026_0514, MIN_INTERVAL_CLKS_EXACT, RAMP_EXACT)
     assert {"jog OK", "jog EGAP", "jog ETOOFAST", "jog EJOG_SPEED", "move OK"} <= set(results), results
     assert results["jog OK"] >= RANDOM_COUNT // 3 and results["move OK"] >= RANDOM_COUNT // 2, results
 

@@ -21,6 +21,7 @@ import os
 import random
 import re
 from collections import Counter
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -302,20 +303,25 @@ def _spoil(rng: random.Random, move: Move) -> Move:
     return move
 
 
+Draw = Callable[[random.Random], Move]
+
+
+def _spoiled(draw: Draw) -> Draw:
+    """A draw of draw's move or a raw one (half and half), spoiled (_spoil)."""
+    return lambda rng: _spoil(rng, draw(rng) if rng.random() < 0.5 else _raw_move(rng))
+
+
+def _mixed_move(rng: random.Random, kinds: Sequence[tuple[float, Draw]]) -> Move:
+    """A move of the first kind whose bound a uniform draw in [0, 1) is below (the bounds ascending, the last 1.0)."""
+    r = rng.random()
+    return next(draw for bound, draw in kinds if r < bound)(rng)
+
+
 def random_moves(seed: int, count: int) -> list[Move]:
     """count random moves: designed (mostly valid), raw (wide ranges) and spoiled (invalid or extreme)."""
     rng = random.Random(seed)
-    moves: list[Move] = []
-    while len(moves) < count:
-        r = rng.random()
-        if r < 0.6:
-            move = _designed_move(rng)
-        elif r < 0.85:
-            move = _raw_move(rng)
-        else:
-            move = _spoil(rng, _designed_move(rng) if rng.random() < 0.5 else _raw_move(rng))
-        moves.append(move)
-    return moves
+    kinds = ((0.6, _designed_move), (0.85, _raw_move), (1.0, _spoiled(_designed_move)))
+    return [_mixed_move(rng, kinds) for _ in range(count)]
 
 
 RANDOM_COUNT = 12_000
@@ -327,6 +333,35 @@ def _mismatch(move: Move, py: Outcome, c: Outcome) -> str:
         diff = {k: (py[k], c[k]) for k in py if py[k] != c[k]}
         return f"{move}: fields differ (python, C): {diff}"
     return f"{move}: python {py if isinstance(py, str) else 'OK'}, C {c if isinstance(c, str) else 'OK'}"
+
+
+def _differs(lib: ctypes.CDLL, move: Move, py: Outcome, py_info: dict[str, int | str]) -> str | None:
+    """How the C library's outcome of a move differs from the Python driver's (py, py_info), None when it does not:
+    the plan or error, every double of the info, and the plan of the call without the info (stepramp_plan_move, or
+    stepramp_plan_move_ramp for a move with a "ramp")."""
+    c, c_info = c_outcome_info(lib, move)
+    if py != c:
+        return _mismatch(move, py, c)
+    if py_info != c_info:  # every double behind the registers is identical too
+        diff = {k: (py_info[k], c_info[k]) for k in py_info if py_info[k] != c_info[k]}
+        return f"{move}: info differs (python, C): {diff}"
+    if c_outcome(lib, move) != c:
+        ramp = "_ramp" if "ramp" in move else ""
+        return f"{move}: stepramp_plan_move{ramp} differs from stepramp_plan_move_info{ramp}"
+    return None
+
+
+def _compare(lib: ctypes.CDLL, moves: list[Move]) -> list[Outcome]:
+    """Every move the same in C as in Python (_differs); returns the Python driver's outcomes."""
+    outcomes: list[Outcome] = []
+    mismatches: list[str] = []
+    for move in moves:
+        py, py_info = py_outcome_info(move)
+        outcomes.append(py)
+        if (mismatch := _differs(lib, move, py, py_info)) is not None:
+            mismatches.append(mismatch)
+    assert not mismatches, f"{len(mismatches)} of {len(moves)} moves differ:\n" + "\n".join(mismatches[:20])
+    return outcomes
 
 
 # --------------------------------------------------------------------------------------------------------
@@ -373,17 +408,7 @@ def test_random_moves_bit_for_bit(lib: ctypes.CDLL) -> None:
     moves = random_moves(RANDOM_SEED, RANDOM_COUNT)
     outcomes: Counter[str] = Counter()
     shapes: Counter[str] = Counter()
-    mismatches: list[str] = []
-    for move in moves:
-        py, py_info = py_outcome_info(move)
-        c, c_info = c_outcome_info(lib, move)
-        if py != c:
-            mismatches.append(_mismatch(move, py, c))
-        elif py_info != c_info:  # every double behind the registers is identical too
-            diff = {k: (py_info[k], c_info[k]) for k in py_info if py_info[k] != c_info[k]}
-            mismatches.append(f"{move}: info differs (python, C): {diff}")
-        elif c_outcome(lib, move) != c:
-            mismatches.append(f"{move}: stepramp_plan_move differs from stepramp_plan_move_info")
+    for py in _compare(lib, moves):
         outcomes["STEPRAMP_OK" if isinstance(py, dict) else py] += 1
         if isinstance(py, dict):
             n = py["steps"]
@@ -393,7 +418,6 @@ def test_random_moves_bit_for_bit(lib: ctypes.CDLL) -> None:
             shapes["m0>256" if n - 1 - py["sd"] - 1 > 256 else "m0<=256"] += n > 1
             shapes["prescale 65535"] += py["prescale"] == MAX_PRESCALE
             shapes["|steps| 2^31-1"] += n == MAX_STEPS
-    assert not mismatches, f"{len(mismatches)} of {len(moves)} moves differ:\n" + "\n".join(mismatches[:20])
     # the random set covers every outcome and shape (but the ramp's: no ramp argument here)
     assert set(outcomes) == {"STEPRAMP_OK", *ERROR_KEYS.values()} - RAMP_ONLY, outcomes
     assert outcomes["STEPRAMP_OK"] >= len(moves) // 2, outcomes
@@ -468,17 +492,15 @@ def random_exact_moves(seed: int, count: int) -> list[Move]:
     """count moves with ramp RAMP_EXACT: designed for the exact mode (most), as random_moves draws them, spoiled, or
     with a ramp that is neither mode."""
     rng = random.Random(seed)
+    kinds = (
+        (0.55, _exact_designed_move),
+        (0.7, _designed_move),
+        (0.85, _raw_move),
+        (1.0, _spoiled(_exact_designed_move)),
+    )
     moves: list[Move] = []
-    while len(moves) < count:
-        r = rng.random()
-        if r < 0.55:
-            move = _exact_designed_move(rng)
-        elif r < 0.7:
-            move = _designed_move(rng)
-        elif r < 0.85:
-            move = _raw_move(rng)
-        else:
-            move = _spoil(rng, _exact_designed_move(rng) if rng.random() < 0.5 else _raw_move(rng))
+    for _ in range(count):
+        move = _mixed_move(rng, kinds)
         move["ramp"] = rng.choice(_BAD_RAMPS) if rng.random() < 0.01 else RAMP_EXACT
         moves.append(move)
     return moves
@@ -499,17 +521,7 @@ def test_random_exact_moves_bit_for_bit(lib: ctypes.CDLL) -> None:
     print(f"seed {EXACT_SEED} (STEPRAMP_SEED={EXACT_SEED} replays it)")
     moves = random_exact_moves(EXACT_SEED, EXACT_COUNT)
     outcomes: Counter[str] = Counter()
-    mismatches: list[str] = []
-    for move in moves:
-        py, py_info = py_outcome_info(move)
-        c, c_info = c_outcome_info(lib, move)
-        if py != c:
-            mismatches.append(_mismatch(move, py, c))
-        elif py_info != c_info:
-            diff = {k: (py_info[k], c_info[k]) for k in py_info if py_info[k] != c_info[k]}
-            mismatches.append(f"{move}: info differs (python, C): {diff}")
-        elif c_outcome(lib, move) != c:
-            mismatches.append(f"{move}: stepramp_plan_move_ramp differs from stepramp_plan_move_info_ramp")
+    for move, py in zip(moves, _compare(lib, moves), strict=True):
         if isinstance(py, dict):
             outcomes["STEPRAMP_OK"] += 1
             outcomes["OK, m0 < 1 (decel_seed still set)"] += py["steps"] >= 2 and py["steps"] - py["sd"] - 2 < 1
@@ -518,7 +530,6 @@ def test_random_exact_moves_bit_for_bit(lib: ctypes.CDLL) -> None:
             outcomes[py] += 1
             outcomes["EOVERFLOW of a ramp constant"] += py == "STEPRAMP_EOVERFLOW" and _ramp_constant_cause(move)
     print(f"{len(moves)} exact-mode moves: {sorted(outcomes.items())}")
-    assert not mismatches, f"{len(mismatches)} of {len(moves)} moves differ:\n" + "\n".join(mismatches[:20])
     assert set(ERROR_KEYS.values()) | {"STEPRAMP_OK"} <= set(outcomes), outcomes
     assert outcomes["STEPRAMP_OK"] >= 0.4 * len(moves), outcomes
     assert min(outcomes[k] for k in ("EOVERFLOW of a ramp constant", "OK, m0 < 1 (decel_seed still set)")) >= 20

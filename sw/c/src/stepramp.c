@@ -2,34 +2,13 @@
 /*
  * stepramp driver for MicroBlaze standalone: see stepramp.h. C99, no malloc, no stdio.
  */
-#ifdef STEPRAMP_CONFIG_HEADER
-#include STEPRAMP_CONFIG_HEADER /* may define STEPRAMP_READ32 / _WRITE32 / _WRITE8 / _IDLE / _CMD_BYTE_LANE */
-#endif
+#include "stepramp_bus_priv.h" /* first: STEPRAMP_CONFIG_HEADER, STEPRAMP_READ32 / _WRITE32 / _WRITE8 / _IDLE */
 
 #include "stepramp.h"
 
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
-
-/* Register access: the Xilinx standalone BSP unless the user has defined the macros. */
-#if !defined(STEPRAMP_READ32) || !defined(STEPRAMP_WRITE32) || !defined(STEPRAMP_WRITE8)
-#include "xil_io.h"
-#endif
-#ifndef STEPRAMP_READ32
-#define STEPRAMP_READ32(addr) Xil_In32(addr)
-#endif
-#ifndef STEPRAMP_WRITE32
-#define STEPRAMP_WRITE32(addr, value) Xil_Out32((addr), (value))
-#endif
-#ifndef STEPRAMP_WRITE8
-#define STEPRAMP_WRITE8(addr, value) Xil_Out8((addr), (value))
-#endif
-
-/* Run between two STATUS polls of stepramp_wait_done. */
-#ifndef STEPRAMP_IDLE
-#define STEPRAMP_IDLE() ((void)0)
-#endif
 
 /* Byte address offset, within a register, of its bits 7:0 (see stepramp.h). */
 #ifndef STEPRAMP_CMD_BYTE_LANE
@@ -628,68 +607,45 @@ const char *stepramp_corename(uint32_t code)
     return code < CORE_TABLE_SIZE && core_names[code] != NULL ? core_names[code] : "UNKNOWN";
 }
 
+/* The driver's own results, STEPRAMP_EID .. STEPRAMP_ESWITCH, in words: X(name, text). */
+#define STEPRAMP_DRIVER_RESULTS(X)                                                                                     \
+    X(EID, "the ID register does not identify a stepramp core at this address, or one built for the other ramp "       \
+           "arithmetic (ID bit 15, G_RAMP) than the driver plans for (stepramp_init_ramp)")                            \
+    X(ETIMEOUT, "no DONE within the allowed number of status polls")                                                   \
+    X(ENOIRQ, "no interrupt from this core: neither STATUS.DONE nor STATUS.ERROR is set")                              \
+    X(EOUTPUTS, "invalid stepping outputs: mode must be 0 .. 4 and ustep_log2 0 .. 7")                                 \
+    X(EJOG_SPEED, "the jog speed must be a finite non-zero number of rad/s")                                           \
+    X(EGAP, "STEP width + STEP space clocks does not fit the shortest interval of the move, jog or change: lower "     \
+            "the speed, the STEP width or the space")                                                                  \
+    X(EPULSE, "the take-over pulse must be in 1 .. 2^31 - 1")                                                          \
+    X(EREVERSE, "the target lies inside the stop distance or behind the motor: the change needs a move back (soft "    \
+                "stop and a queued move), not a take-over")                                                            \
+    X(EIDLE, "the core is idle: there is no motion to change")                                                         \
+    X(EPENDING, "a change or a queued move is pending (STATUS.PENDING): the staging registers are locked")             \
+    X(EINPUTS, "invalid input configuration: the filter must be 0 .. 2^20 - 1 clocks, the latch source 0 .. 3 with "   \
+               "an edge selected, the polarity bits among the four inputs")                                            \
+    X(ENOLATCH, "nothing latched: STATUS.LATCHED is 0")                                                                \
+    X(EESTOP, "the E-stop is active or its fault is set (STATUS.ESTOP_FAULT clears only once ESTOP is inactive)")      \
+    X(EHOMING, "invalid homing: the switch must be HOME or a limit in its own direction, the direction -1 or +1, "     \
+               "the speeds and accelerations finite and positive, max_travel and max_polls at least 1")                \
+    X(ELATCH_SPEED, "the homing latch speed is too high for an exact zero: a step must last at least the filter + "    \
+                    "the switch's settle time + 5 clocks")                                                             \
+    X(ETRAVEL, "homing: no switch edge within max_travel steps (the motion was hard-stopped)")                         \
+    X(EBUSY, "the axis is moving")                                                                                     \
+    X(ESWITCH, "homing: the motion ended before the switch edge, or the switch was not active where the seek "         \
+               "latched it")
+
+#define DRIVER_RESULT(name, text) [STEPRAMP_##name - STEPRAMP_EID] = text,
+
+static const char *const driver_results[] = {STEPRAMP_DRIVER_RESULTS(DRIVER_RESULT)};
+
+#define DRIVER_RESULTS_SIZE (sizeof driver_results / sizeof driver_results[0])
+
 const char *stepramp_strresult(int result)
 {
-    if (result == STEPRAMP_EID) {
-        return "the ID register does not identify a stepramp core at this address, or one built for the other ramp "
-               "arithmetic (ID bit 15, G_RAMP) than the driver plans for (stepramp_init_ramp)";
-    }
-    if (result == STEPRAMP_ETIMEOUT) {
-        return "no DONE within the allowed number of status polls";
-    }
-    if (result == STEPRAMP_ENOIRQ) {
-        return "no interrupt from this core: neither STATUS.DONE nor STATUS.ERROR is set";
-    }
-    if (result == STEPRAMP_EOUTPUTS) {
-        return "invalid stepping outputs: mode must be 0 .. 4 and ustep_log2 0 .. 7";
-    }
-    if (result == STEPRAMP_EJOG_SPEED) {
-        return "the jog speed must be a finite non-zero number of rad/s";
-    }
-    if (result == STEPRAMP_EGAP) {
-        return "STEP width + STEP space clocks does not fit the shortest interval of the move, jog or change: lower "
-               "the speed, the STEP width or the space";
-    }
-    if (result == STEPRAMP_EPULSE) {
-        return "the take-over pulse must be in 1 .. 2^31 - 1";
-    }
-    if (result == STEPRAMP_EREVERSE) {
-        return "the target lies inside the stop distance or behind the motor: the change needs a move back (soft "
-               "stop and a queued move), not a take-over";
-    }
-    if (result == STEPRAMP_EIDLE) {
-        return "the core is idle: there is no motion to change";
-    }
-    if (result == STEPRAMP_EPENDING) {
-        return "a change or a queued move is pending (STATUS.PENDING): the staging registers are locked";
-    }
-    if (result == STEPRAMP_EINPUTS) {
-        return "invalid input configuration: the filter must be 0 .. 2^20 - 1 clocks, the latch source 0 .. 3 with an "
-               "edge selected, the polarity bits among the four inputs";
-    }
-    if (result == STEPRAMP_ENOLATCH) {
-        return "nothing latched: STATUS.LATCHED is 0";
-    }
-    if (result == STEPRAMP_EESTOP) {
-        return "the E-stop is active or its fault is set (STATUS.ESTOP_FAULT clears only once ESTOP is inactive)";
-    }
-    if (result == STEPRAMP_EHOMING) {
-        return "invalid homing: the switch must be HOME or a limit in its own direction, the direction -1 or +1, the "
-               "speeds and accelerations finite and positive, max_travel and max_polls at least 1";
-    }
-    if (result == STEPRAMP_ELATCH_SPEED) {
-        return "the homing latch speed is too high for an exact zero: a step must last at least the filter + the "
-               "switch's settle time + 5 clocks";
-    }
-    if (result == STEPRAMP_ETRAVEL) {
-        return "homing: no switch edge within max_travel steps (the motion was hard-stopped)";
-    }
-    if (result == STEPRAMP_EBUSY) {
-        return "the axis is moving";
-    }
-    if (result == STEPRAMP_ESWITCH) {
-        return "homing: the motion ended before the switch edge, or the switch was not active where the seek latched "
-               "it";
+    if (result >= STEPRAMP_EID && (size_t)(result - STEPRAMP_EID) < DRIVER_RESULTS_SIZE &&
+        driver_results[result - STEPRAMP_EID] != NULL) {
+        return driver_results[result - STEPRAMP_EID];
     }
     if (STEPRAMP_IS_ECORE(result)) {
         uint32_t code = STEPRAMP_ECORE_CODE(result);

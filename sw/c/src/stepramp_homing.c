@@ -48,26 +48,13 @@ int stepramp_homing_check(const stepramp_t *dev, const stepramp_homing_t *cfg)
     return have >= need ? STEPRAMP_OK : STEPRAMP_ELATCH_SPEED;
 }
 
-/* Wait for DONE and clear the flags; STEPRAMP_ECORE(code) for an error, unless it is `allowed` (0: none). */
+/* stepramp_wait_done (wait for DONE, clear the flags) within cfg->max_polls, with STEPRAMP_ECORE(allowed) taken as
+ * STEPRAMP_OK (allowed 0: no error is). */
 static int finish(const stepramp_t *dev, const stepramp_homing_t *cfg, uint32_t allowed)
 {
-    uint32_t i;
-    stepramp_status_t st;
+    int rc = stepramp_wait_done(dev, cfg->max_polls);
 
-    for (i = 0u; i < cfg->max_polls; i++) {
-        if (i != 0u) {
-            STEPRAMP_IDLE();
-        }
-        (void)stepramp_status(dev, &st);
-        if (st.done) {
-            stepramp_clear_flags(dev);
-            if (st.error && (allowed == 0u || st.err_code != allowed)) {
-                return STEPRAMP_ECORE(st.err_code);
-            }
-            return STEPRAMP_OK;
-        }
-    }
-    return STEPRAMP_ETIMEOUT;
+    return (allowed != 0u && rc == STEPRAMP_ECORE(allowed)) ? STEPRAMP_OK : rc;
 }
 
 /* |a - b| for two positions, in 64 bits */

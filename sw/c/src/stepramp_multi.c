@@ -2,31 +2,13 @@
 /*
  * stepramp multi-axis driver: see stepramp_multi.h. C99, no malloc, no stdio.
  */
-#ifdef STEPRAMP_CONFIG_HEADER
-#include STEPRAMP_CONFIG_HEADER /* may define STEPRAMP_READ32 / _WRITE32 / _IDLE */
-#endif
+#include "stepramp_bus_priv.h" /* first: STEPRAMP_CONFIG_HEADER, STEPRAMP_READ32 / _WRITE32 / _IDLE (as stepramp.c) */
 
 #include "stepramp_multi.h"
 
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
-
-/* Register access: the Xilinx standalone BSP unless the user has defined the macros (as in stepramp.c). */
-#if !defined(STEPRAMP_READ32) || !defined(STEPRAMP_WRITE32)
-#include "xil_io.h"
-#endif
-#ifndef STEPRAMP_READ32
-#define STEPRAMP_READ32(addr) Xil_In32(addr)
-#endif
-#ifndef STEPRAMP_WRITE32
-#define STEPRAMP_WRITE32(addr, value) Xil_Out32((addr), (value))
-#endif
-
-/* Run between two AXES_STATUS polls of stepramp_multi_wait_done. */
-#ifndef STEPRAMP_IDLE
-#define STEPRAMP_IDLE() ((void)0)
-#endif
 
 static uint32_t read_global(const stepramp_multi_t *m, uint32_t off)
 {
@@ -42,6 +24,26 @@ static void write_global(const stepramp_multi_t *m, uint32_t off, uint32_t value
 static uint32_t all_axes(const stepramp_multi_t *m)
 {
     return (m->axes >= 32u) ? UINT32_C(0xFFFFFFFF) : ((UINT32_C(1) << m->axes) - 1u);
+}
+
+/* STEPRAMP_ENULL without the top, STEPRAMP_EMULTI_AXES for a mask with a bit beyond its axes, else STEPRAMP_OK. */
+static int check_mask(const stepramp_multi_t *m, uint32_t mask)
+{
+    if (m == NULL) {
+        return STEPRAMP_ENULL;
+    }
+    return ((mask & ~all_axes(m)) != 0u) ? STEPRAMP_EMULTI_AXES : STEPRAMP_OK;
+}
+
+/* An axis mask into a global register (SYNC_START, SYNC_SOFT_STOP, IRQ_MASK), once check_mask has passed it. */
+static int write_mask(const stepramp_multi_t *m, uint32_t off, uint32_t mask)
+{
+    int rc = check_mask(m, mask);
+
+    if (rc == STEPRAMP_OK) {
+        write_global(m, off, mask);
+    }
+    return rc;
 }
 
 int stepramp_multi_init(stepramp_multi_t *m, uintptr_t base, double fclk, double spr, uint32_t prescale)
@@ -84,26 +86,12 @@ stepramp_t *stepramp_multi_axis(stepramp_multi_t *m, uint32_t i)
 
 int stepramp_multi_sync_start(const stepramp_multi_t *m, uint32_t mask)
 {
-    if (m == NULL) {
-        return STEPRAMP_ENULL;
-    }
-    if ((mask & ~all_axes(m)) != 0u) {
-        return STEPRAMP_EMULTI_AXES;
-    }
-    write_global(m, STEPRAMP_MULTI_REG_SYNC_START, mask);
-    return STEPRAMP_OK;
+    return write_mask(m, STEPRAMP_MULTI_REG_SYNC_START, mask);
 }
 
 int stepramp_multi_sync_soft_stop(const stepramp_multi_t *m, uint32_t mask)
 {
-    if (m == NULL) {
-        return STEPRAMP_ENULL;
-    }
-    if ((mask & ~all_axes(m)) != 0u) {
-        return STEPRAMP_EMULTI_AXES;
-    }
-    write_global(m, STEPRAMP_MULTI_REG_SYNC_SOFT_STOP, mask);
-    return STEPRAMP_OK;
+    return write_mask(m, STEPRAMP_MULTI_REG_SYNC_SOFT_STOP, mask);
 }
 
 uint32_t stepramp_multi_status(const stepramp_multi_t *m, stepramp_axes_status_t *status)
@@ -125,14 +113,7 @@ uint32_t stepramp_multi_status(const stepramp_multi_t *m, stepramp_axes_status_t
 
 int stepramp_multi_set_irq_mask(const stepramp_multi_t *m, uint32_t mask)
 {
-    if (m == NULL) {
-        return STEPRAMP_ENULL;
-    }
-    if ((mask & ~all_axes(m)) != 0u) {
-        return STEPRAMP_EMULTI_AXES;
-    }
-    write_global(m, STEPRAMP_MULTI_REG_IRQ_MASK, mask);
-    return STEPRAMP_OK;
+    return write_mask(m, STEPRAMP_MULTI_REG_IRQ_MASK, mask);
 }
 
 uint32_t stepramp_multi_irq_mask(const stepramp_multi_t *m)
@@ -225,12 +206,10 @@ int stepramp_multi_wait_done(stepramp_multi_t *m, uint32_t mask, uint32_t max_po
     uint32_t poll;
     uint32_t i;
     stepramp_axes_status_t st;
+    int rc = check_mask(m, mask);
 
-    if (m == NULL) {
-        return STEPRAMP_ENULL;
-    }
-    if ((mask & ~all_axes(m)) != 0u) {
-        return STEPRAMP_EMULTI_AXES;
+    if (rc != STEPRAMP_OK) {
+        return rc;
     }
     m->failed_mask = 0u;
     for (poll = 0; poll < max_polls; poll++) {
@@ -253,16 +232,18 @@ int stepramp_multi_wait_done(stepramp_multi_t *m, uint32_t mask, uint32_t max_po
     return STEPRAMP_ETIMEOUT;
 }
 
+/* This driver's own results, STEPRAMP_EMULTI_ID .. STEPRAMP_EMULTI_AXIS, in words */
+static const char *const multi_results[] = {
+    [STEPRAMP_EMULTI_ID - STEPRAMP_EMULTI_ID] =
+        "the ID register does not identify a multi-axis stepramp top (magic 'SM', 1 .. 8 axes) at this address",
+    [STEPRAMP_EMULTI_AXES - STEPRAMP_EMULTI_ID] =
+        "more plans or step counts than the top has axes, or an axis mask beyond its axes",
+    [STEPRAMP_EMULTI_AXIS - STEPRAMP_EMULTI_ID] = "an axis flagged an error (see failed_mask and results[])"};
+
 const char *stepramp_multi_strresult(int result)
 {
-    if (result == STEPRAMP_EMULTI_ID) {
-        return "the ID register does not identify a multi-axis stepramp top (magic 'SM', 1 .. 8 axes) at this address";
-    }
-    if (result == STEPRAMP_EMULTI_AXES) {
-        return "more plans or step counts than the top has axes, or an axis mask beyond its axes";
-    }
-    if (result == STEPRAMP_EMULTI_AXIS) {
-        return "an axis flagged an error (see failed_mask and results[])";
+    if (result >= STEPRAMP_EMULTI_ID && result <= STEPRAMP_EMULTI_AXIS) {
+        return multi_results[result - STEPRAMP_EMULTI_ID];
     }
     return stepramp_strresult(result);
 }

@@ -16,18 +16,6 @@
 
 #include "test_check.h"
 
-/* CHECK(got == want) for 32-bit words, printing both */
-#define CHECK_EQ(got, want)                                                                                            \
-    do {                                                                                                               \
-        unsigned long got_ = (unsigned long)(got), want_ = (unsigned long)(want);                                      \
-        g_checks++;                                                                                                    \
-        if (got_ != want_) {                                                                                           \
-            g_failures++;                                                                                              \
-            printf("%s:%d: %s: %s = 0x%08lx, expected %s = 0x%08lx\n", __FILE__, __LINE__, __func__, #got, got_,       \
-                   #want, want_);                                                                                      \
-        }                                                                                                              \
-    } while (0)
-
 #define BASE ((uintptr_t)0x40A00000u)
 #define GOOD_ID 0x53520003u
 

@@ -18,17 +18,6 @@
 
 #include "test_check.h"
 
-#define CHECK_EQ(got, want)                                                                                            \
-    do {                                                                                                               \
-        unsigned long got_ = (unsigned long)(got), want_ = (unsigned long)(want);                                      \
-        g_checks++;                                                                                                    \
-        if (got_ != want_) {                                                                                           \
-            g_failures++;                                                                                              \
-            printf("%s:%d: %s: %s = 0x%08lx, expected %s = 0x%08lx\n", __FILE__, __LINE__, __func__, #got, got_,       \
-                   #want, want_);                                                                                      \
-        }                                                                                                              \
-    } while (0)
-
 #define BASE ((uintptr_t)0x44A00000u)
 #define WORDS 1024u /* 4 KiB: 16 windows of 256 bytes */
 #define LOG_MAX 512u
@@ -180,13 +169,19 @@ void stepramp_hostbus_idle(void)
 
 #define MULTI_ID(axes) (0x534D0100u | (axes))
 
+/* A fresh fake top of `axes` axes (fake_reset) and stepramp_multi_init's result on it (fclk 1 MHz, 200 steps/rev) */
+static int init_top(stepramp_multi_t *m, uint32_t axes, uint32_t prescale)
+{
+    fake_reset(MULTI_ID(axes));
+    return stepramp_multi_init(m, BASE, 1e6, 200.0, prescale);
+}
+
 static void test_init(void)
 {
     stepramp_multi_t m;
     uint32_t i;
 
-    fake_reset(MULTI_ID(3u));
-    CHECK_EQ(stepramp_multi_init(&m, BASE, 1e6, 200.0, 2u), STEPRAMP_OK);
+    CHECK_EQ(init_top(&m, 3u, 2u), STEPRAMP_OK);
     CHECK_EQ(m.axes, 3u);
     CHECK_EQ(m.version, 1u);
     for (i = 0; i < 3u; i++) {
@@ -200,10 +195,8 @@ static void test_init(void)
 
     fake_reset(0x53520006u); /* a single core at this address */
     CHECK_EQ(stepramp_multi_init(&m, BASE, 1e6, 200.0, 1u), STEPRAMP_EMULTI_ID);
-    fake_reset(MULTI_ID(0u));
-    CHECK_EQ(stepramp_multi_init(&m, BASE, 1e6, 200.0, 1u), STEPRAMP_EMULTI_ID);
-    fake_reset(MULTI_ID(9u));
-    CHECK_EQ(stepramp_multi_init(&m, BASE, 1e6, 200.0, 1u), STEPRAMP_EMULTI_ID);
+    CHECK_EQ(init_top(&m, 0u, 1u), STEPRAMP_EMULTI_ID);
+    CHECK_EQ(init_top(&m, 9u, 1u), STEPRAMP_EMULTI_ID);
     fake_reset(MULTI_ID(2u));
     fake.regs[(2u * WINDOW + A_ID) / 4u] = 0u; /* axis 1's window holds no core */
     CHECK_EQ(stepramp_multi_init(&m, BASE, 1e6, 200.0, 1u), STEPRAMP_EMULTI_ID);
@@ -216,8 +209,7 @@ static void test_global_registers(void)
     stepramp_multi_t m;
     stepramp_axes_status_t st;
 
-    fake_reset(MULTI_ID(3u));
-    CHECK_EQ(stepramp_multi_init(&m, BASE, 1e6, 200.0, 1u), STEPRAMP_OK);
+    CHECK_EQ(init_top(&m, 3u, 1u), STEPRAMP_OK);
     CHECK_EQ(stepramp_multi_sync_start(&m, 0x5u), STEPRAMP_OK);
     CHECK_EQ(fake.writes, 1u);
     CHECK_EQ(fake.log[0].offset, G_SYNC_START);
@@ -266,8 +258,7 @@ static void test_plan_coordinated(void)
     const int64_t steps[4] = {48, -29, 0, 17};
     uint32_t i;
 
-    fake_reset(MULTI_ID(4u));
-    CHECK_EQ(stepramp_multi_init(&m, BASE, 1e6, 200.0, 2u), STEPRAMP_OK);
+    CHECK_EQ(init_top(&m, 4u, 2u), STEPRAMP_OK);
     CHECK_EQ(stepramp_plan_coordinated(want, steps, 4u, ACCEL, DECEL, SPEED, 200.0, 1e6, 2u), STEPRAMP_OK);
     memset(got, 0, sizeof got);
     CHECK_EQ(stepramp_multi_plan_coordinated(&m, got, steps, 4u, ACCEL, DECEL, SPEED), STEPRAMP_OK);
@@ -278,8 +269,7 @@ static void test_plan_coordinated(void)
     CHECK_EQ(fake.writes, 0u);
     /* the planner's own error passes through; too many axes */
     CHECK_EQ(stepramp_multi_plan_coordinated(&m, got, steps, 0u, ACCEL, DECEL, SPEED), STEPRAMP_ECOORD_AXES);
-    fake_reset(MULTI_ID(3u));
-    CHECK_EQ(stepramp_multi_init(&m, BASE, 1e6, 200.0, 2u), STEPRAMP_OK);
+    CHECK_EQ(init_top(&m, 3u, 2u), STEPRAMP_OK);
     CHECK_EQ(stepramp_multi_plan_coordinated(&m, got, steps, 4u, ACCEL, DECEL, SPEED), STEPRAMP_EMULTI_AXES);
     {
         const int64_t three[3] = {48, -29, 17};
@@ -310,8 +300,7 @@ static void test_move_coordinated(void)
     const int64_t steps[3] = {0, 48, -29};
     uint32_t i, last_axis_write[3] = {0u, 0u, 0u}, writes_in[3] = {0u, 0u, 0u};
 
-    fake_reset(MULTI_ID(3u));
-    CHECK_EQ(stepramp_multi_init(&m, BASE, 1e6, 200.0, 2u), STEPRAMP_OK);
+    CHECK_EQ(init_top(&m, 3u, 2u), STEPRAMP_OK);
     CHECK_EQ(stepramp_plan_coordinated(want, steps, 3u, ACCEL, DECEL, SPEED, 200.0, 1e6, 2u), STEPRAMP_OK);
     CHECK_EQ(stepramp_multi_move_coordinated(&m, plans, steps, 3u, ACCEL, DECEL, SPEED), STEPRAMP_OK);
     CHECK(memcmp(plans, want, sizeof want) == 0);
@@ -352,8 +341,7 @@ static void test_wait_done(void)
     stepramp_multi_t m;
     uint32_t i;
 
-    fake_reset(MULTI_ID(3u));
-    CHECK_EQ(stepramp_multi_init(&m, BASE, 1e6, 200.0, 1u), STEPRAMP_OK);
+    CHECK_EQ(init_top(&m, 3u, 1u), STEPRAMP_OK);
     fake.done_after = 4u;
     fake.done_bits = 0x5u;
     CHECK_EQ(stepramp_multi_wait_done(&m, 0x5u, 10u), STEPRAMP_OK);

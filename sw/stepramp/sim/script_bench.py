@@ -114,9 +114,24 @@ class _AxilWriter:
         raise TimeoutError(f"read {addr:#x}: no RVALID within 100 clocks")
 
 
+def _is_axil(top: str) -> bool:
+    """Whether the top is an AXI4-Lite one (aclk, aresetn), not a PLB-like one (clk, rst)."""
+    return top.endswith("axil")
+
+
+def _clock(dut: Any, top: str) -> Any:
+    return dut.aclk if _is_axil(top) else dut.clk
+
+
+def _input_cfg(script: Mapping[str, Any]) -> int:
+    """INPUT_CFG for a script: the limit inputs on, LIMIT_HARD as the script's "limit_hard"."""
+    cfg = 1 << INPUT_CFG.field("LIMIT_EN").lsb
+    return cfg | (int(bool(script.get("limit_hard"))) << INPUT_CFG.field("LIMIT_HARD").lsb)
+
+
 async def _reset(dut: Any, top: str) -> Any:
     """Reset the top and return its register access."""
-    if top.endswith("axil"):
+    if _is_axil(top):
         bus = _AxilWriter(dut)
         await apply_reset(dut.aclk, dut.aresetn, active=0)
         return bus
@@ -154,27 +169,29 @@ class _Recorder:
                 self.errors.append((now_cycles(CLK_PERIOD_PS), int(regfile.err_code_r.value)))
 
 
+async def _after_edge(origin: int, a: Any) -> None:
+    """Wait until half a clock after edge origin + a, where a script's pin change falls (it must not be past)."""
+    now = get_sim_time("ps")
+    half = (origin + int(a)) * CLK_PERIOD_PS + CLK_PERIOD_PS // 2
+    assert now <= half, f"the pin change after edge {a} is late"
+    if half > now:
+        await Timer(half - now, unit="ps")
+
+
 async def _drive_pins(dut: Any, clk: Any, origin: int, pins: list[list[Any]]) -> None:
     """Each (a, pin, level) of the script: the pin (active high) takes the level after edge origin + a."""
     for a, name, level in pins:
-        edge = origin + int(a)
-        now = get_sim_time("ps")
-        half = edge * CLK_PERIOD_PS + CLK_PERIOD_PS // 2
-        assert now <= half, f"the pin change after edge {a} is late"
-        if half > now:
-            await Timer(half - now, unit="ps")
+        await _after_edge(origin, a)
         getattr(dut, str(name)).value = int(level)
 
 
 async def _play(dut: Any, top: str, script: dict[str, Any]) -> dict[str, Any]:
-    clk = dut.aclk if top == "stepramp_axil" else dut.clk
+    clk = _clock(dut, top)
     quiet_inputs(dut)
     bus = await _reset(dut, top)
     if script.get("pins") or script.get("input_filter") or script.get("limit_hard"):
-        cfg = 1 << INPUT_CFG.field("LIMIT_EN").lsb
-        cfg |= int(bool(script.get("limit_hard"))) << INPUT_CFG.field("LIMIT_HARD").lsb
         await bus.write(offset("INPUT_FILTER"), int(script.get("input_filter", 0)))
-        await bus.write(offset("INPUT_CFG"), cfg)
+        await bus.write(offset("INPUT_CFG"), _input_cfg(script))
     rec = _Recorder(dut, clk)
     regfile = dut.core_inst.regfile_inst
     log = player.WriteLog(regfile.wr, regfile.waddr)
@@ -210,18 +227,28 @@ def _backstop_ns() -> int:
     return (clocks + 10_000) * CLK_PERIOD_NS
 
 
+def _request_scripts() -> list[dict[str, Any]]:
+    """The request's scripts (STEPRAMP_SCRIPT_REQUEST, written by stepramp.sim.script_sim)."""
+    scripts: list[dict[str, Any]] = json.loads(Path(os.environ["STEPRAMP_SCRIPT_REQUEST"]).read_text())["scripts"]
+    return scripts
+
+
+def _write_results(results: list[dict[str, Any]]) -> None:
+    """Per script what the RTL did, to STEPRAMP_SCRIPT_RESULT (stepramp.sim.script_sim reads it)."""
+    Path(os.environ["STEPRAMP_SCRIPT_RESULT"]).write_text(json.dumps({"results": results}))
+
+
 @cocotb.test(timeout_time=_backstop_ns(), timeout_unit="ns")
 async def play_scripts(dut: Any) -> None:
     """Play every script of the request, each from a reset, and write what the RTL did."""
-    request = json.loads(Path(os.environ["STEPRAMP_SCRIPT_REQUEST"]).read_text())
     top = dut._name
-    start_clock(dut.aclk if top == "stepramp_axil" else dut.clk)
+    start_clock(_clock(dut, top))
     quiet_inputs(dut)
     watch_core(dut.core_inst)
     results = []
-    for script in request["scripts"]:
+    for script in _request_scripts():
         results.append(await _play(dut, top, script))
-    Path(os.environ["STEPRAMP_SCRIPT_RESULT"]).write_text(json.dumps({"results": results}))
+    _write_results(results)
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -262,12 +289,7 @@ async def _drive_multi_pins(dut: Any, origin: int, pins: list[list[Any]]) -> Non
     """(a, pin, axis, level): axis's bit of the pin (ESTOP: the one pin) takes the level after edge origin + a."""
     shadow = {"limit_neg": 0, "limit_pos": 0, "home": 0}
     for a, name, axis, level in pins:
-        edge = origin + int(a)
-        now = get_sim_time("ps")
-        half = edge * CLK_PERIOD_PS + CLK_PERIOD_PS // 2
-        assert now <= half, f"the pin change after edge {a} is late"
-        if half > now:
-            await Timer(half - now, unit="ps")
+        await _after_edge(origin, a)
         if name == "estop":
             dut.estop.value = int(level)
         else:
@@ -277,16 +299,14 @@ async def _drive_multi_pins(dut: Any, origin: int, pins: list[list[Any]]) -> Non
 
 
 async def _play_multi(dut: Any, top: str, script: dict[str, Any]) -> dict[str, Any]:
-    clk = dut.aclk if top.endswith("axil") else dut.clk
+    clk = _clock(dut, top)
     axes = int(script["axes"])
     quiet_inputs(dut)
     bus = await _reset(dut, top)
-    cfg = 1 << INPUT_CFG.field("LIMIT_EN").lsb
-    cfg |= int(bool(script.get("limit_hard"))) << INPUT_CFG.field("LIMIT_HARD").lsb
     for axis in range(axes):
         base = axis_base(axis)
         await bus.write(base + offset("INPUT_FILTER"), int(script.get("input_filter", 0)))
-        await bus.write(base + offset("INPUT_CFG"), cfg)
+        await bus.write(base + offset("INPUT_CFG"), _input_cfg(script))
     rec = _MultiRecorder(dut, axes)
     # the top's write strobes (stepramp_multi's wr and waddr: an axis takes a write at the edge the top samples it)
     log = player.WriteLog(dut.multi_inst.wr, dut.multi_inst.waddr)
@@ -323,9 +343,8 @@ async def _play_multi(dut: Any, top: str, script: dict[str, Any]) -> dict[str, A
 @cocotb.test(timeout_time=_backstop_ns(), timeout_unit="ns")
 async def play_multi_scripts(dut: Any) -> None:
     """Play every multi-axis script of the request on stepramp_multi_plb / _axil, each from a reset."""
-    request = json.loads(Path(os.environ["STEPRAMP_SCRIPT_REQUEST"]).read_text())
     top = dut._name
-    start_clock(dut.aclk if top.endswith("axil") else dut.clk)
+    start_clock(_clock(dut, top))
     quiet_inputs(dut)
-    results = [await _play_multi(dut, top, script) for script in request["scripts"]]
-    Path(os.environ["STEPRAMP_SCRIPT_RESULT"]).write_text(json.dumps({"results": results}))
+    results = [await _play_multi(dut, top, script) for script in _request_scripts()]
+    _write_results(results)

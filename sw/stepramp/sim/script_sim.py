@@ -10,7 +10,7 @@ is what they are compared with (tb/test_script_rtl.py).
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -22,15 +22,42 @@ from stepramp.sim.runner import run_cocotb
 TOPS = {"plb": "stepramp_plb", "axil": "stepramp_axil"}
 
 
+def _play(
+    entity: str,
+    testcase: str,
+    scripts: list[dict[str, Any]],
+    build: Path,
+    parameters: Mapping[str, object] | None,
+    waves: Path | None = None,
+) -> list[dict[str, Any]]:
+    """Run stepramp.sim.script_bench's `testcase` on the top `entity` built with `parameters`, with the request
+    {"scripts": scripts} in build; the "results" it wrote (RuntimeError when it wrote none)."""
+    build = build.resolve()
+    build.mkdir(parents=True, exist_ok=True)
+    request, result = build / "scripts.json", build / "scripts_result.json"
+    result.unlink(missing_ok=True)
+    request.write_text(json.dumps({"scripts": scripts}))
+    run_cocotb(
+        entity,
+        "stepramp.sim.script_bench",
+        build,
+        parameters=parameters,
+        waves=waves,
+        extra_env={"STEPRAMP_SCRIPT_REQUEST": str(request), "STEPRAMP_SCRIPT_RESULT": str(result)},
+        testcase=testcase,
+        log_file=build / "sim.log",
+    )
+    if not result.exists():
+        raise RuntimeError(f"the simulation wrote no result; see {build / 'sim.log'}")
+    out: list[dict[str, Any]] = json.loads(result.read_text())["results"]
+    return out
+
+
 def simulate_planned(
     planned: Sequence[ScriptResult], build: Path, top: str = "plb", waves: Path | None = None, ramp: int = 0
 ) -> list[dict[str, Any]]:
     """Play the planned scripts in one simulation (each from a reset) on a top built with G_RAMP = ramp (the scripts'
     "ramp"); per script the RTL's {"edges", "positions", "core_errors", "commits"}."""
-    build = build.resolve()
-    build.mkdir(parents=True, exist_ok=True)
-    request, result = build / "scripts.json", build / "scripts_result.json"
-    result.unlink(missing_ok=True)
     scripts = [
         {
             "actions": [{"at": a.at, "writes": [list(w) for w in a.writes], "ctrl": a.ctrl} for a in p.actions],
@@ -42,21 +69,7 @@ def simulate_planned(
         }
         for p in planned
     ]
-    request.write_text(json.dumps({"scripts": scripts}))
-    run_cocotb(
-        TOPS.get(top, top),
-        "stepramp.sim.script_bench",
-        build,
-        parameters={"G_RAMP": ramp} if ramp else None,
-        waves=waves,
-        extra_env={"STEPRAMP_SCRIPT_REQUEST": str(request), "STEPRAMP_SCRIPT_RESULT": str(result)},
-        testcase="play_scripts",
-        log_file=build / "sim.log",
-    )
-    if not result.exists():
-        raise RuntimeError(f"the simulation wrote no result; see {build / 'sim.log'}")
-    out: list[dict[str, Any]] = json.loads(result.read_text())["results"]
-    return out
+    return _play(TOPS.get(top, top), "play_scripts", scripts, build, {"G_RAMP": ramp} if ramp else None, waves)
 
 
 def simulate_script(script: dict[str, Any], build: Path, top: str = "plb", waves: Path | None = None) -> dict[str, Any]:
@@ -80,10 +93,6 @@ def simulate_multi(planned: Sequence[MultiResult], build: Path, top: str = "plb"
     axes = {p.axes for p in planned}
     if len(axes) != 1:
         raise ValueError(f"the scripts of one simulation need one axis count, got {sorted(axes)}")
-    build = build.resolve()
-    build.mkdir(parents=True, exist_ok=True)
-    request, result = build / "scripts.json", build / "scripts_result.json"
-    result.unlink(missing_ok=True)
     scripts = []
     for p in planned:
         actions = played_actions(p)
@@ -104,17 +113,4 @@ def simulate_multi(planned: Sequence[MultiResult], build: Path, top: str = "plb"
                 "limit_hard": first.limit_hard,
             }
         )
-    request.write_text(json.dumps({"scripts": scripts}))
-    run_cocotb(
-        MULTI_TOPS.get(top, top),
-        "stepramp.sim.script_bench",
-        build,
-        parameters={"G_AXES": axes.pop()},
-        extra_env={"STEPRAMP_SCRIPT_REQUEST": str(request), "STEPRAMP_SCRIPT_RESULT": str(result)},
-        testcase="play_multi_scripts",
-        log_file=build / "sim.log",
-    )
-    if not result.exists():
-        raise RuntimeError(f"the simulation wrote no result; see {build / 'sim.log'}")
-    out: list[dict[str, Any]] = json.loads(result.read_text())["results"]
-    return out
+    return _play(MULTI_TOPS.get(top, top), "play_multi_scripts", scripts, build, {"G_AXES": axes.pop()})
