@@ -47,9 +47,6 @@ architecture rtl of stepramp_divider is
   constant C_ALIGN : std_logic_vector(1 downto 0) := "01";
   constant C_ITER  : std_logic_vector(1 downto 0) := "10";
 
-  -- No bit pair selected (the select's AND-OR of the step is zero).
-  constant C_NO_PAIR : std_logic_vector(C_PAIRS - 1 downto 0) := (others => '0');
-
   signal state  : std_logic_vector(1 downto 0);
   signal num_r  : unsigned(2 * C_PAIRS - 1 downto 0);
   signal den_r  : unsigned(G_DEN_WIDTH - 1 downto 0);
@@ -200,14 +197,7 @@ begin
           hi_v := ('0' & sel_r(C_PAIRS - 1 downto 1)) and num_odd;
           lo_v := ('0' & sel_r(C_PAIRS - 1 downto 1)) and num_even;
 
-          pair := "00";
-          if (hi_v /= C_NO_PAIR) then
-            pair(1) := '1';
-          end if;
-          if (lo_v /= C_NO_PAIR) then
-            pair(0) := '1';
-          end if;
-          pair_r <= pair;
+          pair_r <= any(hi_v) & any(lo_v);
 
           -- The three trial differences are three subtractors side by side in hardware; a simulator computes
           -- trial - 2 D only when 3 D does not fit, and trial - D only when 2 D does not either.

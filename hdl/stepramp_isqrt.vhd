@@ -95,8 +95,6 @@ architecture rtl of stepramp_isqrt is
   signal rad_odd  : std_logic_vector(C_PAIRS + 1 downto 0);
   signal rad_even : std_logic_vector(C_PAIRS + 1 downto 0);
 
-  constant C_NO_PAIR : std_logic_vector(C_PAIRS + 1 downto 0) := (others => '0');
-
 begin
 
   assert G_WIDTH >= 4 and G_WIDTH <= 128 and G_WIDTH mod 2 = 0
@@ -128,7 +126,6 @@ begin
 
   sqrt_proc : process (clk) is
 
-    variable pair  : unsigned(1 downto 0);
     variable sel   : std_logic_vector(C_PAIRS + 1 downto 0);
     variable first : natural range 0 to 2 ** C_IDX_W - 1;
     -- The next pair's high and low bit, one place per pair (all zero but the selected one).
@@ -195,14 +192,7 @@ begin
           hi_v := sel_r and rad_odd;
           lo_v := sel_r and rad_even;
 
-          pair := "00";
-          if (hi_v /= C_NO_PAIR) then
-            pair(1) := '1';
-          end if;
-          if (lo_v /= C_NO_PAIR) then
-            pair(0) := '1';
-          end if;
-          pair_r <= pair;
+          pair_r <= any(hi_v) & any(lo_v);
 
           -- A carry-select subtractor in hardware (both high parts side by side); a simulator computes only the high
           -- part the low part's borrow picks.

@@ -124,23 +124,6 @@ architecture rtl of stepramp_multi is
 
   end function field;
 
-  function any (
-    bits : std_logic_vector
-  ) return std_logic is
-  begin
-
-    for i in bits'range loop
-
-      if (bits(i) = '1') then
-        return '1';
-      end if;
-
-    end loop;
-
-    return '0';
-
-  end function any;
-
   constant C_ID : std_logic_vector(31 downto 0) := C_MULTI_ID_MAGIC & C_MULTI_ID_VERSION &
                                                    std_logic_vector(to_unsigned(G_AXES, 8));
 

@@ -1,6 +1,6 @@
 -- SPDX-License-Identifier: MIT
--- stepramp_pkg: helpers shared by the stepramp entities (log2_ceil, clog2, to_sl, csel_sub, csel_sub_int); compiled
--- first (docs/integration.md, "Compile order").
+-- stepramp_pkg: helpers shared by the stepramp entities (log2_ceil, clog2, to_sl, any, csel_sub, csel_sub_int);
+-- compiled first (docs/integration.md, "Compile order").
 
 library ieee;
   use ieee.std_logic_1164.all;
@@ -21,6 +21,11 @@ package stepramp_pkg is
   -- '1' for true, '0' for false.
   function to_sl (
     b : boolean
+  ) return std_logic;
+
+  -- '1' when a bit of bits is '1' (their OR).
+  function any (
+    bits : std_logic_vector
   ) return std_logic;
 
   -- trial - sub (both of one width w >= 2, modulo 2^w) as a carry-select subtractor: the low (w + 1) / 2 bits are one
@@ -100,6 +105,18 @@ package body stepramp_pkg is
     return '0';
 
   end function to_sl;
+
+  function any (
+    bits : std_logic_vector
+  ) return std_logic is
+
+    constant C_NONE : std_logic_vector(bits'range) := (others => '0');
+
+  begin
+
+    return to_sl(bits /= C_NONE);
+
+  end function any;
 
   function csel_sub (
     trial : unsigned;
