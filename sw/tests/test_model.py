@@ -36,6 +36,7 @@ from stepramp.sim.profiles import (
     RANDOM_PROFILES,
     Profile,
     design_args,
+    random_design_moves,
 )
 
 BOUND_C0 = 0.008  # in units of c0_slow: half of the recurrence's 0.014 c0 per ramp is left (docs/algorithm.md)
@@ -96,26 +97,18 @@ def check_move(args: dict[str, Any], label: str = "") -> Result:
 
 
 def _random_moves(seed: int, count: int, long_moves: int) -> list[dict[str, Any]]:
-    """Random valid moves: varied spr, f_clk, prescale 1..8, accel/decel ratio up to 100 both ways."""
-    rng = random.Random(seed)
-    out: list[dict[str, Any]] = []
-    while len(out) < count:
-        prescale = rng.randint(1, 8)
-        spr = rng.choice((24.0, 200.0, 400.0, 1000.0, 1600.0, 3200.0, 25600.0, 51200.0)) * rng.choice((1, 1.37))
-        fclk = math.exp(rng.uniform(math.log(1e5), math.log(2e8)))
-        min_ticks = math.ceil(64 / prescale)
-        period = min_ticks + math.exp(rng.uniform(0.0, math.log(1e5)))
-        n_a = math.exp(rng.uniform(math.log(0.05), math.log(3e4)))
-        n_d = n_a * math.exp(rng.uniform(-math.log(100.0), math.log(100.0)))
-        steps = rng.randint(20_000, 200_000) if len(out) < long_moves else rng.randint(1, 5000)
-        steps *= rng.choice((1, -1))
-        args = design_args(steps, period, n_a, n_d, spr, fclk, prescale)
-        try:
-            plan_move(**args)
-        except ValueError:
-            continue
-        out.append(args)
-    return out
+    """Random valid moves (random_design_moves): cruise intervals from 64 clocks, the first long_moves of 20,000 ..
+    200,000 steps, the others 1 .. 5,000."""
+    return random_design_moves(
+        seed,
+        count,
+        long_moves,
+        min_clks=64,
+        period_span=1e5,
+        long_steps=(20_000, 200_000),
+        short_steps=(1, 5000),
+        plan=lambda args: plan_move(**args),
+    )
 
 
 RANDOM_MOVES = _random_moves(20240611, 320, long_moves=5)

@@ -12,10 +12,11 @@ from __future__ import annotations
 import dataclasses
 import math
 import random
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from stepramp.board.plan import MIN_INTERVAL_CLKS, Plan
+from stepramp.board.plan import MIN_INTERVAL_CLKS, RAMP_EXACT, Plan, plan_move
 
 
 @dataclass(frozen=True)
@@ -253,8 +254,6 @@ MIN_INTERVAL_CLKS_EXACT = 256."""
 def exact_factor(profile: Profile) -> int:
     """The smallest k in 1 .. EXACT_CLOCK_FACTOR for which the exact mode takes the profile at k times its clock and
     PRESCALE (the same ticks, every interval k times as many clocks); ValueError when none does."""
-    from stepramp.board.plan import RAMP_EXACT, plan_move
-
     for k in range(1, EXACT_CLOCK_FACTOR + 1):
         try:
             plan_move(**_scaled(profile, k).args(), ramp=RAMP_EXACT)
@@ -279,25 +278,55 @@ EXACT_PROFILES: list[Profile] = [exact_profile(p) for p in PROFILES]
 """The 64 profiles in exact mode (exact_profile; plan them with ramp=RAMP_EXACT)."""
 
 
-def random_exact_moves(seed: int, count: int, long_moves: int) -> list[dict[str, Any]]:
-    """Random moves the exact mode takes (sw/tests/test_exact.py, scripts/exact_check.py): spr, f_clk and PRESCALE
-    1 .. 8 varied, accel / decel up to 100 both ways; the first long_moves of 20,000 .. 100,000 steps."""
-    from stepramp.board.plan import RAMP_EXACT, plan_move
+SPRS = (24.0, 200.0, 400.0, 1000.0, 1600.0, 3200.0, 25600.0, 51200.0)
+"""The steps per revolution random_design_moves draws from (each also times 1.37)."""
 
+
+def random_design_moves(
+    seed: int,
+    count: int,
+    long_moves: int,
+    *,
+    min_clks: int,
+    period_span: float,
+    long_steps: tuple[int, int],
+    short_steps: tuple[int, int],
+    plan: Callable[[dict[str, Any]], object],
+    sprs: tuple[float, ...] = SPRS,
+) -> list[dict[str, Any]]:
+    """count random plan_move arguments (design_args), the ones plan takes without a ValueError: PRESCALE 1 .. 8,
+    spr from sprs (times 1 or 1.37), f_clk 100 kHz .. 200 MHz (log-uniform), a cruise period of min_clks / PRESCALE
+    ticks plus up to period_span more, ramps of 0.05 .. 30,000 steps to reach it and a deceleration ratio up to 100
+    both ways; the first long_moves of long_steps steps, the others of short_steps, either direction."""
     rng = random.Random(seed)
     out: list[dict[str, Any]] = []
     while len(out) < count:
         prescale = rng.randint(1, 8)
-        spr = rng.choice((24.0, 200.0, 400.0, 1000.0, 1600.0, 3200.0, 25600.0, 51200.0)) * rng.choice((1, 1.37))
+        spr = rng.choice(sprs) * rng.choice((1, 1.37))
         fclk = math.exp(rng.uniform(math.log(1e5), math.log(2e8)))
-        period = math.ceil(256 / prescale) + math.exp(rng.uniform(0.0, math.log(1e4)))
+        period = math.ceil(min_clks / prescale) + math.exp(rng.uniform(0.0, math.log(period_span)))
         n_a = math.exp(rng.uniform(math.log(0.05), math.log(3e4)))
         n_d = n_a * math.exp(rng.uniform(-math.log(100.0), math.log(100.0)))
-        steps = rng.randint(20_000, 100_000) if len(out) < long_moves else rng.randint(1, 3000)
+        steps = rng.randint(*long_steps) if len(out) < long_moves else rng.randint(*short_steps)
         args = design_args(steps * rng.choice((1, -1)), period, n_a, n_d, spr, fclk, prescale)
         try:
-            plan_move(**args, ramp=RAMP_EXACT)
+            plan(args)
         except ValueError:
             continue
         out.append(args)
     return out
+
+
+def random_exact_moves(seed: int, count: int, long_moves: int) -> list[dict[str, Any]]:
+    """Random moves the exact mode takes (sw/tests/test_exact.py, scripts/exact_check.py): random_design_moves with
+    cruise intervals from 256 clocks, the first long_moves of 20,000 .. 100,000 steps, the others 1 .. 3,000."""
+    return random_design_moves(
+        seed,
+        count,
+        long_moves,
+        min_clks=256,
+        period_span=1e4,
+        long_steps=(20_000, 100_000),
+        short_steps=(1, 3000),
+        plan=lambda args: plan_move(**args, ramp=RAMP_EXACT),
+    )

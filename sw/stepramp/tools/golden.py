@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 import random
 from collections.abc import Callable, Iterable
 from dataclasses import asdict, is_dataclass
@@ -30,6 +29,7 @@ from typing import Any
 
 from stepramp.board.plan import RAMP_AVR446, RAMP_EXACT, RAMPS, plan_move
 from stepramp.models.engine import HARD, SOFT, iter_edges, last_edge
+from stepramp.sim.profiles import SPRS, random_design_moves
 from stepramp.tools.summary import edge_checksum, summarise_model
 
 SEED = 34
@@ -66,36 +66,19 @@ def sha(obj: Any) -> str:
 
 
 def random_moves(seed: int = SEED, count: int = MOVE_COUNT, long_moves: int = LONG_MOVES) -> list[dict[str, Any]]:
-    """Random plan_move arguments that both ramps plan: spr, f_clk and PRESCALE 1 .. 8 varied, accel / decel up to 100
-    both ways, cruise intervals from 256 clocks; the first long_moves 20,000 .. 200,000 steps, the others 1 .. 3,000."""
-    rng = random.Random(seed)
-    out: list[dict[str, Any]] = []
-    while len(out) < count:
-        prescale = rng.randint(1, 8)
-        spr = rng.choice((24.0, 200.0, 400.0, 1000.0, 1600.0, 3200.0, 25600.0)) * rng.choice((1, 1.37))
-        fclk = math.exp(rng.uniform(math.log(1e5), math.log(2e8)))
-        period = math.ceil(256 / prescale) + math.exp(rng.uniform(0.0, math.log(1e4)))
-        n_a = math.exp(rng.uniform(math.log(0.05), math.log(3e4)))
-        n_d = n_a * math.exp(rng.uniform(-math.log(100.0), math.log(100.0)))
-        steps = rng.randint(20_000, 200_000) if len(out) < long_moves else rng.randint(1, 3000)
-        alpha = 2.0 * math.pi / spr
-        v = fclk / prescale / period
-        args = {
-            "steps": steps * rng.choice((1, -1)),
-            "accel": alpha * v * v / (2.0 * n_a),
-            "decel": alpha * v * v / (2.0 * n_d),
-            "speed": alpha * v,
-            "spr": spr,
-            "fclk": fclk,
-            "prescale": prescale,
-        }
-        try:
-            for ramp in (RAMP_AVR446, RAMP_EXACT):
-                plan_move(**args, ramp=ramp)
-        except ValueError:
-            continue
-        out.append(args)
-    return out
+    """Random plan_move arguments that both ramps plan (random_design_moves, without 51,200 steps per revolution):
+    cruise intervals from 256 clocks; the first long_moves 20,000 .. 200,000 steps, the others 1 .. 3,000."""
+    return random_design_moves(
+        seed,
+        count,
+        long_moves,
+        min_clks=256,
+        period_span=1e4,
+        long_steps=(20_000, 200_000),
+        short_steps=(1, 3000),
+        plan=lambda args: [plan_move(**args, ramp=ramp) for ramp in (RAMP_AVR446, RAMP_EXACT)],
+        sprs=SPRS[:-1],
+    )
 
 
 def random_scripts(seed: int = SEED, count: int = SCRIPT_COUNT) -> list[dict[str, Any]]:
