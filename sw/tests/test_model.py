@@ -34,6 +34,7 @@ from stepramp.sim.profiles import (
     PROFILES,
     PROFILES_BY_NAME,
     RANDOM_PROFILES,
+    MoveRanges,
     Profile,
     design_args,
     random_design_moves,
@@ -99,16 +100,8 @@ def check_move(args: dict[str, Any], label: str = "") -> Result:
 def _random_moves(seed: int, count: int, long_moves: int) -> list[dict[str, Any]]:
     """Random valid moves (random_design_moves): cruise intervals from 64 clocks, the first long_moves of 20,000 ..
     200,000 steps, the others 1 .. 5,000."""
-    return random_design_moves(
-        seed,
-        count,
-        long_moves,
-        min_clks=64,
-        period_span=1e5,
-        long_steps=(20_000, 200_000),
-        short_steps=(1, 5000),
-        plan=lambda args: plan_move(**args),
-    )
+    ranges = MoveRanges(64, 1e5, (20_000, 200_000), (1, 5000))
+    return random_design_moves(seed, count, long_moves, ranges, lambda args: plan_move(**args))
 
 
 RANDOM_MOVES = _random_moves(20240611, 320, long_moves=5)

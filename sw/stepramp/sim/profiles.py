@@ -282,22 +282,26 @@ SPRS = (24.0, 200.0, 400.0, 1000.0, 1600.0, 3200.0, 25600.0, 51200.0)
 """The steps per revolution random_design_moves draws from (each also times 1.37)."""
 
 
+@dataclass(frozen=True)
+class MoveRanges:
+    """What random_design_moves draws from: a cruise period of min_clks / PRESCALE ticks plus up to period_span more,
+    long_steps steps for the first moves and short_steps for the others, the steps per revolution sprs."""
+
+    min_clks: int
+    period_span: float
+    long_steps: tuple[int, int]
+    short_steps: tuple[int, int]
+    sprs: tuple[float, ...] = SPRS
+
+
 def random_design_moves(
-    seed: int,
-    count: int,
-    long_moves: int,
-    *,
-    min_clks: int,
-    period_span: float,
-    long_steps: tuple[int, int],
-    short_steps: tuple[int, int],
-    plan: Callable[[dict[str, Any]], object],
-    sprs: tuple[float, ...] = SPRS,
+    seed: int, count: int, long_moves: int, ranges: MoveRanges, plan: Callable[[dict[str, Any]], object]
 ) -> list[dict[str, Any]]:
     """count random plan_move arguments (design_args), the ones plan takes without a ValueError: PRESCALE 1 .. 8,
-    spr from sprs (times 1 or 1.37), f_clk 100 kHz .. 200 MHz (log-uniform), a cruise period of min_clks / PRESCALE
-    ticks plus up to period_span more, ramps of 0.05 .. 30,000 steps to reach it and a deceleration ratio up to 100
-    both ways; the first long_moves of long_steps steps, the others of short_steps, either direction."""
+    spr from ranges.sprs (times 1 or 1.37), f_clk 100 kHz .. 200 MHz (log-uniform), the cruise period of ranges,
+    ramps of 0.05 .. 30,000 steps to reach it and a deceleration ratio up to 100 both ways; the first long_moves of
+    ranges.long_steps steps, the others of ranges.short_steps, either direction."""
+    min_clks, period_span, long_steps, short_steps, sprs = dataclasses.astuple(ranges)
     rng = random.Random(seed)
     out: list[dict[str, Any]] = []
     while len(out) < count:
@@ -320,13 +324,5 @@ def random_design_moves(
 def random_exact_moves(seed: int, count: int, long_moves: int) -> list[dict[str, Any]]:
     """Random moves the exact mode takes (sw/tests/test_exact.py, scripts/exact_check.py): random_design_moves with
     cruise intervals from 256 clocks, the first long_moves of 20,000 .. 100,000 steps, the others 1 .. 3,000."""
-    return random_design_moves(
-        seed,
-        count,
-        long_moves,
-        min_clks=256,
-        period_span=1e4,
-        long_steps=(20_000, 100_000),
-        short_steps=(1, 3000),
-        plan=lambda args: plan_move(**args, ramp=RAMP_EXACT),
-    )
+    ranges = MoveRanges(256, 1e4, (20_000, 100_000), (1, 3000))
+    return random_design_moves(seed, count, long_moves, ranges, lambda args: plan_move(**args, ramp=RAMP_EXACT))

@@ -29,7 +29,7 @@ from typing import Any
 
 from stepramp.board.plan import RAMP_AVR446, RAMP_EXACT, RAMPS, plan_move
 from stepramp.models.engine import HARD, SOFT, iter_edges, last_edge
-from stepramp.sim.profiles import SPRS, random_design_moves
+from stepramp.sim.profiles import SPRS, MoveRanges, random_design_moves
 from stepramp.tools.summary import edge_checksum, summarise_model
 
 SEED = 34
@@ -68,17 +68,14 @@ def sha(obj: Any) -> str:
 def random_moves(seed: int = SEED, count: int = MOVE_COUNT, long_moves: int = LONG_MOVES) -> list[dict[str, Any]]:
     """Random plan_move arguments that both ramps plan (random_design_moves, without 51,200 steps per revolution):
     cruise intervals from 256 clocks; the first long_moves 20,000 .. 200,000 steps, the others 1 .. 3,000."""
-    return random_design_moves(
-        seed,
-        count,
-        long_moves,
-        min_clks=256,
-        period_span=1e4,
-        long_steps=(20_000, 200_000),
-        short_steps=(1, 3000),
-        plan=lambda args: [plan_move(**args, ramp=ramp) for ramp in (RAMP_AVR446, RAMP_EXACT)],
-        sprs=SPRS[:-1],
-    )
+    ranges = MoveRanges(256, 1e4, (20_000, 200_000), (1, 3000), SPRS[:-1])
+    return random_design_moves(seed, count, long_moves, ranges, plan_both)
+
+
+def plan_both(args: dict[str, Any]) -> None:
+    """plan_move of the arguments in both ramps (a ValueError when either refuses them)."""
+    for ramp in (RAMP_AVR446, RAMP_EXACT):
+        plan_move(**args, ramp=ramp)
 
 
 def random_scripts(seed: int = SEED, count: int = SCRIPT_COUNT) -> list[dict[str, Any]]:
