@@ -9,8 +9,8 @@ checks it):
    continuation), the register widths, the fixed-point formats, the ramp kinds. Imports nothing of stepramp.
 2. ``stepramp.models``: the reference models, pure Python: the engine's bit-exact arithmetic (``engine``) with one
    implementation per ramp kind (``ramp``: AVR446 through ``blocks``, exact through ``exact``), the stepping logic
-   (``stepping``), the machine inputs (``inputs``), the arithmetic blocks (``blocks``) and the ideal trapezoid that
-   judges them (``ideal``).
+   (``stepping``), the machine inputs (``inputs``), the arithmetic blocks (``blocks``), the shared ramp computer's
+   scheduler (``scheduler``) and the ideal trapezoid that judges them (``ideal``).
 3. ``stepramp.board``: what the soft CPU (or a host) runs: move planning (``plan``, ``change``, ``coord``), the
    register driver (``driver``, ``multi``, ``homing``), the register map (``regmap``), the script planner
    (``script_schema`` to load a script, ``script`` to plan it, ``multi_script`` for the multi-axis top). Nothing of
