@@ -158,18 +158,18 @@ architecture rtl of stepramp_engine is
   signal min_gap_i  : natural range 0 to 2 ** 17 - 1;
   signal min_gap_nz : std_logic;
   signal min_gap_gt : std_logic;
-  -- A soft stop request waits for its pulse p (the first pulse edge after the edge that sampled it).
-  signal sreq : std_logic;
+  -- A soft stop request: sreq_w waits for q, the first pulse edge after the edge that sampled it; q arms it (sreq),
+  -- and the pulse after q decides it (docs/algorithm.md, "Soft stop": decided at p = q + 1).
+  signal sreq_w : std_logic;
+  signal sreq   : std_logic;
   -- Take-over: chg_pend_r an accepted change waits for its pulse P; chg_hit STEP_COUNT = P (registered: pulse P - 1
-  -- has been emitted); tk the take-over itself (two clocks after pulse P - 1's edge); tk_cur the interval now
-  -- counting is interval P (a soft stop is then decided at pulse P + 1); tk_d1 and tk_d2 delay tk until the parameter
-  -- check of the new segment is ready; cur_err the code the motion ends with at its last pulse (NONE but after a
-  -- take-over of a segment that failed the check).
+  -- has been emitted); tk the take-over itself (two clocks after pulse P - 1's edge); tk_d1 and tk_d2 delay tk until
+  -- the parameter check of the new segment is ready; cur_err the code the motion ends with at its last pulse (NONE
+  -- but after a take-over of a segment that failed the check).
   signal chg_pend_r    : std_logic;
   signal chg_hit       : std_logic;
   signal tk            : std_logic;
   signal pc_latch      : std_logic; -- the precompute latches c_first and the seeds (start or take-over)
-  signal tk_cur        : std_logic;
   signal tk_d1         : std_logic;
   signal tk_d2         : std_logic;
   signal chg_refused_r : std_logic;
@@ -479,9 +479,6 @@ begin
           v_pulse := '1';
           if (n_one = '1') then
             v_finish := '1';
-          elsif (sreq = '1') then
-            -- A soft stop requested before pulse 0 (p = 0: no speed, m = 0): the move ends with pulse 0.
-            v_finish := '1';
           else
             v_load := '1';
           end if;
@@ -669,6 +666,7 @@ begin
           stc_hi      <= (others => '0');
           tmr_restart <= '1';
           sreq        <= '0';
+          sreq_w      <= '0';
           phase       <= C_PH_SETUP;
           idle_r      <= '0';
           loaded      <= '0';
@@ -733,17 +731,17 @@ begin
         start_interval(alt_d, alt_one, C_ST_DECEL);
       end if;
 
-      -- Soft stop request: taken while busy and no stop is in effect; a pulse consumes the request it decided on
-      -- (a request sampled at a pulse edge is for the next pulse).
-      -- (At pulse P of a take-over the request waits for pulse P + 1: tk_cur.)
-      if (d_pulse = '1' and tk_cur = '0') then
-        sreq <= '0';
-      end if;
+      -- Soft stop request: taken while busy, no stop in effect and no earlier request undecided. A pulse decides the
+      -- armed request (sreq) and arms the waiting one (sreq_w): a request is decided at the pulse after the first
+      -- pulse after it (one sampled at a pulse edge waits for the next pulse). After a take-over at pulse P no
+      -- request is armed at P: one sampled before the take-over dropped the change.
       if (d_pulse = '1') then
-        tk_cur <= '0';
+        sreq   <= sreq_w;
+        sreq_w <= '0';
       end if;
-      if (soft_stop = '1' and busy_r = '1' and stop_mode_m = '0' and d_alt = '0') then
-        sreq <= '1';
+      if (soft_stop = '1' and busy_r = '1' and stop_mode_m = '0' and d_alt = '0' and sreq_w = '0' and
+          (sreq = '0' or d_pulse = '1')) then
+        sreq_w <= '1';
       end if;
 
       -- Take-over (docs/algorithm.md, "The take-over, the queue and the script contract"). A commit is accepted while
@@ -755,7 +753,8 @@ begin
       tk_d1         <= tk;
       tk_d2         <= tk_d1;
       if (change = '1') then
-        if (busy_r = '1' and chg_pend_r = '0' and sreq = '0' and stop_mode_m = '0' and soft_stop = '0' and
+        if (busy_r = '1' and chg_pend_r = '0' and sreq = '0' and sreq_w = '0' and stop_mode_m = '0' and
+            soft_stop = '0' and
             step_count_r < unsigned(change_at) and d_finish = '0' and
             (p_endless = '1' or ('0' & unsigned(change_at)) <= p_last_pulse)) then
           chg_pend_r <= '1';
@@ -769,7 +768,6 @@ begin
       end if;
       if (tk = '1') then
         chg_pend_r <= '0';
-        tk_cur     <= '1';
         latch_move;
         -- Interval P was started as the running segment's last, or not: the new segment decides (tk_d2).
         cur_last <= '0';
@@ -785,7 +783,6 @@ begin
         -- A change still pending when the motion ends normally was never taken (its pulse was past the end).
         chg_refused_r <= chg_pend_r and not hard_stop and to_sl(d_err = C_ERR_NONE);
         chg_pend_r    <= '0';
-        tk_cur        <= '0';
         done_r        <= '1';
         busy_r        <= '0';
         state_r       <= C_ST_STOP;
@@ -793,6 +790,7 @@ begin
         phase         <= C_PH_IDLE;
         idle_r        <= '1';
         sreq          <= '0';
+        sreq_w        <= '0';
         if (d_err /= C_ERR_NONE) then
           error_r    <= '1';
           err_code_r <= d_err;
@@ -830,10 +828,10 @@ begin
         alt_r         <= '0';
         taken_r       <= '0';
         sreq          <= '0';
+        sreq_w        <= '0';
         chg_pend_r    <= '0';
         chg_hit       <= '0';
         chg_refused_r <= '0';
-        tk_cur        <= '0';
         tk_d1         <= '0';
         tk_d2         <= '0';
         cur_err       <= C_ERR_NONE;

@@ -330,7 +330,8 @@ def check_stopped(plan: Plan, kind: str, phase: str, request: int, edges: list[i
     """A move stopped through CTRL, SOFT_STOP or HARD_STOP (`kind`) sampled by the engine at edge `request` of the
     move, `wait_pulses` pulses into it, in `phase`: every edge as stepramp.models.engine.edges_with_stop says; no pulse
     at or after a hard stop; a soft stop changes nothing in DECEL, and in ACCEL or RUN ends the move early on a decel
-    ramp (the speed never rises, the last interval is at the slow end: the plan's c_last)."""
+    ramp (the speed never rises after the pulse that decides it, the last interval is at the slow end: the plan's
+    c_last)."""
     what = f"{kind} stop in {phase}"
     want = edges_with_stop(plan, kind, request)
     assert edges == want, f"{what}: {edges_differ(edges, want)}"
@@ -341,7 +342,8 @@ def check_stopped(plan: Plan, kind: str, phase: str, request: int, edges: list[i
         assert edges == normal, f"{what}: changes the move"
     else:
         assert len(edges) < len(normal), f"{what}: does not end the move early"
-        tail = [b - a for a, b in itertools.pairwise(edges[wait_pulses:])]
+        # the request comes before pulse wait_pulses (q), the stop is decided at pulse q + 1 (docs/algorithm.md)
+        tail = [b - a for a, b in itertools.pairwise(edges[wait_pulses + 1 :])]
         slow_end = (plan.c_last >> 16) * plan.prescale
         assert tail[-1] >= 0.95 * slow_end, f"{what}: last interval {tail[-1]}, not at the slow end {slow_end}"
         assert all(b >= a - plan.prescale for a, b in itertools.pairwise(tail)), f"{what}: the speed rose"

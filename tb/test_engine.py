@@ -249,7 +249,7 @@ def soft_stop_cases(chunk: int) -> list[tuple[str, Plan, Stop]]:
     if chunk == SOFT_CHUNKS - 1:
         # accel = 100 * decel, stop decided at pulse 1 (D = A_1, m = 100), and at pulse 2 (DECEL already)
         plan = plan_move(**PROFILES_BY_NAME["ratio_accel_100_triangle"].args())
-        cases += [("ratio_accel_100_triangle", plan, Stop("soft", model_edges(plan)[k] - 1)) for k in (1, 2)]
+        cases += [("ratio_accel_100_triangle", plan, Stop("soft", model_edges(plan)[k - 1] - 1)) for k in (1, 2)]
     return cases
 
 
@@ -265,7 +265,7 @@ def test_engine_soft_stop(chunk: int) -> None:
         position += signed_steps(plan, len(res.edges))
         problems += check_stopped_move(name, plan, stop, res, position)
         p = soft_stop_pulse(plan, stop.at_cycle)
-        if p is None or p == 0:
+        if p is None:
             continue
         phase = phase_of(plan, p)
         m = soft_stop_length(plan, p)
@@ -274,9 +274,11 @@ def test_engine_soft_stop(chunk: int) -> None:
         elif p < plan.steps - 1:
             phases_seen.add(f"{phase} ignored")
         if m and len(res.edges) >= 3:
-            # the stop ends on its slowest interval, and the FSM shows DECEL from interval p + 1 on
+            # the stop's ramp ends on its slowest interval (m >= 2: intervals p + 1 .. p + m are the stop's; with
+            # m = 1 its one interval is c_last, after the plan's interval p), and the FSM shows DECEL from interval
+            # p + 1 on
             iv = [b - a for a, b in zip(res.edges, res.edges[1:], strict=False)]
-            if iv[-1] < iv[-2]:
+            if m >= 2 and iv[-1] < iv[-2]:
                 problems.append(f"{name} soft stop at edge {stop.at_cycle}: last interval {iv[-1]} < {iv[-2]}")
             if any(s != "DECEL" for s in res.states[p:-1]):
                 problems.append(f"{name} soft stop at edge {stop.at_cycle}: states {res.states[p:]}")
@@ -583,8 +585,8 @@ def runtime_error_cases() -> list[tuple[str, Plan, Stop | None, int, int]]:
         ("LATE at pulse 2, negative", late_later, None, ERR["LATE"], 2),
         ("ZERO_TICKS at pulse 1", zero_first, None, ERR["ZERO_TICKS"], -1),
         ("ZERO_TICKS later, negative", zero_later, None, ERR["ZERO_TICKS"], -1),
-        ("RANGE, soft stop in ACCEL", range_accel, Stop("soft", 3), ERR["RANGE"], 1),
-        ("RANGE, soft stop in RUN", range_run, Stop("soft", 2 + 200 + 1), ERR["RANGE"], 2),
+        ("RANGE, soft stop in ACCEL", range_accel, Stop("soft", 1), ERR["RANGE"], 1),
+        ("RANGE, soft stop in RUN", range_run, Stop("soft", 2 + 200 - 1), ERR["RANGE"], 2),
     ]
 
 
@@ -668,15 +670,16 @@ DOC_BUDGET = {
 def budget_cases() -> list[tuple[str, Plan, Stop | None, int | None]]:
     """(label, plan, stop or None, late pulse or None): the interval before the value in question lasts need - 1
     clocks (the move ends with LATE at that interval's last pulse) and need clocks (in time), need being the
-    budget's formula: for interval 2 (or the soft-stop alternative of pulse 1; a soft stop sampled at edge 2 is
-    decided at pulse 1) while interval 1 = c_first counts, and for a decel step after the decel seed's interval."""
+    budget's formula: for interval 2 (or the soft-stop alternative of pulse 1; a soft stop sampled at edge 1, before
+    pulse 0, is decided at pulse 1) while interval 1 = c_first counts, and for a decel step after the decel seed's
+    interval."""
     cases: list[tuple[str, Plan, Stop | None, int | None]] = []
 
     def both_sides(label: str, need: int, doc: int | None, make: Callable[[int], Plan], stop: str | None) -> None:
         assert doc is None or need == doc, f"{label}: the budget says {need} clocks, the docs' table {doc}"
         for clocks in (need - 1, need):
             # a hard stop right after pulse 1 (at edge 2 + clocks) keeps long intervals out of the simulation
-            at = {"soft": 2, "hard": 3 + clocks}.get(stop or "")
+            at = {"soft": 1, "hard": 3 + clocks}.get(stop or "")
             halt = None if stop is None or at is None else Stop(stop, at)
             late = 1 if clocks < need else None
             cases.append((f"{label}: {clocks} clocks, need {need}", make(clocks * Q16), halt, late))
@@ -785,12 +788,12 @@ def test_engine_pulse_one_clock_after_a_load() -> None:
     4 clocks after its pulse edge). The precompute sees the load one clock late (the sequencer registers advance and
     take_alt), so in that clock it still shows what the load consumed (nxt_ok, and the soft-stop alternative of the
     previous pulse): the decision must not take them. Cases: interval 1 of 1 tick; and interval 2 of 1 tick with a
-    soft stop sampled at pulse 1's edge (so decided at pulse 2) while pulse 1's alternative was "end" (m = 0). The
+    soft stop sampled at pulse 0's edge (so decided at pulse 2) while pulse 1's alternative was "end" (m = 0). The
     step spacing is off (min_gap 1), so that the 1-clock gap is the engine's own case."""
     first = hand_plan(3, c_first=1 * Q16)
     second = hand_plan(4, sa=2, sd=2, c_sa=1 * Q16, stop_ratio=0)
-    pulse1 = model_edges(second)[1]
-    cases = [("interval 1 of 1 tick", first, None), ("interval 2 of 1 tick, soft stop at pulse 1", second, pulse1)]
+    pulse0 = model_edges(second)[0]
+    cases = [("interval 1 of 1 tick", first, None), ("interval 2 of 1 tick, soft stop at pulse 0", second, pulse0)]
     stops = [None if at is None else Stop("soft", at) for _, _, at in cases]
     # min_gap 1: no step spacing (the real core's is at least 2, which would stop these moves with STEP_SPACE)
     extras = [{"min_gap": 1} for _ in cases]
@@ -949,7 +952,7 @@ def reset_cases() -> list[tuple[str, Plan, Stop | None, int | None, list[int]]]:
     x, y = SHORT_TRAP, SHORT_TRAP_P3_NEG
     xe, ye = model_edges(x), model_edges(y)
     k_run = (y.sa + y.sd) // 2
-    soft = Stop("soft", xe[3] + 5)  # decided at pulse 4, in ACCEL
+    soft = Stop("soft", xe[2] + 5)  # decided at pulse 4, in ACCEL
     p = soft_stop_pulse(x, soft.at_cycle)
     stopped = edges_with_stop(x, "soft", soft.at_cycle)
     assert p == 4 and phase_of(x, p) == "ACCEL" and len(stopped) < len(xe) - 3

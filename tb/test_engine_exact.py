@@ -118,7 +118,7 @@ def budget_cases() -> list[tuple[str, Plan, dict[str, int], list[Stop], list[int
             values = [plan.c_first << 16, exact.value(c_dec, m - 1) << 16, exact.value(c_dec, m - 2) << 16]
             edges = [2 + t for t in accumulate(values, HALF)]
             label = f"ACCEL alternative, n0 = {n0:#x}, m = {m:#x}: {c1} clocks (need {need})"
-            soft = Stop("soft", 2)
+            soft = Stop("soft", 1)  # before pulse 0: decided at pulse 1
             if c1 < need:
                 cases.append((label, plan, fields, [soft], edges[:2], ERR["LATE"]))
             else:
@@ -197,7 +197,7 @@ def test_exact_engine_segments() -> None:
         ("up head, soft stop in the cruise", ups, Stop("soft", 25_000)),
         ("down head", downs, None),
         ("down head, soft stop in the head", downs, Stop("soft", 4_000)),
-        ("down head with sa = 2, soft stop at pulse 1", down2, Stop("soft", pulse0 + 1)),
+        ("down head with sa = 2, soft stop at pulse 1", down2, Stop("soft", pulse0 - 1)),
     ):
         want = segment_edges(seg, 1, stop=None if stop is None else (stop.kind, stop.at_cycle))
         runs.append((label, plan, fields, stop, want))
@@ -243,14 +243,14 @@ def test_exact_engine_segments() -> None:
         runs.append((label, plan, fields, Stop(*hard), segment_edges(seg, 1, stop=hard)))
     move = plan_move(**EXACT_PROFILES[0].args(), ramp=RAMP_EXACT)
     edges = model_edges(move)
-    for pulse in (move.sa - 1, move.sa, move.sd - 1):  # decided at the pulse after the sample
+    for pulse in (move.sa - 1, move.sa, move.sd - 1):  # decided one pulse after the first pulse after the sample
         runs.append(
             (
                 f"move, soft stop at pulse {pulse + 1}",
                 move,
                 {},
-                Stop("soft", edges[pulse]),
-                edges_with_stop(move, "soft", edges[pulse]),
+                Stop("soft", edges[pulse - 1]),
+                edges_with_stop(move, "soft", edges[pulse - 1]),
             )
         )
     # the parameter check in exact mode: a ramp constant below 2^16 (c0 under 16 ticks) is valid, 0 is not

@@ -2,7 +2,9 @@
 """The model's golden checksums (sw/tests/golden/checksums.json, written by scripts/golden.py on the tree before issue
 34's refactoring; stepramp.tools.golden says what they cover): every profile's edges and stops, 1,000 random moves,
 200 random scripts and the named scripts, in both ramps, recomputed and compared. A difference means the model's
-edges (or the script planner's actions) changed; rewrite the file only when that is meant.
+edges (or the script planner's actions) changed; rewrite the file only when that is meant. The checksums were
+re-recorded in session 20 for the soft-stop rule of issue 35 (a stop decided one pulse later): only the stops and the
+scripts with a soft stop changed.
 
 * test_golden_checksums: all of them, recomputed (about 10 s);
 * test_golden_inputs_unchanged: the random generators still give the recorded inputs (else a difference in the

@@ -113,6 +113,12 @@ def tick_intervals(plan: Plan, pulse_edges: list[int]) -> list[int]:
     return [(b - a) // plan.prescale for a, b in itertools.pairwise(pulse_edges)]
 
 
+def request_decided_at(normal: list[int], k: int) -> int:
+    """A request edge whose soft stop is decided at pulse k >= 1: the edge of pulse k - 2 (the first pulse after it
+    is k - 1), or edge 1 for k = 1 (before pulse 0's edge)."""
+    return normal[k - 2] if k >= 2 else 1
+
+
 def check_soft(profile: Profile, plan: Plan, phys: Physics, normal: list[int], e: int) -> tuple[str, str] | None:
     """All physics checks of one soft stop at edge e (normal: the move's edges); returns (phase, outcome)."""
     got = edges_with_stop(plan, "soft", e)
@@ -121,11 +127,14 @@ def check_soft(profile: Profile, plan: Plan, phys: Physics, normal: list[int], e
     assert len(got) <= max(plan.steps, 0), what
     assert all(x > FIRST_PULSE_LATENCY - 1 for x in got), what
     p = soft_stop_pulse(plan, e)
+    # the rule (docs/algorithm.md, "Soft stop"): q the first pulse strictly after e, decided at p = q + 1; ignored
+    # before edge 1 (the start edge is not busy), when no pulse comes after e, or when q is the last pulse
+    q = next((k for k, x in enumerate(normal) if x > e), None)
+    assert p == (q + 1 if e >= 1 and q is not None and q + 1 < len(normal) else None), f"{what}: p = {p}, q = {q}"
     if p is None:
         assert got == normal, f"{what}: a request outside the move changed it"
         return None
-    # p: the first pulse strictly after e; everything up to it is the plan's
-    assert normal[p] > e and (p == 0 or normal[p - 1] <= e), what
+    # everything up to p is the plan's
     assert got[: p + 1] == normal[: p + 1], f"{what}: pulses up to p = {p} changed"
     if p >= length:
         assert got == normal, what
@@ -212,8 +221,8 @@ def test_soft_stop_at_every_pulse_covers_every_outcome() -> None:
         pulses = set(range(1, len(normal), max(1, len(normal) // MAX_PULSES_PER_PROFILE)))
         pulses.update(k for b in (plan.sa, plan.sd, len(normal) - 1) for k in (b - 1, b, b + 1) if 1 <= k < len(normal))
         for k in sorted(pulses):
-            # a request at the edge of pulse k - 1 is decided at pulse k
-            outcome = check_soft(profile, plan, phys, normal, normal[k - 1])
+            # a request at the edge of pulse k - 2 is decided at pulse k
+            outcome = check_soft(profile, plan, phys, normal, request_decided_at(normal, k))
             if outcome is not None:
                 seen.add(outcome)
     for phase in (ACCEL, RUN):
@@ -230,22 +239,28 @@ def test_soft_stop_examples() -> None:
     plan, info = plan_move_info(**profile.args())
     assert plan.stop_ratio == 1 << 16
     normal = edges(plan)
-    # a stop requested in interval 10 is decided at pulse 10 and lasts 10 more steps: 21 pulses in all
+    # a stop requested in interval 10 (at pulse 9's edge): the first pulse after it is 10, so it is decided at
+    # pulse 11 and lasts 11 more steps: 23 pulses in all
+    assert soft_stop_pulse(plan, normal[9]) == 11
     got = edges_with_stop(plan, "soft", normal[9])
-    assert len(got) == 21
-    assert got[:11] == normal[:11]
-    # requested one edge before pulse 10: still pulse 10; at its edge: pulse 11 (strictly after)
+    assert len(got) == 23
+    assert got[:12] == normal[:12]
+    # requested one edge before pulse 10: still pulse 11; at its edge: pulse 12 (pulse 10's is not after it)
     assert edges_with_stop(plan, "soft", normal[10] - 1) == got
-    assert len(edges_with_stop(plan, "soft", normal[10])) == 23
-    # the start edge is not busy: ignored; edges 1 and 2 (before pulse 0 is out): the move ends with pulse 0
+    assert len(edges_with_stop(plan, "soft", normal[10])) == 25
+    # the start edge is not busy: ignored; edge 1 (before pulse 0 is out): decided at pulse 1, m = 1: 3 pulses;
+    # at pulse 0's edge: decided at pulse 2, m = 2: 5 pulses
     assert edges_with_stop(plan, "soft", 0) == normal
-    assert edges_with_stop(plan, "soft", 1) == [FIRST_PULSE_LATENCY]
-    assert len(edges_with_stop(plan, "soft", FIRST_PULSE_LATENCY)) == 3  # decided at pulse 1: m = 1
-    # in RUN the stop takes L - sd + 1 steps: the length of the plan's own decel ramp (intervals sd .. L)
+    assert soft_stop_pulse(plan, 1) == 1
+    first = edges_with_stop(plan, "soft", 1)
+    assert len(first) == 3 and first[:2] == normal[:2]
+    assert len(edges_with_stop(plan, "soft", FIRST_PULSE_LATENCY)) == 5
+    # in RUN the stop takes L - sd + 1 steps: the length of the plan's own decel ramp (intervals sd .. L); a
+    # request at pulse k - 1's edge is decided at pulse k + 1: pulses 0 .. k + 1 + L - sd + 1
     k = plan.sa + 40
-    assert phase_of(plan, k) == RUN
+    assert phase_of(plan, k + 1) == RUN
     length = plan.steps - 1
-    assert len(edges_with_stop(plan, "soft", normal[k - 1])) == k + length - plan.sd + 2
+    assert len(edges_with_stop(plan, "soft", normal[k - 1])) == k + length - plan.sd + 3
     assert length - plan.sd + 1 == length - math.floor(info.x_d)
     # in ACCEL the stop's ramp starts from the plan's interval p + 1: its first interval is D_(m-1) from D_m = A_p
     values = soft_stop_values(plan, 10)
@@ -253,8 +268,16 @@ def test_soft_stop_examples() -> None:
     plain = list(itertools.islice(interval_values(plan), 11))
     d_m = plain[10] >> 16
     assert values[10] == (d_m + (2 * d_m) // (4 * 10 - 1)) << 16
-    # in DECEL, or at the last pulse, or after the move: no change
+    # decided in DECEL (at pulse sd: requested at pulse sd - 2's edge), or at the last pulse L (requested at pulse
+    # L - 2's edge), or the first pulse after the request is the last (requested at pulse L - 1's edge), or after
+    # the move: no change
+    assert soft_stop_pulse(plan, normal[plan.sd - 2]) == plan.sd
+    assert edges_with_stop(plan, "soft", normal[plan.sd - 2]) == normal
     assert edges_with_stop(plan, "soft", normal[plan.sd]) == normal
+    assert soft_stop_pulse(plan, normal[-3]) == length
+    assert edges_with_stop(plan, "soft", normal[-3]) == normal
+    assert soft_stop_pulse(plan, normal[-2]) is None
+    assert edges_with_stop(plan, "soft", normal[-2]) == normal
     assert edges_with_stop(plan, "soft", normal[-1]) == normal
     assert edges_with_stop(plan, "soft", normal[-1] + 100) == normal
     # hard stop: the pulse due at the request's edge is suppressed, the start edge wins, idle edges do nothing
@@ -301,7 +324,9 @@ def test_soft_stop_with_extreme_ratios() -> None:
         plan = plan_move(**profile.args())
         phys = physics(profile)
         normal = edges(plan)
-        outcomes = {check_soft(profile, plan, phys, normal, normal[k - 1]) for k in range(1, plan.sa, 3)}
+        outcomes = {
+            check_soft(profile, plan, phys, normal, request_decided_at(normal, k)) for k in range(1, plan.sa, 3)
+        }
         assert outcomes <= {(ACCEL, "stopped"), (ACCEL, "ends at p")}, outcomes
         # with decel = 100 * accel the stopping distance is below one step in all of this ramp: the move ends at p
         assert ((ACCEL, "stopped") in outcomes) == (ratio >= 0.1), (ratio, outcomes)

@@ -60,6 +60,7 @@ from stepramp.models.engine import (
     segment_edges,
     segment_stop_values,
     segment_values,
+    soft_stop_pulse,
 )
 from stepramp.models.engine import edges as model_edges
 from stepramp.sim.scripts import NAMED_SCALE, NAMED_SCRIPTS, random_script
@@ -208,8 +209,9 @@ def _pulse_or_none(edges: list[int], at: int) -> int | None:
 
 def test_a_soft_stop_and_a_pending_change() -> None:
     """A soft stop sampled up to E + 1 (E: pulse P - 1's engine edge) drops the pending change and is decided as in
-    the move; one sampled after the take-over (E + 2 on) is not decided at pulse P but at the segment's pulse 1, by
-    the segment's rules; one within a few clocks of the take-over is refused (the boundary is the RTL's)."""
+    the move (one pulse after the first pulse after it, P + 1 at the latest); one sampled after the take-over (E + 2
+    on) is decided by the segment's rules, at its pulse 1 (P + 1) at the earliest; one within a few clocks of the
+    take-over is refused (the boundary is the RTL's)."""
     plan, info = plan_move_info(300, **MOVE, spr=200.0, fclk=1e6)
     plain = _plain(300)
     at = 80_000
@@ -218,10 +220,14 @@ def test_a_soft_stop_and_a_pending_change() -> None:
     change = plan_change(speed_at_pulse(info, p), info.length - p, 2000.0, 2000.0, 150.0, 200.0, 1e6)
     move = {"at": 0, "op": "move", "steps": 300, **MOVE}
     commit = {"at": at, "op": "set", "speed": 150.0}
-    # dropped: sampled at E - 3, decided at pulse P by the move's own rules
+    # dropped: sampled at E - 3 (the move's edge E - 5), after pulse P - 2's engine edge: the first pulse after it is
+    # P - 1, so it is decided at pulse P by the move's own rules
+    assert plain[p - 2] - 1 < took - 3
+    assert soft_stop_pulse(plan, took - 3 - 2) == p
     got = run(script(move, commit, {"at": took - 4, "op": "soft_stop"}))
     assert got.rejected == [] and got.edges == [e + 3 for e in edges_with_stop(plan, "soft", took - 3 - 2)]
-    # deferred: sampled at E + 5, before pulse P's engine edge: decided at P + 1 by the segment's rules
+    # after the take-over: sampled at E + 5, before pulse P's engine edge (the first pulse after it is P): decided at
+    # P + 1, the segment's pulse 1, by the segment's rules
     assert plain[p] - 1 > took + 5
     got = run(script(move, commit, {"at": took + 4, "op": "soft_stop"}))
     values = segment_stop_values(change.segment, 1)
@@ -278,7 +284,7 @@ def test_stops_are_the_engine_models_stops() -> None:
     plain = _plain(300)
     start_edge = 1  # a START at 0: the gate passes the request of edge 1 at once
     # around pulses' edges (STEP edge - 1 is the engine's): a soft stop sampled at pulse k's engine edge is decided at
-    # pulse k + 1, one sampled a clock earlier at pulse k; a hard stop at W keeps a pulse whose engine edge is W
+    # pulse k + 2, one sampled a clock earlier at pulse k + 1; a hard stop at W keeps a pulse whose engine edge is W
     around = [plain[k] + dw for k in (10, 150) for dw in (-3, -2, -1, 0)]
     for at in (3_000, 30_000, 80_000, 125_000, 140_000, *around):
         for kind, op in (("soft", "soft_stop"), ("hard", "hard_stop")):
@@ -868,9 +874,10 @@ def _queue_at_60(move: dict[str, Any]) -> dict[str, Any]:
 
 def test_a_stop_before_change_b_cancels_it() -> None:
     """A soft or hard stop written before W_B (change B's commit): the driver does not commit B. A soft stop sampled
-    after A took over is decided at A's pulse 1 by A's rules (here its cruise: the stop distance from 100 rad/s);
-    one sampled while A is pending drops A and is decided by the move's; a hard stop ends the motion. Change A is
-    plan_change's from the move's speed at P_A, towards a virtual rest floor(vb^2 / (2 d1)) steps past 300."""
+    after A took over, before pulse P_A's engine edge, is decided at A's pulse 1 (P_A + 1) by A's rules (here its
+    cruise: the stop distance from 100 rad/s); one sampled while A is pending drops A and is decided by the move's; a
+    hard stop ends the motion. Change A is plan_change's from the move's speed at P_A, towards a virtual rest
+    floor(vb^2 / (2 d1)) steps past 300."""
     plan, info = plan_move_info(300, **MOVE, spr=200.0, fclk=1e6)
     plain = _plain(300)
     move = {"at": 0, "op": "move", "steps": 300, **MOVE}
@@ -885,7 +892,7 @@ def test_a_stop_before_change_b_cancels_it() -> None:
     assert list(chained.actions[1].writes) == [*plan_writes(regs), *segment_writes(seg), (offset("CHANGE_AT"), p_a)]
     took = plain[p_a - 1] + 1  # PENDING of A falls (E_A + 2)
     at = took + 20
-    assert at < w_b
+    assert at < w_b and at + 1 < plain[p_a] - 1  # (the first pulse after the sample is P_A)
     got = run(script(move, queue, {"at": at, "op": "soft_stop"}))
     assert [(a.ctrl, a.command) for a in got.actions] == [(START, 0), (CHANGE, 1), (SOFT_STOP, 2)]
     values = segment_stop_values(change_a.segment, 1)
@@ -962,8 +969,9 @@ def test_a_soft_stop_after_change_b_is_committed() -> None:
 
 def test_named_stops_in_a_jog() -> None:
     got = _named("soft_stop_in_jog")
-    # the first engine edge after the sample, and the stop distance from 100 rad/s (80 steps, whatever K)
-    decided = next(i for i, e in enumerate(got.edges) if e - 1 > (120_000 // K + 1))
+    # decided one pulse after the first engine edge after the sample (docs/algorithm.md, "Soft stop"), and the stop
+    # distance from 100 rad/s (80 steps, whatever K)
+    decided = next(i for i, e in enumerate(got.edges) if e - 1 > (120_000 // K + 1)) + 1
     stop = math.ceil((100.0 * K / ALPHA) ** 2 / (2.0 * 2000.0 * K**2 / ALPHA))
     assert len(got.edges) == decided + 1 + stop
     tail = _intervals(got.edges[decided:])

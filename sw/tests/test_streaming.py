@@ -255,7 +255,9 @@ def test_stops_lazy_equal_the_lists(name: str, plan: Plan) -> None:
     normal = spec_edges(plan)
     for request in stop_requests(normal, plan):
         busy = request >= 1 and normal and request < normal[-1]
-        assert model.soft_stop_pulse(plan, request) == (bisect.bisect_right(normal, request) if busy else None)
+        # decided one pulse after q, the first pulse after the request; ignored when q is the last pulse
+        q = bisect.bisect_right(normal, request)
+        assert model.soft_stop_pulse(plan, request) == (q + 1 if busy and q + 1 < len(normal) else None)
         for kind in (model.SOFT, model.HARD):
             expected = model.edges_with_stop(plan, kind, request)
             stop = (kind, request)

@@ -52,16 +52,18 @@ def soft_stop_line_bound(lead: Plan, p: int | None) -> float:
     times the lead's rest position (docs/algorithm.md, "Coordinated moves": the coordinated soft stop). `lead` is the
     lead axis's plan and `p` the pulse at which its stop is decided (stepramp.models.engine.soft_stop_pulse).
 
-    Every axis decides its stop at its own first pulse after the request, so it accelerates up to one of its own
-    intervals longer (p_i - r_i p_lead in (-r_i, 1)), and its ACCEL stop, floor(p_i * STOP_RATIO / 2^16) steps,
-    carries that on scaled by the ratio s = accel / decel: less than 2 + s steps when the lead decides in ACCEL;
-    in RUN (stop = its own decel ramp, ceil(r_i n_d) against r_i ceil(n_d)) less than 2; 0 when the lead's stop is
-    ignored (DECEL, or p + m >= L: every axis ends on its own target, on the line)."""
+    Every axis decides its stop one pulse after its own first pulse after the request (docs/algorithm.md, "Soft
+    stop"), so it accelerates up to two of its own intervals longer than the request, the lead too: p_i - r_i p_lead
+    lies in (1 - 2 r_i, 2 - r_i). Its ACCEL stop, floor(p_i * STOP_RATIO / 2^16) steps, carries that on scaled by
+    the ratio s = accel / decel: less than 2 + 2 s steps when the lead decides in ACCEL; in RUN (stop = its own decel
+    ramp, ceil(r_i n_d) against r_i ceil(n_d), one step of rounding more) less than 3, which also bounds an axis
+    already in its RUN while the lead is still in ACCEL; 0 when the lead's stop is ignored (DECEL, or p + m >= L:
+    every axis ends on its own target, on the line)."""
     if p is None or p >= lead.steps - 1 or p >= lead.sd:
-        return 0.0 if p is None or p >= lead.steps - 1 else 2.0
+        return 0.0 if p is None or p >= lead.steps - 1 else 3.0
     if p >= lead.sa:
-        return 2.0
-    return 2.0 + lead.stop_ratio / 65536.0
+        return 3.0
+    return max(2.0 + 2.0 * lead.stop_ratio / 65536.0, 3.0)
 
 
 def axis_base(axis: int) -> int:
@@ -175,8 +177,8 @@ class MultiAxis:
 
     async def sync_soft_stop(self, axes: Iterable[int]) -> None:
         """SOFT_STOP the selected axes on one clock edge (one write of their mask to SYNC_SOFT_STOP): each as if
-        CTRL.SOFT_STOP were written to it at that edge (each decides its stop at its own next pulse with its plan's
-        decel; a queued move is dropped). On a coordinated move every axis comes to rest near the line
+        CTRL.SOFT_STOP were written to it at that edge (each decides its stop one pulse after its own next pulse, with
+        its plan's decel; a queued move is dropped). On a coordinated move every axis comes to rest near the line
         (docs/algorithm.md, "Coordinated moves": the coordinated soft stop)."""
         await self.access.write(REG_SYNC_SOFT_STOP, self.mask(axes))
 

@@ -78,8 +78,9 @@ class Part:
 
 @dataclass
 class Stop:
-    """A soft stop: sampled by the engine at `sample`, decided at the engine edge `decided` (of pulse p, or the
-    sample when there is no pulse left), in effect or ignored."""
+    """A soft stop: sampled by the engine at `sample`, decided at the engine edge `decided` (of pulse p = q + 1, q
+    the first pulse after the sample; the sample itself when q is the last pulse or there is none), in effect or
+    ignored."""
 
     sample: int
     decided: int
@@ -433,8 +434,8 @@ class RunState:
         edges = m.upto(sample + 1)
         while last_pending is not None and len(edges) <= last_pending.pulse and m.more():
             edges = m.upto(-math.inf)
-        p = bisect.bisect_right(edges, sample + 1)  # the first pulse whose engine edge is after the sample
-        if p >= len(edges) or (m.hard is not None and sample > m.hard):
+        q = bisect.bisect_right(edges, sample + 1)  # the first pulse whose engine edge is after the sample
+        if q >= len(edges) or (m.hard is not None and sample > m.hard):
             m.stop = Stop(sample, sample, False)  # the motion ends first: ignored
             return
         if last_pending is not None:
@@ -446,16 +447,17 @@ class RunState:
                 assert last_pending.pending is not None
                 m.drops.append((last_pending.pending, sample))
                 m.changed()
-            elif p <= last_pending.pulse:  # sampled after the take-over: decided at the segment's pulse 1
-                p = last_pending.pulse + 1
-        if m.parts[-1].commit is not None and p <= m.parts[-1].pulse:
-            # (a queued move's change B dropped before pulse P_A: change A, taken over, decides it at its pulse 1)
-            p = m.parts[-1].pulse + 1
+        # Decided one pulse after q (docs/algorithm.md, "Soft stop"), by the rules of the part that runs there. A
+        # stop sampled after a take-over at P (from E + 2 on; also change A of a queued move when its change B was
+        # dropped) has q >= P: it is decided at the segment's pulse 1 at the earliest. One that dropped the pending
+        # change has q <= P and is decided by the running segment's rules, at P + 1 at the latest.
+        p = q + 1
+        assert m.parts[-1].commit is None or p > m.parts[-1].pulse
         edges = m.upto(sample + 1)
         while p >= len(edges) and m.more():
             edges = m.upto(-math.inf)
         if p >= len(edges):
-            m.stop = Stop(sample, sample, False)
+            m.stop = Stop(sample, sample, False)  # q is the motion's last pulse: ignored
             return
         part = m.parts[-1]
         decided = edges[p] - 1

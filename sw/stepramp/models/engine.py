@@ -356,8 +356,9 @@ def soft_stop_length(plan: Plan, p: int) -> int | None:
     """m, the number of intervals after pulse p of a soft stop decided at pulse p; None when it is ignored.
 
     0 means the move ends with pulse p. The new last pulse is p + m. The move's segment's (segment_stop_length): at
-    or after the last pulse, or in DECEL (p >= sd), ignored; p = 0: 0; ACCEL: floor(p * stop_ratio / 2^16); RUN: the
-    plan's own decel ramp from cruise, L - sd + 1 (intervals sd .. L); ignored when p + m reaches L.
+    or after the last pulse, or in DECEL (p >= sd), ignored; p = 0 (no request is decided there since issue 35): 0;
+    ACCEL: floor(p * stop_ratio / 2^16); RUN: the plan's own decel ramp from cruise, L - sd + 1 (intervals sd .. L);
+    ignored when p + m reaches L.
     """
     if p >= plan.steps - 1:  # pulse p is the last one (or there is none: the segment of N = 0 has L = 0, not -1)
         return None
@@ -387,18 +388,23 @@ def soft_stop_pulse(plan: Plan, request_edge: int) -> int | None:
     """p, the pulse at which a soft stop sampled at request_edge is decided; None when the request is ignored.
 
     The request counts only while the engine is busy (edges 1 .. the last pulse's edge; edge 0, the start edge,
-    is not busy). p is the first pulse whose edge is strictly after request_edge. O(ramp) time, no edge list.
+    is not busy). p is one pulse after q, the first pulse whose edge is strictly after request_edge (ignored when q
+    is the last pulse): docs/algorithm.md, "Soft stop". O(ramp) time, no edge list.
     """
     last = last_edge(plan)
     if request_edge < 1 or last is None or request_edge >= last:
         return None
-    return _first_pulse_from(plan, request_edge + 1)
+    q = _first_pulse_from(plan, request_edge + 1)
+    return q + 1 if q + 1 < plan.steps else None
 
 
 def _first_pulse_after(normal: list[int], request_edge: int) -> int | None:
+    """The pulse at which a soft stop sampled at request_edge is decided, from the normal edges (soft_stop_pulse):
+    one after the first pulse whose edge is after request_edge; None when that one is the last or there is none."""
     if request_edge < 1 or not normal or request_edge >= normal[-1]:
         return None
-    return bisect.bisect_right(normal, request_edge)
+    q = bisect.bisect_right(normal, request_edge)
+    return q + 1 if q + 1 < len(normal) else None
 
 
 def edges_with_stop(plan: Plan, kind: str, request_edge: int) -> list[int]:
@@ -406,7 +412,7 @@ def edges_with_stop(plan: Plan, kind: str, request_edge: int) -> list[int]:
 
     kind "hard": every pulse whose edge is before request_edge (a pulse due at request_edge itself is suppressed);
     at the start edge (0) the hard stop wins and nothing is emitted; after the move it changes nothing.
-    kind "soft": see soft_stop_pulse and soft_stop_values; pulse 0 is the last when p = 0.
+    kind "soft": see soft_stop_pulse and soft_stop_values.
     """
     if kind not in (SOFT, HARD):
         raise ValueError(f"kind must be {SOFT!r} or {HARD!r}, got {kind!r}")
@@ -468,7 +474,7 @@ def segment_stop_length(seg: Segment, p: int) -> int | None:
         raise ValueError(f"a soft stop is decided at a pulse p >= 0, not {p}")
     if length is not None and (p >= length or p >= seg.sd):
         return None
-    if p == 0:  # a request before pulse 0 (a segment run from START): the move ends with pulse 0, as a move does
+    if p == 0:  # (no request is decided at pulse 0 since issue 35, p = q + 1 >= 1; the value of the ACCEL rule)
         return 0
     if p < seg.sa:
         m = seg.head_index - p if seg.head == "down" else (seg.head_index + p) * seg.stop_ratio >> STOP_RATIO_FRAC
@@ -527,7 +533,8 @@ def segment_edges(
 ) -> list[int]:
     """Edges of a segment's pulses 0 .. when it runs from START (pulse 0 at FIRST_PULSE_LATENCY), as edges_with_stop
     gives them for a move: all of them (a positioning segment), the first `count` intervals (an endless one), or
-    with a stop sampled at request_edge (hard: the pulses before it; soft: decided at the first pulse after it).
+    with a stop sampled at request_edge (hard: the pulses before it; soft: decided one pulse after the first pulse
+    after it).
     An endless segment needs `count` or a stop that ends it."""
 
     def to_edges(values: list[int]) -> list[int]:
@@ -546,8 +553,8 @@ def segment_edges(
     n = 64
     while True:
         normal = first_edges(n)
-        if normal[-1] > request_edge or (seg.length is not None and n >= seg.length):
-            break
+        if (len(normal) > 1 and normal[-2] > request_edge) or (seg.length is not None and n >= seg.length):
+            break  # (the pulse after the first one after the request: where a soft stop is decided)
         n *= 2
     if kind == HARD:
         return normal if request_edge < 0 else normal[: bisect.bisect_left(normal, request_edge)]
