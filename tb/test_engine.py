@@ -304,11 +304,35 @@ def stop_combination_cases() -> list[tuple[str, Plan, list[Stop], list[int]]]:
             cases.append((name, plan, [Stop("soft", e1), Stop("hard", e2)], [x for x in soft if x < e2]))
         # soft and hard at the same edge: the hard stop wins
         cases.append((name, plan, [Stop("soft", e1), Stop("hard", e1)], [x for x in normal if x < e1]))
+    # A stop decided in ACCEL that its rule ignores (p + m >= L) where one decided a pulse later, in RUN, would act (a
+    # hand-made move: STOP_RATIO 10, sa 3, sd 10, L 19): a second request while the first is armed (after pulse 1,
+    # before pulse 2, which decides it) changes nothing; one sampled at pulse 2's edge, where the first is decided
+    # and ignored, is a request of its own, decided at pulse 4.
+    plan = hand_plan(
+        20,
+        sa=3,
+        sd=10,
+        accel_seed=100 * Q16,
+        c_sa=60 * Q16,
+        cruise=60 * Q32,
+        c_sd=60 * Q16,
+        decel_seed=60 * Q16,
+        stop_ratio=10 * Q16,
+    )
+    normal = model_edges(plan)
+    first = Stop("soft", normal[0] + 1)
+    assert soft_stop_pulse(plan, first.at_cycle) == 2 and soft_stop_length(plan, 2) is None
+    assert phase_of(plan, 4) == "RUN" and soft_stop_length(plan, 4) == 10
+    cases.append(("ignored stop, then one while it is armed", plan, [first, Stop("soft", normal[1] + 1)], normal))
+    at_decision = edges_with_stop(plan, "soft", normal[2])
+    assert len(at_decision) < len(normal)
+    cases.append(("ignored stop, then one at its deciding pulse", plan, [first, Stop("soft", normal[2])], at_decision))
     return cases
 
 
 def test_engine_stop_combinations() -> None:
-    """A second soft stop is ignored (pending or in effect); a hard stop still ends a soft stop; hard beats soft."""
+    """A second soft stop is ignored (pending, armed or in effect), but not one at the pulse that decided and ignored
+    the first; a hard stop still ends a soft stop; hard beats soft."""
     cases = stop_combination_cases()
     cycles = sum(max([s.at_cycle for s in stops] + expected) for _, _, stops, expected in cases)
     assert cycles < STOP_TEST_CYCLES
