@@ -16,7 +16,9 @@ entity stepramp_core is
     G_WADDR : boolean := false;
     -- The ramp arithmetic: 0 the AVR446 recurrence, 1 the exact ramp (docs/algorithm.md, "Exact step times"); ID
     -- bit 15 reads it.
-    G_RAMP : natural := 0
+    G_RAMP : natural := 0;
+    -- The winding outputs A1 A2 B1 B2 (stepramp_stepper); without them ID bit 14 reads 1 and DRIVE.MODE 0.
+    G_WINDINGS : boolean := true
   );
   port (
     clk : in    std_logic;
@@ -141,8 +143,9 @@ begin
 
   regfile_inst : entity work.stepramp_regfile
     generic map (
-      G_WADDR => G_WADDR,
-      G_RAMP  => G_RAMP
+      G_WADDR    => G_WADDR,
+      G_RAMP     => G_RAMP,
+      G_WINDINGS => G_WINDINGS
     )
     port map (
       clk             => clk,
@@ -262,7 +265,8 @@ begin
 
   stepper_inst : entity work.stepramp_stepper
     generic map (
-      G_MICROSTEPS => G_MICROSTEPS
+      G_MICROSTEPS => G_MICROSTEPS,
+      G_WINDINGS   => G_WINDINGS
     )
     port map (
       clk           => clk,

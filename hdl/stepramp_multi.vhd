@@ -19,7 +19,10 @@ entity stepramp_multi is
     G_AXES       : positive := 2;  -- axes, 1 .. 8
     G_MICROSTEPS : positive := 16; -- sine table steps per full step of every axis (stepramp_stepper)
     -- stepramp_regfile's G_WADDR: the AXI4-Lite top decodes a write from waddr (the window too).
-    G_WADDR : boolean := false
+    G_WADDR : boolean := false;
+    -- The winding outputs A1 A2 B1 B2 of every axis (stepramp_core): off by default here (driver chips take STEP /
+    -- DIR); without them A1 .. B2 stay '0', each axis's ID bit 14 reads 1 and its DRIVE.MODE 0.
+    G_WINDINGS : boolean := false
   );
   port (
     clk : in    std_logic;
@@ -275,7 +278,8 @@ begin
     core_inst : entity work.stepramp_core
       generic map (
         G_MICROSTEPS => G_MICROSTEPS,
-        G_WADDR      => G_WADDR
+        G_WADDR      => G_WADDR,
+        G_WINDINGS   => G_WINDINGS
       )
       port map (
         clk            => clk,

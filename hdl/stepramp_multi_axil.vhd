@@ -10,8 +10,10 @@ library work;
 
 entity stepramp_multi_axil is
   generic (
-    G_AXES       : positive := 2; -- axes, 1 .. 8
-    G_MICROSTEPS : positive := 16 -- sine table steps per full step (stepramp_stepper)
+    G_AXES       : positive := 2;  -- axes, 1 .. 8
+    G_MICROSTEPS : positive := 16; -- sine table steps per full step (stepramp_stepper)
+    -- The winding outputs A1 A2 B1 B2 (stepramp_multi): off by default (A1 .. B2 stay '0').
+    G_WINDINGS : boolean := false
   );
   port (
     aclk    : in    std_logic;
@@ -110,7 +112,8 @@ begin
     generic map (
       G_AXES       => G_AXES,
       G_MICROSTEPS => G_MICROSTEPS,
-      G_WADDR      => true
+      G_WADDR      => true,
+      G_WINDINGS   => G_WINDINGS
     )
     port map (
       clk       => aclk,

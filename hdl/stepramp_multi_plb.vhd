@@ -10,8 +10,10 @@ library work;
 
 entity stepramp_multi_plb is
   generic (
-    G_AXES       : positive := 2; -- axes, 1 .. 8
-    G_MICROSTEPS : positive := 16 -- sine table steps per full step (stepramp_stepper)
+    G_AXES       : positive := 2;  -- axes, 1 .. 8
+    G_MICROSTEPS : positive := 16; -- sine table steps per full step (stepramp_stepper)
+    -- The winding outputs A1 A2 B1 B2 (stepramp_multi): off by default (A1 .. B2 stay '0').
+    G_WINDINGS : boolean := false
   );
   port (
     clk : in    std_logic;
@@ -86,7 +88,8 @@ begin
   multi_inst : entity work.stepramp_multi
     generic map (
       G_AXES       => G_AXES,
-      G_MICROSTEPS => G_MICROSTEPS
+      G_MICROSTEPS => G_MICROSTEPS,
+      G_WINDINGS   => G_WINDINGS
     )
     port map (
       clk       => clk,

@@ -16,7 +16,10 @@ entity stepramp_regfile is
     -- wait for the read / write arbitration); false: addr serves reads and writes (waddr unused).
     G_WADDR : boolean := false;
     -- The core's ramp arithmetic (stepramp_core's G_RAMP), read in ID bit 15.
-    G_RAMP : natural := 0
+    G_RAMP : natural := 0;
+    -- The core has the winding outputs (stepramp_core's G_WINDINGS): else ID bit 14 reads 1 and DRIVE.MODE reads 0
+    -- and ignores writes.
+    G_WINDINGS : boolean := true
   );
   port (
     clk : in    std_logic;
@@ -249,11 +252,20 @@ architecture rtl of stepramp_regfile is
 
   end function is_config;
 
-  -- Bits of a storage register that exist (the others read 0), from the register map (stepramp_regs_pkg).
+  -- DRIVE.MODE's bits, which a core without windings does not store.
+  constant C_DRIVE_MODE_BITS : unsigned(31 downto 0) := shift_left(to_unsigned(2 ** C_DRIVE_MODE_W - 1, 32),
+                                                                   C_DRIVE_MODE_LSB);
+
+  -- Bits of a storage register that exist (the others read 0), from the register map (stepramp_regs_pkg); without
+  -- windings not DRIVE.MODE.
   function storage_mask (
     w : natural
   ) return std_logic_vector is
   begin
+
+    if (not G_WINDINGS and w = C_REG_DRIVE / 4) then
+      return C_REG_RW_MASK(w) and not std_logic_vector(C_DRIVE_MODE_BITS);
+    end if;
 
     return C_REG_RW_MASK(w);
 
@@ -310,8 +322,11 @@ architecture rtl of stepramp_regfile is
   constant C_STORAGE_WORDS : t_word_flags := word_flags(0);
   constant C_CONFIG_WORDS  : t_word_flags := word_flags(1);
   constant C_MAPPED_WORDS  : t_word_flags := word_flags(2);
-  -- ID bit 15: the ramp arithmetic the core was built with (G_RAMP), so that a driver can refuse a plan for the other.
-  constant C_ID_RAMP : std_logic_vector(31 downto 0) := std_logic_vector(to_unsigned(G_RAMP * 2 ** 15, 32));
+  -- ID bit 15: the ramp arithmetic the core was built with (G_RAMP), so that a driver can refuse a plan for the other;
+  -- bit 14: 1 when the core was built without the winding outputs (G_WINDINGS false), so that a driver refuses
+  -- their modes.
+  constant C_ID_BUILD : natural                       := G_RAMP * 2 ** 15 + (1 - boolean'pos(G_WINDINGS)) * 2 ** 14;
+  constant C_ID_RAMP  : std_logic_vector(31 downto 0) := std_logic_vector(to_unsigned(C_ID_BUILD, 32));
 
   -- v when c, else 0 (the terms of an AND-OR multiplexer).
   function gate (

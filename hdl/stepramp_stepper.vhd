@@ -14,7 +14,10 @@ library work;
 entity stepramp_stepper is
   generic (
     G_MICROSTEPS : positive := 16;
-    G_DUTY_BITS  : positive := 12
+    G_DUTY_BITS  : positive := 12;
+    -- The winding outputs A1 A2 B1 B2 (full, half, wave, PWM): without them (false) they stay '0' and their logic is
+    -- left out in synthesis (docs/stepramp_stepper.md, "Generics").
+    G_WINDINGS : boolean := true
   );
   port (
     clk        : in    std_logic;
@@ -592,9 +595,9 @@ begin
   gate_busy     <= gate_busy_r;
   dir_fault     <= fault_r;
   enable        <= enable_r;
-  a1            <= a1_r;
-  a2            <= a2_r;
-  b1            <= b1_r;
-  b2            <= b2_r;
+  a1            <= a1_r and to_sl(G_WINDINGS);
+  a2            <= a2_r and to_sl(G_WINDINGS);
+  b1            <= b1_r and to_sl(G_WINDINGS);
+  b2            <= b2_r and to_sl(G_WINDINGS);
 
 end architecture rtl;

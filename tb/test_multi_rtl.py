@@ -13,9 +13,10 @@ timing").
 Tests (one simulation per top):
 
 * register_windows: the global window (ID with the axis count, IRQ_MASK, SYNC_START reads 0, AXES_STATUS after
-  reset, read-only writes, word addresses), each axis's window (its ID, a register written with a value of its own and
-  read back from every window: no aliasing), err on every unmapped global offset, on the unmapped offsets of each axis
-  window and on the windows past the last axis; with idle cycles / backpressure;
+  reset, read-only writes, word addresses), each axis's window (its ID, with bit 14: no winding outputs, the top's
+  default; DRIVE.MODE reads 0 whatever is written and the driver refuses a winding mode; a register written with a
+  value of its own and read back from every window: no aliasing), err on every unmapped global offset, on the
+  unmapped offsets of each axis window and on the windows past the last axis; with idle cycles / backpressure;
 * sync_start_same_clock: equal moves on axes 0 and 2 started by one SYNC_START: their STEP edges are the same clock
   edges, equal to the model's from the write's edge; axis 1 (programmed, not selected) does not move; AXES_STATUS and
   POSITION after;
@@ -72,7 +73,7 @@ from stepramp.board.multi import (
     soft_stop_line_bound,
 )
 from stepramp.board.plan import Plan, plan_move
-from stepramp.board.regmap import ERROR_CODES, ID_VALUE, REGISTERS, REGISTERS_BY_NAME, offset
+from stepramp.board.regmap import ERROR_CODES, ID_VALUE, ID_WINDINGS_BIT, REGISTERS, REGISTERS_BY_NAME, offset
 from stepramp.models import stepping as sm
 from stepramp.models.engine import change_edges, edges_with_stop, phase_of, soft_stop_pulse
 from stepramp.models.engine import edges as model_edges
@@ -329,15 +330,27 @@ async def register_windows(dut) -> None:
     assert await bus.read(REG_AXES_STATUS) == 0, "SYNC_SOFT_STOP of idle axes changed AXES_STATUS"
     await tb.multi.set_irq_mask(range(axes))
 
-    # Every axis window: its own ID, STEPS written with a value of its own, read back from every window.
+    # Every axis window: its own ID (bit 14: built without the winding outputs, the top's default G_WINDINGS),
+    # STEPS written with a value of its own, read back from every window.
     for i in range(axes):
-        assert await bus.read(axis_base(i) + offset("ID")) == ID_VALUE, f"axis {i}: ID"
+        assert await bus.read(axis_base(i) + offset("ID")) == ID_VALUE | 1 << ID_WINDINGS_BIT, f"axis {i}: ID"
         await bus.write(axis_base(i) + offset("STEPS"), 0x1000 + i)
         await bus.write(axis_base(i) + offset("SA"), 0x100 * (i + 1), strobe=0b0010)  # byte lane 1 only
     for i in range(axes):
         assert await bus.read(axis_base(i) + offset("STEPS")) == 0x1000 + i, f"axis {i}: STEPS"
         assert await bus.read(axis_base(i) + offset("SA")) == 0x100 * (i + 1), f"axis {i}: SA"
         assert (await tb.axis(i).status()).done is False
+
+    # No windings: DRIVE.MODE reads 0 whatever is written (USTEP_LOG2 is kept), and the driver refuses a winding mode.
+    drive = REGISTERS_BY_NAME["DRIVE"]
+    pwm_mode = 4 << drive.field("MODE").lsb | 3 << drive.field("USTEP_LOG2").lsb
+    await bus.write(axis_base(0) + offset("DRIVE"), pwm_mode)
+    assert await bus.read(axis_base(0) + offset("DRIVE")) == 3 << drive.field("USTEP_LOG2").lsb, "DRIVE.MODE stored"
+    await bus.write(axis_base(0) + offset("DRIVE"), 0)
+    await tb.axis(0).check_id()
+    assert tb.axis(0).windings is False
+    with pytest.raises(ValueError, match="winding"):
+        await tb.axis(0).configure_outputs(Outputs(mode="pwm"))
 
     # Unmapped: the rest of the global window, the unmapped offsets of each axis window, the windows past the axes.
     for addr in range(REG_SYNC_SOFT_STOP + 4, AXIS_WINDOW, 4):

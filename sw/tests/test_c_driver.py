@@ -114,6 +114,7 @@ def _driver_result_names() -> dict[int, str]:
 
 
 DRIVER_RESULTS = _driver_result_names()
+DRIVER_RESULTS_BY_NAME = {name: value for value, name in DRIVER_RESULTS.items()}
 
 #: The Python driver's own ValueErrors of plan_jog and plan -> the C driver's results.
 JOG_ERROR_KEYS = {
@@ -452,12 +453,47 @@ def test_exact_driver_checks_the_core_ramp(lib: ctypes.CDLL) -> None:
         for ramp in (RAMP_AVR446, RAMP_EXACT):
             rc = lib.stepramp_init_ramp(ctypes.byref(dev), FAKEBUS_BASE, 1e6, 200.0, 1, ramp)
             assert DRIVER_RESULTS[rc] == ("STEPRAMP_OK" if ramp == core else "STEPRAMP_EID")
-            assert dev.version == ID_VALUE & 0x7FFF
+            assert dev.version == ID_VALUE & 0x3FFF
         want = "STEPRAMP_OK" if core == RAMP_AVR446 else "STEPRAMP_EID"
         assert DRIVER_RESULTS[lib.stepramp_init(ctypes.byref(dev), FAKEBUS_BASE, 1e6, 200.0, 1)] == want
     with pytest.raises(ValueError, match="ramp must be"):
         StepRamp(FakeBank(), 1e6, 200.0, 1, 2)
     assert DRIVER_RESULTS[lib.stepramp_init_ramp(ctypes.byref(dev), FAKEBUS_BASE, 1e6, 200.0, 1, 2)] == "STEPRAMP_ERAMP"
+
+
+def test_a_core_without_windings_like_the_python_driver(lib: ctypes.CDLL) -> None:
+    """ID bit 14 (NO_WINDINGS, a core built with G_WINDINGS false): stepramp_init sets dev->windings 0 as
+    StepRamp.check_id sets windings False, both take the version from ID bits 13:0, and stepramp_configure_outputs
+    refuses every winding mode with STEPRAMP_EWINDINGS (writing nothing) where StepRamp.configure_outputs raises its
+    ValueError; the STEP/DIR mode writes the same words in both. With bit 14 clear every mode passes in both."""
+    no_windings = 1 << 14
+    for core_id in (ID_VALUE, ID_VALUE | no_windings, 0x5352_0000 | no_windings | 0x3F_FF):
+        dev = CDev()
+        lib.stepramp_fakebus_reset(FAKEBUS_BASE, core_id)
+        assert lib.stepramp_init(ctypes.byref(dev), FAKEBUS_BASE, 1e6, 200.0, 1) == 0
+        bank = FakeBank()
+        bank.regs[offset("ID")] = core_id
+        drv = StepRamp(bank, 1e6, 200.0)
+        version = run_async(drv.check_id())
+        assert version == dev.version == core_id & 0x3FFF, f"{core_id:#x}: version without bit 14"
+        assert bool(dev.windings) is drv.windings is not bool(core_id & no_windings)
+        for mode, value in MODES.items():
+            outputs = Outputs(mode=mode, ustep_log2=1, step_width=3, dir_setup=2, pwm_period=9)
+            lib.stepramp_fakebus_clear_log()
+            bank.log.clear()
+            try:
+                run_async(drv.configure_outputs(outputs))
+                py, why = "STEPRAMP_OK", ""
+            except ValueError as exc:
+                py, why = "STEPRAMP_EWINDINGS", str(exc)
+            assert py == "STEPRAMP_OK" or ("G_WINDINGS" in why and "ID bit 14" in why), why
+            fields = dataclasses.asdict(outputs) | {"mode": value}
+            c = DRIVER_RESULTS[lib.stepramp_configure_outputs(ctypes.byref(dev), ctypes.byref(COutputs(**fields)))]
+            want = "STEPRAMP_EWINDINGS" if value and core_id & no_windings else "STEPRAMP_OK"
+            assert (py, bank.log) == (c, bus_writes(lib)), f"{core_id:#x} {mode}"
+            assert c == want and (bank.log == []) == (want != "STEPRAMP_OK"), f"{core_id:#x} {mode}"
+    text = lib.stepramp_strresult(DRIVER_RESULTS_BY_NAME["STEPRAMP_EWINDINGS"]).decode()
+    assert "G_WINDINGS" in text and "ID bit 14" in text and "STEP/DIR" in text, text
 
 
 def test_a_move_too_fast_for_the_step_gap(lib: ctypes.CDLL) -> None:

@@ -113,9 +113,9 @@ def test_coordinated_plans_share_the_stop_ratio() -> None:
 def test_a_coordinated_soft_stop_stays_near_the_line() -> None:
     """500 random coordinated moves (2 to 4 axes, accel / decel from 1/20 to 20) soft-stopped at a random engine
     edge on every axis (SYNC_SOFT_STOP): every axis rests within soft_stop_line_bound of the line (its share
-    L_i / L_lead of the lead's rest position): under max(2 + 2 accel / decel, 3) steps when the lead decides in
-    ACCEL, 3 in RUN (each axis decides one pulse after its own next pulse), and exactly on its target when the lead's
-    stop is ignored."""
+    L_i / L_lead of the lead's rest position): under 3 + 3 s steps (s = accel / decel) when the lead decides in
+    ACCEL, 3 + s in RUN (each axis decides one pulse after its own next pulse), and exactly on its target
+    when the lead's stop is ignored."""
     rng = random.Random(_seed())
     worst: dict[str, float] = {}
     for _ in range(500):

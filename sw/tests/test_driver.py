@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from stepramp.board import regmap
 from stepramp.board.driver import (
     NO_SEGMENT,
     MmapAccess,
@@ -155,6 +156,32 @@ def test_id_and_position() -> None:
     assert run(drv.position()) == -5
     with pytest.raises(ValueError, match="does not fit"):
         run(drv.set_position(1 << 31))
+
+
+def test_a_core_without_windings_refuses_the_winding_modes() -> None:
+    """ID bit 14 set (NO_WINDINGS: the core was built with G_WINDINGS false): check_id learns it, the version is bits
+    13:0 without it, and configure_outputs refuses every winding mode (nothing written) but takes STEP/DIR."""
+    assert regmap.ID_WINDINGS_BIT == 14
+    bank = FakeBank()
+    drv = StepRamp(bank, fclk=1e6, spr=200.0)
+    assert drv.windings, "a driver assumes windings until the ID says otherwise"
+    bank.regs[offset("ID")] = 0x5352 << 16 | 1 << 14 | 0x3A << 8 | 0x5C
+    assert run(drv.check_id()) == 0x3A5C, "the version is ID bits 13:0, bit 14 is not part of it"
+    assert drv.windings is False
+    for mode in ("wave", "full", "half", "pwm"):
+        with pytest.raises(ValueError, match=r"without winding outputs.*ID bit 14.*G_WINDINGS"):
+            run(drv.configure_outputs(Outputs(mode=mode)))
+    assert bank.log == [], "a refused configuration writes nothing"
+    bank.regs[offset("DRIVE")] = 0x33
+    run(drv.configure_outputs(Outputs(mode="stepdir", ustep_log2=2, step_width=5)))
+    assert bank.regs[offset("DRIVE")] == 2 << 4, "DRIVE.MODE 0"
+    assert bank.regs[offset("STEP_WIDTH")] == 5
+    # Bit 14 clear: a core with windings, every mode as before.
+    bank.regs[offset("ID")] = 0x5352 << 16 | 0x3F << 8 | 0xFF
+    assert run(drv.check_id()) == 0x3FFF
+    assert drv.windings is True
+    run(drv.configure_outputs(Outputs(mode="half")))
+    assert bank.regs[offset("DRIVE")] == 3
 
 
 def test_mmap_access_on_a_file(tmp_path: Path) -> None:

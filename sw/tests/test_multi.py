@@ -124,6 +124,26 @@ def test_probe_and_check_id() -> None:
         m.axis(3)
 
 
+def test_probe_reads_each_axis_windings_from_its_own_window() -> None:
+    """Each axis's driver learns from its own window's ID whether its core has windings (bit 14 set: built with
+    G_WINDINGS false, STEP/DIR only), as stepramp_multi_init does through stepramp_init; an axis window that is no
+    stepramp core fails the probe."""
+    top = FakeTop(3)
+    top.regs[axis_base(1) + offset("ID")] = ID_VALUE | 1 << 14
+    m = run(MultiAxis.probe(top, FCLK, SPR, PRESCALE))
+    assert [m.axis(i).windings for i in range(3)] == [True, False, True]
+    assert [a for a in top.reads if a != REG_ID] == [axis_base(i) + offset("ID") for i in range(3)]
+    with pytest.raises(ValueError, match="without winding outputs"):
+        run(m.configure_outputs(Outputs(mode="full"), axes=[1]))
+    run(m.configure_outputs(Outputs(mode="full"), axes=[0, 2]))
+    assert top.regs[axis_base(0) + offset("DRIVE")] == top.regs[axis_base(2) + offset("DRIVE")] == 2
+    run(m.configure_outputs(Outputs()))  # STEP/DIR on every axis
+    top.regs[axis_base(2) + offset("ID")] = 0xDEADBEEF
+    with pytest.raises(MultiAxisError, match="axis 2") as err:
+        run(MultiAxis.probe(top, FCLK, SPR))
+    assert err.value.axes == (2,)
+
+
 def test_global_registers() -> None:
     top = FakeTop(3)
     m = MultiAxis(top, 3, FCLK, SPR)

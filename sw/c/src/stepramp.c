@@ -75,7 +75,8 @@ int stepramp_init_ramp(stepramp_t *dev, uintptr_t base, double fclk, double spr,
     dev->input_filter = 0u; /* the reset values */
     dev->input_cfg = STEPRAMP_INPUT_CFG_RESET;
     id = read_reg(dev, STEPRAMP_REG_ID);
-    dev->version = id & 0x7FFFu;
+    dev->version = id & 0x3FFFu;
+    dev->windings = ((id >> STEPRAMP_ID_WINDINGS_BIT) & 1u) ^ 1u; /* StepRamp.check_id: ID bit 14 is NO_WINDINGS */
     /* StepRamp.check_id: a stepramp core, built for the ramp this driver plans for (ID bit 15 is its G_RAMP) */
     return ((id >> 16) == STEPRAMP_ID_MAGIC && ((id >> STEPRAMP_ID_RAMP_BIT) & 1u) == ramp) ? STEPRAMP_OK
                                                                                              : STEPRAMP_EID;
@@ -319,6 +320,9 @@ int stepramp_configure_outputs(stepramp_t *dev, const stepramp_outputs_t *out)
 {
     if (out == NULL || out->mode > 4u || out->ustep_log2 > 7u) {
         return STEPRAMP_EOUTPUTS;
+    }
+    if (out->mode != 0u && !dev->windings) {
+        return STEPRAMP_EWINDINGS; /* StepRamp.configure_outputs: STEP/DIR only on a core without windings */
     }
     write_reg(dev, STEPRAMP_REG_DRIVE,
               (out->mode << STEPRAMP_DRIVE_MODE_SHIFT) | (out->ustep_log2 << STEPRAMP_DRIVE_USTEP_LOG2_SHIFT));
@@ -607,7 +611,7 @@ const char *stepramp_corename(uint32_t code)
     return code < CORE_TABLE_SIZE && core_names[code] != NULL ? core_names[code] : "UNKNOWN";
 }
 
-/* The driver's own results, STEPRAMP_EID .. STEPRAMP_ESWITCH, in words: X(name, text). */
+/* The driver's own results, STEPRAMP_EID .. STEPRAMP_EWINDINGS, in words: X(name, text). */
 #define STEPRAMP_DRIVER_RESULTS(X)                                                                                     \
     X(EID, "the ID register does not identify a stepramp core at this address, or one built for the other ramp "       \
            "arithmetic (ID bit 15, G_RAMP) than the driver plans for (stepramp_init_ramp)")                            \
@@ -633,7 +637,9 @@ const char *stepramp_corename(uint32_t code)
     X(ETRAVEL, "homing: no switch edge within max_travel steps (the motion was hard-stopped)")                         \
     X(EBUSY, "the axis is moving")                                                                                     \
     X(ESWITCH, "homing: the motion ended before the switch edge, or the switch was not active where the seek "         \
-               "latched it")
+               "latched it")                                                                                           \
+    X(EWINDINGS, "the core was built without winding outputs (ID bit 14 set, G_WINDINGS false): only the STEP/DIR "   \
+                 "mode (0)")
 
 #define DRIVER_RESULT(name, text) [STEPRAMP_##name - STEPRAMP_EID] = text,
 

@@ -66,8 +66,12 @@ extern "C" {
 /** ID register bits 31:16 of every stepramp core ('SR'). */
 #define STEPRAMP_ID_MAGIC 0x5352u
 /** ID register bit 15: the core's ramp arithmetic, its G_RAMP (0: STEPRAMP_RAMP_AVR446, 1: STEPRAMP_RAMP_EXACT);
- * the version is in bits 14:0 (regmap.ID_RAMP_BIT). */
+ * the version is in bits 13:0 (regmap.ID_RAMP_BIT). */
 #define STEPRAMP_ID_RAMP_BIT 15u
+/** ID register bit 14, NO_WINDINGS: set by a core built with G_WINDINGS false, which has no winding outputs (A1 .. B2
+ * stay '0', DRIVE.MODE reads 0 and ignores writes): stepramp_configure_outputs then takes the STEP/DIR mode only
+ * (regmap.ID_WINDINGS_BIT). */
+#define STEPRAMP_ID_WINDINGS_BIT 14u
 
 /** STOP_RATIO value 1.0 (Q16.16): accel equal to decel. */
 #define STEPRAMP_STOP_RATIO_ONE 0x00010000u
@@ -101,6 +105,8 @@ enum {
     STEPRAMP_EBUSY = 80,      /**< stepramp_home: the axis is moving */
     STEPRAMP_ESWITCH = 81,    /**< stepramp_home: the motion ended before the switch edge, or the switch is not
                                    active where the seek latched it */
+    STEPRAMP_EWINDINGS = 82,  /**< stepramp_configure_outputs: a winding mode (1 .. 4) on a core without winding
+                                   outputs (ID bit 14 set, G_WINDINGS false: dev->windings 0), STEP/DIR only */
     STEPRAMP_ECORE_BASE = 128 /**< STEPRAMP_ECORE(code): the core flagged STATUS.ERROR with ERR_CODE code */
 };
 
@@ -153,7 +159,9 @@ typedef struct {
     uint32_t prescale;      /**< base timer period in clocks, 1 .. 65535 */
     uint32_t ramp;          /**< the core's ramp arithmetic every move, jog and change is planned for:
                                  STEPRAMP_RAMP_AVR446 (stepramp_init) or STEPRAMP_RAMP_EXACT (stepramp_init_ramp) */
-    uint32_t version;       /**< ID bits 14:0 read by stepramp_init: major << 8 | minor */
+    uint32_t version;       /**< ID bits 13:0 read by stepramp_init: major << 8 | minor */
+    uint32_t windings;      /**< 1: the core has winding outputs (ID bit 14 clear, as read by stepramp_init); 0: it
+                                 was built with G_WINDINGS false, stepramp_configure_outputs takes mode 0 only */
     uint32_t segment_dirty; /**< 1: SEGMENT .. HEAD_PROD_HI may hold anything but 0, so the next program writes them
                                  (0 for a move from rest to rest): unknown after stepramp_init (an earlier program
                                  without a core reset, or another master, may have left them set), or set by a jog;
@@ -404,7 +412,8 @@ typedef struct {
  * Write the stepping output registers. Only while stopped: the core ignores these writes during a move and flags
  * ERROR with ERR_CODE CFG_BUSY. Records STEP width + STEP space in dev->min_gap (the jog's check).
  *
- * @return STEPRAMP_OK, or STEPRAMP_EOUTPUTS (nothing written) for a NULL pointer, mode > 4 or ustep_log2 > 7
+ * @return STEPRAMP_OK, or STEPRAMP_EOUTPUTS (nothing written) for a NULL pointer, mode > 4 or ustep_log2 > 7;
+ *         STEPRAMP_EWINDINGS (nothing written) for a mode 1 .. 4 on a core without windings (dev->windings 0)
  */
 int stepramp_configure_outputs(stepramp_t *dev, const stepramp_outputs_t *out);
 

@@ -416,6 +416,51 @@ static void test_enable_and_outputs(void)
     CHECK(strstr(stepramp_strresult(STEPRAMP_EOUTPUTS), "mode") != NULL);
 }
 
+/* ID bit 14 (NO_WINDINGS: a core built with G_WINDINGS false): init clears dev->windings, the version is ID bits 13:0,
+ * and stepramp_configure_outputs refuses every winding mode (1 .. 4) with STEPRAMP_EWINDINGS, writing nothing, but
+ * takes STEP/DIR (DRIVE.MODE 0); with bit 14 clear every mode is taken as before */
+static void test_no_windings(void)
+{
+    stepramp_t dev;
+    stepramp_outputs_t out = {0u, 2u, 5u, 0u, 0u, 0u, 1u};
+    uint32_t mode;
+
+    CHECK_EQ(STEPRAMP_ID_WINDINGS_BIT, 14u);
+    stepramp_fakebus_reset(BASE, 0x53520000u | 0x4000u | 0x3A5Cu);
+    CHECK_EQ(stepramp_init(&dev, BASE, 1e6, 200.0, 1u), STEPRAMP_OK);
+    CHECK_EQ(dev.version, 0x3A5Cu);
+    CHECK_EQ(dev.windings, 0u);
+    stepramp_fakebus_clear_log();
+    for (mode = 1u; mode <= 4u; mode++) {
+        out.mode = mode;
+        CHECK_EQ(stepramp_configure_outputs(&dev, &out), STEPRAMP_EWINDINGS);
+    }
+    CHECK_EQ(bus->writes, 0u); /* nothing written */
+    CHECK_EQ(dev.min_gap, STEPRAMP_MIN_GAP_RESET);
+    out.mode = 5u; /* still an invalid mode first */
+    CHECK_EQ(stepramp_configure_outputs(&dev, &out), STEPRAMP_EOUTPUTS);
+    out.mode = 0u;
+    CHECK_EQ(stepramp_configure_outputs(&dev, &out), STEPRAMP_OK);
+    CHECK_EQ(reg(0x64u), 2u << 4); /* DRIVE.MODE 0 */
+    CHECK_EQ(reg(0x68u), 5u);
+    CHECK_EQ(dev.min_gap, 6u);
+    CHECK(strstr(stepramp_strresult(STEPRAMP_EWINDINGS), "G_WINDINGS") != NULL);
+    CHECK(strstr(stepramp_strresult(STEPRAMP_EWINDINGS), "ID bit 14") != NULL);
+    /* with G_RAMP = 1 too: both bits out of the version */
+    stepramp_fakebus_reset(BASE, 0x53520000u | 0xC000u | 0x0003u);
+    CHECK_EQ(stepramp_init_ramp(&dev, BASE, 1e6, 200.0, 1u, STEPRAMP_RAMP_EXACT), STEPRAMP_OK);
+    CHECK(dev.version == 0x0003u && dev.windings == 0u);
+    /* bit 14 clear: windings, every mode */
+    stepramp_fakebus_reset(BASE, 0x53520000u | 0x3FFFu);
+    CHECK_EQ(stepramp_init(&dev, BASE, 1e6, 200.0, 1u), STEPRAMP_OK);
+    CHECK(dev.version == 0x3FFFu && dev.windings == 1u);
+    for (mode = 0u; mode <= 4u; mode++) {
+        out.mode = mode;
+        CHECK_EQ(stepramp_configure_outputs(&dev, &out), STEPRAMP_OK);
+        CHECK_EQ(reg(0x64u), mode | (2u << 4));
+    }
+}
+
 /* the registers of two plans are the same words */
 static int same_words(const stepramp_plan_t *a, const stepramp_plan_t *b)
 {
@@ -1381,14 +1426,14 @@ static void test_error_texts(void)
     /* the driver's results do not collide with the plan's errors */
     CHECK((int)STEPRAMP_ERAMP < STEPRAMP_EID && STEPRAMP_EID != STEPRAMP_ETIMEOUT);
     CHECK(STEPRAMP_ETIMEOUT < STEPRAMP_ECORE(0));
-    for (a = (uint32_t)STEPRAMP_EID; a <= (uint32_t)STEPRAMP_ESWITCH; a++) {
+    for (a = (uint32_t)STEPRAMP_EID; a <= (uint32_t)STEPRAMP_EWINDINGS; a++) {
         CHECK(strcmp(stepramp_strresult((int)a), "unknown error") != 0);
         for (b = (uint32_t)STEPRAMP_EID; b < a; b++) {
             CHECK(strcmp(stepramp_strresult((int)a), stepramp_strresult((int)b)) != 0);
         }
     }
-    CHECK(strcmp(stepramp_strresult(STEPRAMP_ESWITCH + 1), "unknown error") == 0);
-    CHECK(STEPRAMP_ESWITCH < STEPRAMP_ECORE_BASE);
+    CHECK(strcmp(stepramp_strresult(STEPRAMP_EWINDINGS + 1), "unknown error") == 0);
+    CHECK(STEPRAMP_EWINDINGS < STEPRAMP_ECORE_BASE);
 }
 
 int main(void)
@@ -1398,6 +1443,7 @@ int main(void)
     test_program_splits_wide_values();
     test_commands_keep_irq_enables();
     test_enable_and_outputs();
+    test_no_windings();
     test_jog_writes();
     test_exact_mode_driver();
     test_program_segment();

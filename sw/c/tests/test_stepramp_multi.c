@@ -204,6 +204,26 @@ static void test_init(void)
     CHECK_EQ(fake.bus_errors, 0u);
 }
 
+/* each axis learns from its own window's ID whether its core has windings (ID bit 14 set: G_WINDINGS false), as
+ * MultiAxis.probe's per-axis check_id: a winding mode is refused on that axis only */
+static void test_axis_windings(void)
+{
+    stepramp_multi_t m;
+    stepramp_outputs_t out = {2u, 0u, 1u, 0u, 0u, 0u, 1u};
+    uint32_t i;
+
+    fake_reset(MULTI_ID(3u));
+    fake.regs[(2u * WINDOW + A_ID) / 4u] = CORE_ID | 0x4000u; /* axis 1: no windings */
+    CHECK_EQ(stepramp_multi_init(&m, BASE, 1e6, 200.0, 1u), STEPRAMP_OK);
+    for (i = 0; i < 3u; i++) {
+        CHECK_EQ(m.axis[i].windings, i == 1u ? 0u : 1u);
+        CHECK_EQ(m.axis[i].version, CORE_ID & 0x3FFFu);
+        CHECK_EQ(stepramp_configure_outputs(&m.axis[i], &out), i == 1u ? STEPRAMP_EWINDINGS : STEPRAMP_OK);
+    }
+    out.mode = 0u;
+    CHECK_EQ(stepramp_configure_outputs(&m.axis[1], &out), STEPRAMP_OK);
+}
+
 static void test_global_registers(void)
 {
     stepramp_multi_t m;
@@ -389,6 +409,7 @@ static void test_strresult(void)
 int main(void)
 {
     test_init();
+    test_axis_windings();
     test_global_registers();
     test_plan_coordinated();
     test_move_coordinated();

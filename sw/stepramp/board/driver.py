@@ -22,7 +22,15 @@ from typing import Protocol
 
 from stepramp.board.change import Segment, plan_change
 from stepramp.board.plan import RAMP_AVR446, RAMP_EXACT, Plan, check_ramp, plan_move_info
-from stepramp.board.regmap import ERROR_CODES, ID_MAGIC, ID_RAMP_BIT, REGISTERS_BY_NAME, offset, split_wide
+from stepramp.board.regmap import (
+    ERROR_CODES,
+    ID_MAGIC,
+    ID_RAMP_BIT,
+    ID_WINDINGS_BIT,
+    REGISTERS_BY_NAME,
+    offset,
+    split_wide,
+)
 
 STATE_NAMES = ("STOP", "ACCEL", "RUN", "DECEL")
 ERROR_NAMES = {code: name for name, (code, _) in ERROR_CODES.items()}
@@ -265,6 +273,9 @@ class StepRamp:
         self.ramp = check_ramp(ramp)
         self.outputs = Outputs()
         self.inputs = Inputs()  # as configure_inputs last wrote them (the reset values until then)
+        # Whether the core has winding outputs (A1 .. B2): ID bit 14 (NO_WINDINGS) clear. Assumed until check_id reads
+        # ID; a core built with G_WINDINGS false sets the bit and configure_outputs then takes STEP/DIR only.
+        self.windings = True
         # Whether SEGMENT .. HEAD_PROD_HI are known to hold what a move from rest to rest needs (all 0), so that
         # program() need not write them. Not at first: an earlier program (a restart without a core reset) or
         # another master may have left them set, so the first program() writes them; a jog sets them again.
@@ -272,10 +283,12 @@ class StepRamp:
 
     async def check_id(self) -> int:
         """Read ID; raise StepRampError if this is not a stepramp core, or if it was built for the other ramp
-        arithmetic than this driver plans for (ID bit 15, G_RAMP). Returns the version (major << 8 | minor)."""
+        arithmetic than this driver plans for (ID bit 15, G_RAMP). Sets `windings` from ID bit 14 (NO_WINDINGS: set
+        when the core was built with G_WINDINGS false). Returns the version (major << 8 | minor, ID bits 13:0)."""
         raw = await self.access.read(offset("ID"))
         if raw >> 16 != ID_MAGIC:
             raise StepRampError(f"ID register reads {raw:#010x}: not a stepramp core at this address")
+        self.windings = not raw >> ID_WINDINGS_BIT & 1
         core_ramp = raw >> ID_RAMP_BIT & 1
         if core_ramp != self.ramp:
             names = {RAMP_AVR446: "AVR446 (G_RAMP = 0)", RAMP_EXACT: "exact (G_RAMP = 1)"}
@@ -283,7 +296,7 @@ class StepRamp:
                 f"ID register reads {raw:#010x}: the core's ramp is {names[core_ramp]}, "
                 f"but this driver plans for {names[self.ramp]}"
             )
-        return raw & 0x7FFF
+        return raw & 0x3FFF
 
     def plan(self, steps: int, accel: float, decel: float, speed: float) -> Plan:
         """Register values of a move in physical units (rad/s^2, rad/s); ValueError with the reason if invalid.
@@ -301,8 +314,14 @@ class StepRamp:
         return plan
 
     async def configure_outputs(self, outputs: Outputs) -> None:
-        """Write the stepping output registers (only while stopped: the core flags CFG_BUSY otherwise)."""
+        """Write the stepping output registers (only while stopped: the core flags CFG_BUSY otherwise). ValueError
+        (nothing written) for a winding mode on a core without windings (`windings` False, from check_id)."""
         outputs.check()
+        if MODES[outputs.mode] != MODES["stepdir"] and not self.windings:
+            raise ValueError(
+                f"mode {outputs.mode!r} needs the winding outputs, but the core was built without winding outputs "
+                "(ID bit 14 set: G_WINDINGS false): only the STEP/DIR mode ('stepdir')"
+            )
         drive = REGISTERS_BY_NAME["DRIVE"]
         timing = REGISTERS_BY_NAME["DIR_TIMING"]
         await self.access.write(

@@ -80,12 +80,15 @@ REGISTERS: tuple[Register, ...] = tuple(
 
 REGISTERS_BY_NAME: dict[str, Register] = {r.name: r for r in REGISTERS}
 
-#: The ID register's reset value: 0x5352 ("SR") in bits 31:16, the version major.minor in 14:8 and 7:0, and in bit
-#: 15 the core's ramp arithmetic (G_RAMP; 0 in the reset value: a core built with G_RAMP = 1 reads ID_RAMP_BIT set).
+#: The ID register's reset value: 0x5352 ("SR") in bits 31:16, the version major.minor in 13:8 and 7:0, in bit 15
+#: the core's ramp arithmetic (G_RAMP; 0 in the reset value: a core built with G_RAMP = 1 reads ID_RAMP_BIT set), and
+#: in bit 14 NO_WINDINGS (0 in the reset value: a core built with G_WINDINGS false has no winding outputs, A1 .. B2
+#: stay '0', DRIVE.MODE reads 0 and ignores writes, and it reads ID_WINDINGS_BIT set).
 ID_VALUE = REGISTERS_BY_NAME["ID"].reset
 ID_MAGIC = ID_VALUE >> 16
 ID_RAMP_BIT = 15
-VERSION_MAJOR = (ID_VALUE >> 8) & 0x7F
+ID_WINDINGS_BIT = 14
+VERSION_MAJOR = (ID_VALUE >> 8) & 0x3F
 VERSION_MINOR = ID_VALUE & 0xFF
 
 #: Address bits the core decodes: the register window rounded up to a power of two (256 bytes).
