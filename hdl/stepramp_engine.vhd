@@ -321,6 +321,7 @@ begin
       take_alt   => alt_r,
       finish     => d_finish,
       cur_state  => state_r,
+      stop_armed => sreq,
       l          => std_logic_vector(p_l),
       sa         => std_logic_vector(p_sa),
       sd         => std_logic_vector(p_sd),

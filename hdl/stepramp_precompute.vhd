@@ -30,6 +30,9 @@ entity stepramp_precompute is
     take_alt  : in    std_logic;
     finish    : in    std_logic;
     cur_state : in    std_logic_vector(1 downto 0);
+    -- A soft stop request is armed: it is decided at the pulse that ends the interval now counting, so that
+    -- pulse's alternative is prepared (without one, none is: docs/algorithm.md, "Soft stop").
+    stop_armed : in    std_logic;
     -- The move (the engine's active copy).
     l          : in    std_logic_vector(30 downto 0);
     sa         : in    std_logic_vector(30 downto 0);
@@ -626,7 +629,7 @@ begin
           -- Then the soft-stop alternative of the same interval (the next-delay unit is free now). Its D is the
           -- value just added: the plan's interval c + 1 (A_c, c_sa or cruise), Q32.16.
           v_range <= '0';
-          if (alt_kind_r = C_ALT_LOAD) then
+          if (alt_kind_r = C_ALT_LOAD and stop_armed = '1') then
             if (G_RAMP = 1 and state_r = C_ST_RUN) then
               -- Exact ramp, a stop in the cruise: the motion's own decel from sd - 1 moves to pulse c, so interval
               -- c + 1 is c_sd (also when m = 1), and the stop's ramp goes on from C_DEC.

@@ -41,16 +41,16 @@ stepramp.models.blocks.next_delay on the model's values), and an alternative sti
 dropped without delaying or disturbing the next interval.
 
 The cocotb tests: plan_intervals (trapezoids with m0 = 0 and 1, a cruise of one and two intervals, sd = L,
-triangles), short_moves (sa = 1, sa = 2 and 3, sa = sd = L, sa = sd = 1, N = 0 .. 3, a first interval above 2^16
-ticks, intervals of 1 .. 8 ticks), rule_order (hand-made registers that make each rule of the spec's order
-visible: c_sa /= c_sd with sa = sd, c_sa / c_sd /= c_last with sa = sd = L, c_sa /= c_first with sa = 1, and an
-interval of 0 ticks; a plan from plan_move holds equal values wherever two rules match), soft_stops (taken in
-ACCEL with m >= 2, m = 1, m = 0, at p = 1 and p = sa - 1, in RUN with m >= 2 and m = 1, in a triangle, plus a
-random one), long_accel_ramp (a 300-interval accel ramp to the speed limit, stopped near its end),
-aborts_and_restarts (finish, as a hard stop does, or a reset at random clocks of the precompute, also during a
-stop, then the next move exact from its edge 0) and early_pulses. Moves follow each other back to back
-(begin_move at the edge after finish) or after a few idle clocks. The random draws print their seed and replay with
-PRECOMPUTE_SEED=<seed> pytest tb/test_precompute.py.
+triangles; a trapezoid and a triangle again with stop_armed '0', where no alternative may be prepared), short_moves
+(sa = 1, sa = 2 and 3, sa = sd = L, sa = sd = 1, N = 0 .. 3, a first interval above 2^16 ticks, intervals of 1 .. 8
+ticks), rule_order (hand-made registers that make each rule of the spec's order visible: c_sa /= c_sd with sa = sd,
+c_sa / c_sd /= c_last with sa = sd = L, c_sa /= c_first with sa = 1, and an interval of 0 ticks; a plan from
+plan_move holds equal values wherever two rules match), soft_stops (taken in ACCEL with m >= 2, m = 1, m = 0, at p =
+1 and p = sa - 1, in RUN with m >= 2 and m = 1, in a triangle, plus a random one), long_accel_ramp (a 300-interval
+accel ramp to the speed limit, stopped near its end), aborts_and_restarts (finish, as a hard stop does, or a reset
+at random clocks of the precompute, also during a stop, then the next move exact from its edge 0) and early_pulses.
+Moves follow each other back to back (begin_move at the edge after finish) or after a few idle clocks. The random
+draws print their seed and replay with PRECOMPUTE_SEED=<seed> pytest tb/test_precompute.py.
 """
 
 from __future__ import annotations
@@ -250,6 +250,9 @@ class Move:
     idle: clocks with no strobe between the previous move's last edge and this move's edge 0.
     early: each pulse edge comes one clock after nxt_ok rises (the earliest the sequencer can copy it), so that an
     alternative still in the making is dropped; not before the last pulse and the soft stop's pulse.
+    armed: stop_armed is '1' through the move, as if a soft stop request were armed at every pulse, so every pulse's
+    alternative is prepared; False: '0' through the move, and no alternative may be prepared (alt_ok stays '0',
+    alt_kind still as the model says).
     """
 
     name: str
@@ -258,6 +261,7 @@ class Move:
     abort: tuple[str, int, int] | None = None
     idle: int = 0
     early: bool = False
+    armed: bool = True
 
 
 def designed(name: str, steps: int, period: float, n_a: float, n_d: float, prescale: int = 1) -> Profile:
@@ -366,6 +370,7 @@ class Sequencer:
         for port in ("latch", "begin_move", "setup", "take", "advance", "take_alt", "finish"):
             getattr(dut, port).value = 0
         dut.cur_state.value = STOP_STATE
+        dut.stop_armed.value = 1
         drive_move(dut, plan_move(**PROFILES_BY_NAME["steps_0"].args()))
         await start_clock_and_reset(dut.clk, dut.rst)
         await FallingEdge(dut.clk)
@@ -394,11 +399,18 @@ class Sequencer:
         self.expect(where, {p: read(self.dut, p) for p in ports}, {p: 0 for p in ports})
 
     def check_pulse(
-        self, where: str, nxt: Interval | None, alt: Alternative, stop_mode: bool, early: bool = False
+        self,
+        where: str,
+        nxt: Interval | None,
+        alt: Alternative,
+        stop_mode: bool,
+        early: bool = False,
+        armed: bool = True,
     ) -> bool:
         """The outputs just before a pulse edge (and the internal accumulator fractions nxt_acc, alt_acc: a value one
         LSB off shows there at once, in the ticks only when it crosses a tick). early: the edge comes right after
-        nxt_ok rose, so an alternative may still be in the making (alt_ok = '0': then only alt_kind is checked)."""
+        nxt_ok rose, so an alternative may still be in the making (alt_ok = '0': then only alt_kind is checked).
+        armed False: no request is armed, so no alternative may be ready (alt_ok = '0')."""
         ports = ("nxt_ok", "nxt_d", "nxt_state", "nxt_last", "nxt_code", "nxt_acc")
         ports += ("alt_ok", "alt_kind", "alt_d", "alt_one", "alt_code", "alt_acc", "stop_mode")
         got = {p: read(self.dut, p) for p in ports}
@@ -407,7 +419,10 @@ class Sequencer:
             want.update(nxt_ok=1, nxt_d=nxt.ticks, nxt_state=nxt.state, nxt_last=int(nxt.last), nxt_code=nxt.code)
             want.update(nxt_acc=nxt.frac)
             self.stats["intervals"] += 1
-        if alt.kind == ALT_LOAD and early and got["alt_ok"] == 0:
+        if alt.kind == ALT_LOAD and not armed:
+            want.update(alt_ok=0)
+            self.stats["alt not armed"] += 1
+        elif alt.kind == ALT_LOAD and early and got["alt_ok"] == 0:
             self.stats["alt dropped in the making"] += 1
         elif alt.kind == ALT_LOAD:
             want.update(alt_ok=1, alt_d=alt.ticks, alt_one=int(alt.one), alt_code=alt.code, alt_acc=alt.frac)
@@ -432,6 +447,7 @@ class Sequencer:
         exp = Expect(plan)
         failures_before = len(self.failures)
         drive_move(dut, plan)
+        dut.stop_armed.value = int(move.armed)
         if move.idle:
             await ClockCycles(dut.clk, move.idle, rising=False)
         await self.strobe("begin_move", also="latch")  # edge 0: the sequencer latches the move as it starts it
@@ -451,7 +467,7 @@ class Sequencer:
             where = f"{move.name} (N = {plan.steps}, sa = {plan.sa}, sd = {plan.sd}): pulse {k}"
             last = k == len(seq)
             alt = exp.alternative(k) if k >= 1 and not stopped else Alternative(ALT_IGNORE)
-            ok = self.check_pulse(where, None if last else seq[k], alt, stopped, early)
+            ok = self.check_pulse(where, None if last else seq[k], alt, stopped, early, move.armed)
             abort = move.abort if move.abort is not None and move.abort[1] == k else None
             if len(self.failures) - failures_before >= MAX_FAILURES_PER_MOVE:
                 self.failures.append(f"{move.name}: more failures not reported")
@@ -547,11 +563,14 @@ async def plan_intervals(dut) -> None:
         named("triangle_asym"),
         named("trap_m0_zero", idle=1),
         named("trap_run_to_stop"),
+        named("trap_m0_one", armed=False),
+        named("triangle_asym", armed=False, idle=2),
     ]
     seq = Sequencer(dut)
     await seq.run(moves)
     s = seq.stats
     assert s["alt_kind 01"] > 0 and s["alt m = 1"] > 0 and s["alt m >= 2"] > 100, s
+    assert s["alt not armed"] > 50, s
 
 
 @cocotb.test(timeout_time=4, timeout_unit="ms")
