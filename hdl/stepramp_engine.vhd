@@ -320,7 +320,6 @@ begin
       advance    => adv_r,
       take_alt   => alt_r,
       finish     => d_finish,
-      cur_state  => state_r,
       stop_armed => sreq,
       l          => std_logic_vector(p_l),
       sa         => std_logic_vector(p_sa),
@@ -495,8 +494,12 @@ begin
             v_err    := C_ERR_STEP_SPACE;
           else
             v_pulse := '1';
-            -- alt_kind is one-hot: bit 0 END, bit 1 LOAD.
-            if (sreq = '1' and alt_kind_m(0) = '1') then
+            -- alt_kind is one-hot: bit 0 END, bit 1 LOAD; it is slot A's judgement, so an armed request needs
+            -- slot A ready (unless this pulse is the last).
+            if (sreq = '1' and nxt_ok_m = '0' and cur_last = '0') then
+              v_finish := '1';
+              v_err    := C_ERR_LATE;
+            elsif (sreq = '1' and alt_kind_m(0) = '1') then
               -- Soft stop with m = 0: this pulse is the last.
               v_finish := '1';
             elsif (sreq = '1' and alt_kind_m(1) = '1') then

@@ -1,6 +1,7 @@
 -- SPDX-License-Identifier: MIT
 -- stepramp_precompute: the ramp engine's precompute. While an interval counts down in the sequencer
--- (stepramp_engine), it prepares the next one (nxt_*) and, in ACCEL and RUN, the soft-stop alternative (alt_*).
+-- (stepramp_engine), it keeps the next two ready (nxt_* and a second slot behind it) and, when a soft stop request
+-- is armed, the soft-stop alternative of the pulse that decides it (alt_*).
 -- Ports, timing and latency budget: docs/stepramp_engine.md, "stepramp_precompute" and "Latency budget".
 
 library ieee;
@@ -25,11 +26,10 @@ entity stepramp_precompute is
     begin_move : in    std_logic;
     setup      : in    std_logic;
     -- A take-over (with latch): the segment's interval 1 is prepared next, from c_first and the fraction carried.
-    take      : in    std_logic;
-    advance   : in    std_logic;
-    take_alt  : in    std_logic;
-    finish    : in    std_logic;
-    cur_state : in    std_logic_vector(1 downto 0);
+    take     : in    std_logic;
+    advance  : in    std_logic;
+    take_alt : in    std_logic;
+    finish   : in    std_logic;
     -- A soft stop request is armed: it is decided at the pulse that ends the interval now counting, so that
     -- pulse's alternative is prepared (without one, none is: docs/algorithm.md, "Soft stop").
     stop_armed : in    std_logic;
@@ -70,7 +70,7 @@ end entity stepramp_precompute;
 
 architecture rtl of stepramp_precompute is
 
-  -- FSM states of the interval now counting (cur_state; the same encoding as the engine's state port).
+  -- Ramp phases of an interval (the same encoding as the engine's state port).
   constant C_ST_ACCEL : std_logic_vector(1 downto 0) := "01";
   constant C_ST_RUN   : std_logic_vector(1 downto 0) := "10";
   constant C_ST_DECEL : std_logic_vector(1 downto 0) := "11";
@@ -142,12 +142,13 @@ architecture rtl of stepramp_precompute is
   signal p_decel_seed : unsigned(63 downto 0);
   signal p_cruise     : unsigned(63 downto 0);
   signal p_stop_ratio : unsigned(31 downto 0);
-  signal state_r      : std_logic_vector(1 downto 0);
 
   -- The accumulator fraction after the interval now counting.
   signal acc : unsigned(31 downto 0);
 
-  -- Next interval.
+  -- The prepared intervals, two deep: slot A (nxt_*, what the next pulse loads) and slot B (nx2_*, the one after
+  -- it; B is only full when A is). Each holds its ticks, the accumulator fraction after it, its error flags, its
+  -- phase, whether it is the last, and what a soft stop decided at the pulse before it would do (alt kind, m = 1).
   signal nxt_ok_r    : std_logic;
   signal nxt_d_r     : unsigned(32 downto 0);
   signal nxt_acc     : unsigned(31 downto 0);
@@ -155,6 +156,20 @@ architecture rtl of stepramp_precompute is
   signal nxt_zero    : std_logic; -- nxt_code ZERO_TICKS (when not RANGE)
   signal nxt_state_r : std_logic_vector(1 downto 0);
   signal nxt_last_r  : std_logic;
+  signal nxt_altk    : std_logic_vector(1 downto 0);
+  signal nx2_ok      : std_logic;
+  signal nx2_d       : unsigned(32 downto 0);
+  signal nx2_acc     : unsigned(31 downto 0);
+  signal nx2_range   : std_logic;
+  signal nx2_zero    : std_logic;
+  signal nx2_state   : std_logic_vector(1 downto 0);
+  signal nx2_last    : std_logic;
+  signal nx2_altk    : std_logic_vector(1 downto 0);
+  -- The interval being prepared (pc_j): its phase and last flag, set in DECIDE, copied into its slot in ADD.
+  signal pd_state : std_logic_vector(1 downto 0);
+  signal pd_last  : std_logic;
+  -- There is an interval after pc_j to prepare (pc_j is not the last).
+  signal pc_more : std_logic;
 
   -- pc_j is the index of the interval being prepared, pc_m = L - pc_j.
   signal pc_state  : std_logic_vector(2 downto 0);
@@ -175,11 +190,14 @@ architecture rtl of stepramp_precompute is
   -- The head ramp (intervals before sa): head_ctr is the up head's accel index n0 + pc_j, or the down head's
   -- K - pc_j (the decel index of interval pc_j's value, and the m of a soft stop decided at pulse pc_j).
   -- head_started: the down head's first value (the seed itself, interval 2) has been prepared. nxt_head_r: the
-  -- interval prepared is a head interval; cur_head: the interval now counting is (a soft stop in a down head).
+  -- interval pc_j is a head interval; prev_head and prev_state: interval pc_j - 1 is one, and its phase (taken in
+  -- IDX; DECIDE judges a soft stop decided at pulse pc_j - 1 with them: in a down head, whose phase is DECEL,
+  -- prev_head lets it act).
   signal head_ctr     : unsigned(30 downto 0);
   signal head_started : std_logic;
   signal nxt_head_r   : std_logic;
-  signal cur_head     : std_logic;
+  signal prev_head    : std_logic;
+  signal prev_state   : std_logic_vector(1 downto 0);
   -- The alternative prepared is the down head going on (alt_kind LOAD in a down head): the head's next value, or
   -- where that is c_sa, the head's own step.
   signal alt_cont : std_logic;
@@ -190,35 +208,40 @@ architecture rtl of stepramp_precompute is
   signal v_range : std_logic;             -- v_r came from a recurrence value out of the Q32.16 range (code RANGE)
 
   -- Soft stop. stop_mode: a soft stop is in effect; the precompute then follows the stop's decel ramp,
-  -- pc_m = L' - pc_j. While interval c counts down (ACCEL or RUN), the alternative "soft stop decided at pulse c"
-  -- is prepared after the normal next interval: alt_kind (what it does), and for m >= 1 the value of interval
-  -- c + 1 in the stop (c_last when m = 1, else D_(m-1) from D_m := D), through the same accumulator step as a
-  -- normal value. D is the normal value of interval c + 1 just prepared (A_c or c_sa in ACCEL, cruise in RUN),
-  -- truncated to Q32.16: v_r still holds it when the unit takes the request.
+  -- pc_m = L' - pc_j. DECIDE of interval c + 1 judges a soft stop decided at pulse c (c in ACCEL or RUN): alt_kind
+  -- (what it does), kept in c + 1's slot. When a request is armed (stop_armed: it is decided at the pulse ending the
+  -- interval now counting, c) and slot A holds c + 1, nothing more is prepared until that pulse, and for alt kind
+  -- LOAD the alternative is: the value of interval c + 1 in the stop (c_last when m = 1, else D_(m-1) from
+  -- D_m := D), through the same accumulator step as a normal value. D is the normal value of interval c + 1, the
+  -- last one prepared (A_c or c_sa in ACCEL, cruise in RUN), truncated to Q32.16: v_r still holds it when the unit
+  -- takes the request. So the alternative costs one division in the interval before its pulse, whether slot A was
+  -- ready at the arming pulse (two ahead) or was still being prepared (one ahead: the alternative follows it).
   signal stop_mode_r : std_logic;
-  -- c * stop_ratio, Q47.16, for the ACCEL interval c now counting: its low 47 bits, and prod_big, set once it
-  -- reaches 2^47 (it only grows, so a sticky bit tells m >= 2^31 as well as the 16 upper bits did).
+  -- (n0 + c) * stop_ratio, Q47.16, for the ACCEL interval c = pc_j - 1 (stepped in IDX while c <= sa): its low 47
+  -- bits, and prod_big, set once it reaches 2^47 (it only grows, so a sticky bit tells m >= 2^31 as well as the 16
+  -- upper bits did).
   signal cur_prod : unsigned(46 downto 0);
   signal prod_big : std_logic;
-  -- cur_prod + stop_ratio and its sticky bit, registered every clock (cur_prod changes only at advance, and the next
-  -- advance is at least four clocks later), so that advance copies a register instead of waiting for the adder;
+  -- cur_prod + stop_ratio and its sticky bit, registered every clock (cur_prod changes only in IDX, and the next IDX
+  -- is at least four clocks later), so that IDX copies a register instead of waiting for the adder;
   -- the register as two numbers, bits 23 .. 0 and 46 .. 24 (a simulator's transaction each, not one per bit).
   signal prod_next_lo  : natural range 0 to 2 ** 24 - 1;
   signal prod_next_hi  : natural range 0 to 2 ** 23 - 1;
   signal prod_next_big : std_logic;
-  signal prod_step     : std_logic;             -- pc_j <= sa: the next pulse adds stop_ratio to cur_prod
-  signal first_pend    : std_logic;             -- pulse 0 has not loaded interval 1 yet (it adds stop_ratio too)
-  signal stop_m        : unsigned(30 downto 0); -- m of a soft stop decided at the next pulse (set in IDX)
-  signal stop_big      : std_logic;             -- m >= 2^31
-  signal alt_kind_r    : std_logic_vector(1 downto 0);
-  signal alt_one_r     : std_logic;             -- m = 1
-  signal stop_mm1      : unsigned(30 downto 0); -- m - 1 (stop_m is held from IDX to the next pulse)
-  signal run_m         : unsigned(30 downto 0); -- the m of a soft stop in RUN, L - sd + 1 (the move's)
+  signal prod_step     : std_logic;                    -- pc_j <= sa: the next IDX adds stop_ratio to cur_prod
+  signal first_pend    : std_logic;                    -- the segment's first pulse has not come yet (no IDX before it)
+  signal stop_m        : unsigned(30 downto 0);        -- m of a soft stop decided at pulse pc_j - 1 (set in IDX)
+  signal stop_big      : std_logic;                    -- m >= 2^31
+  signal alt_kind_r    : std_logic_vector(1 downto 0); -- of interval pc_j (DECIDE), copied into its slot in ADD
+  signal alt_one_r     : std_logic;                    -- m = 1
+  signal alt_go        : std_logic;                    -- the alternative of the armed request is being prepared or ready
+  signal stop_mm1      : unsigned(30 downto 0);        -- m - 1 (stop_m is held from IDX to the alternative)
+  signal run_m         : unsigned(30 downto 0);        -- the m of a soft stop in RUN, L - sd + 1 (the move's)
   signal alt_ok_r      : std_logic;
   signal alt_d_r       : unsigned(32 downto 0);
   signal alt_acc       : unsigned(31 downto 0);
-  signal alt_range     : std_logic;             -- alt_code RANGE
-  signal alt_zero      : std_logic;             -- alt_code ZERO_TICKS (when not RANGE)
+  signal alt_range     : std_logic;                    -- alt_code RANGE
+  signal alt_zero      : std_logic;                    -- alt_code ZERO_TICKS (when not RANGE)
 
   -- Next-delay unit.
   signal nd_flush     : std_logic;
@@ -269,7 +292,6 @@ begin
   p_decel_seed <= unsigned(decel_seed);
   p_cruise     <= unsigned(cruise);
   p_stop_ratio <= unsigned(stop_ratio);
-  state_r      <= cur_state;
 
   lt_sa <= le_sa and not eq_sa;
   lt_sd <= le_sd and not eq_sd;
@@ -351,10 +373,20 @@ begin
 
     -- The index step of a pulse edge (advance or take_alt): the interval after the one that starts is prepared.
     variable v_idx      : boolean;
-    variable v_pcm      : unsigned(30 downto 0); -- pc_m before the step
-    variable v_j        : unsigned(30 downto 0); -- pc_j after the step
-    variable v_cur_prod : unsigned(46 downto 0); -- cur_prod after this edge
+    variable v_pcm      : unsigned(30 downto 0);       -- pc_m before the step
+    variable v_j        : unsigned(30 downto 0);       -- pc_j after the step
+    variable v_cur_prod : unsigned(46 downto 0);       -- cur_prod after this edge
     variable v_prod_big : std_logic;
+    -- The slots after this edge's pulse (advance moves B into A), the accumulator fractions a value added now starts
+    -- from (after the interval now counting, for slot A and the alternative; after slot A's, for slot B), and
+    -- whether the precompute may start a service this edge (idle, or an alternative dropped by the pulse).
+    variable v_a_ok    : std_logic;
+    variable v_b_ok    : std_logic;
+    variable v_acc_cur : unsigned(31 downto 0);
+    variable v_acc_a   : unsigned(31 downto 0);
+    variable v_idle    : boolean;
+    variable v_alt_go  : std_logic;
+    variable v_pcs     : std_logic_vector(2 downto 0); -- pc_state as this edge acts on it
 
     -- The next-delay unit's answer becomes the value to add (Q32.16), with its range flag.
 
@@ -372,6 +404,7 @@ begin
     -- The accumulator step of v_r gives an interval: its ticks, the fraction carried on, and its error flags.
 
     procedure keep_interval (
+      base            : unsigned(31 downto 0);
       signal ticks    : out unsigned(32 downto 0);
       signal fraction : out unsigned(31 downto 0);
       signal range_f  : out std_logic;
@@ -383,7 +416,7 @@ begin
 
     begin
 
-      v_sum    := acc_step(v_r, acc);
+      v_sum    := acc_step(v_r, base);
       ticks    <= v_sum(64 downto 32);
       fraction <= v_sum(31 downto 0);
       range_f  <= v_range;
@@ -423,25 +456,128 @@ begin
 
     end procedure prepare_unless_last;
 
+    -- ADD: the interval pc_j goes into the first free slot (A, or B behind a full A), with its phase, last flag and
+    -- soft-stop judgement.
+
+    procedure keep_prepared is
+
+      variable v_base : unsigned(31 downto 0);
+      variable v_sum  : unsigned(65 downto 0);
+
+      -- One slot's registers take the interval.
+
+      procedure fill (
+        signal ticks    : out unsigned(32 downto 0);
+        signal fraction : out unsigned(31 downto 0);
+        signal range_f  : out std_logic;
+        signal zero_f   : out std_logic;
+        signal ok       : out std_logic;
+        signal phase    : out std_logic_vector(1 downto 0);
+        signal last     : out std_logic;
+        signal altk     : out std_logic_vector(1 downto 0)
+      ) is
+      begin
+
+        ticks    <= v_sum(64 downto 32);
+        fraction <= v_sum(31 downto 0);
+        range_f  <= v_range;
+        zero_f   <= v_sum(65);
+        ok       <= '1';
+        phase    <= pd_state;
+        last     <= pd_last;
+        altk     <= alt_kind_r;
+
+      end procedure fill;
+
+    begin
+
+      -- (One accumulator step for both slots: the base is picked, not the sum.)
+      v_base := v_acc_a;
+
+      if (v_a_ok = '0') then
+        v_base := v_acc_cur;
+      end if;
+
+      v_sum := acc_step(v_r, v_base);
+
+      if (v_a_ok = '0') then
+        fill(nxt_d_r, nxt_acc, nxt_range, nxt_zero, nxt_ok_r, nxt_state_r, nxt_last_r, nxt_altk);
+      else
+        fill(nx2_d, nx2_acc, nx2_range, nx2_zero, nx2_ok, nx2_state, nx2_last, nx2_altk);
+      end if;
+
+    end procedure keep_prepared;
+
+    -- The soft-stop alternative of the armed request, for alt kind LOAD (slot A holds interval c + 1 = pc_j, the
+    -- last one prepared, and its value D is still in v_r; the next-delay unit is free).
+
+    procedure begin_alternative is
+    begin
+
+      alt_go  <= '1';
+      v_range <= '0';
+
+      if (G_RAMP = 1 and prev_state = C_ST_RUN) then
+        -- Exact ramp, a stop in the cruise: the motion's own decel from sd - 1 moves to pulse c, so interval
+        -- c + 1 is c_sd (also when m = 1), and the stop's ramp goes on from C_DEC.
+        v_r      <= p_c_sd & C_Q16_PAD;
+        pc_state <= C_PC_ALT_ADD;
+      elsif (alt_one_r = '1') then
+        v_r      <= p_c_last & C_Q16_PAD;
+        pc_state <= C_PC_ALT_ADD;
+      elsif (alt_cont = '1' and eq_sa = '0') then
+        -- A down head goes on: its next value (in v_r) is the stop's too.
+        pc_state <= C_PC_ALT_ADD;
+      elsif (alt_cont = '1' and head_started = '0' and G_RAMP = 0) then
+        -- ... where it gave way to c_sa at interval 2 (sa = 2), its own value there: the seed D_(K-2), which
+        -- is also still the unit's last answer (the seed load) for take_alt.
+        v_r      <= rec_val & C_Q16_PAD;
+        pc_state <= C_PC_ALT_ADD;
+      elsif (alt_cont = '1') then
+        -- ... and where it gave way to c_sa, its own value D_(K-sa).
+        request('0', '1', head_ctr);
+        pc_state <= C_PC_ALT_WAIT;
+      else
+        -- D_(m-1) = D + (2 D) div (4 m - 1): the unit's decel step at index m - 1.
+        request('0', '1', stop_mm1);
+        req_alt_r <= '1';
+        pc_state  <= C_PC_ALT_WAIT;
+      end if;
+
+    end procedure begin_alternative;
+
     -- The segment's first interval is prepared (at setup, or in a take-over): its ramp phase, the counters and flags
     -- as after the DECIDE of interval 1, and (AVR446) the accel seed A_0 loaded through the unit (at index 0), like
     -- the decel seed later. The exact ramp's unit takes its constants from the seeds' registers directly.
 
     procedure begin_segment is
+
+      variable v_state : std_logic_vector(1 downto 0);
+      variable v_last  : std_logic;
+
     begin
 
       if (p_sa(30 downto 1) /= 0 and head_down = '1') then
-        nxt_state_r <= C_ST_DECEL;
+        v_state := C_ST_DECEL;
       elsif (p_sa(30 downto 1) /= 0) then
-        nxt_state_r <= C_ST_ACCEL;
+        v_state := C_ST_ACCEL;
       elsif (p_sd(30 downto 1) /= 0 or endless = '1') then
-        nxt_state_r <= C_ST_RUN;
+        v_state := C_ST_RUN;
       else
-        nxt_state_r <= C_ST_DECEL;
+        v_state := C_ST_DECEL;
       end if;
 
-      nxt_head_r <= to_sl(p_sa(30 downto 1) /= 0);
-      nxt_last_r <= to_sl(p_l = 1) and not endless;
+      -- (Slot A's copy serves setup, where interval 1 is offered at once; a take-over's ADD copies them again.)
+      v_last      := to_sl(p_l = 1) and not endless;
+      pd_state    <= v_state;
+      pd_last     <= v_last;
+      nxt_state_r <= v_state;
+      nxt_last_r  <= v_last;
+      nxt_altk    <= C_ALT_IGNORE;
+      pc_more     <= not v_last;
+      nxt_head_r  <= to_sl(p_sa(30 downto 1) /= 0);
+      -- Interval 1 is <= sa (sa >= 1: the parameter check has passed), so the IDX after it steps the product.
+      prod_step <= '1';
 
       pc_j <= to_unsigned(1, 31);
       -- Interval 1 needs no DECIDE: the flags start as after it, (1 < sa) and (1 < sd).
@@ -506,13 +642,62 @@ begin
         seed_wait <= '0';
       end if;
 
+      -- The pulse edge's strobe (one clock after the pulse edge): slot A has started counting, slot B moves into A
+      -- (a value added at this edge goes into the first slot free after the move). An alternative still being
+      -- prepared was not taken (no request was decided at that pulse) and is dropped.
+      v_a_ok    := nxt_ok_r;
+      v_b_ok    := nx2_ok;
+      v_acc_cur := acc;
+      v_acc_a   := nxt_acc;
+      v_alt_go  := alt_go;
+      v_pcs     := pc_state;
+      if (advance = '1') then
+        v_a_ok      := nx2_ok;
+        v_b_ok      := '0';
+        v_acc_cur   := nxt_acc;
+        v_acc_a     := nx2_acc;
+        v_alt_go    := '0';
+        acc         <= nxt_acc;
+        nxt_ok_r    <= nx2_ok;
+        nxt_d_r     <= nx2_d;
+        nxt_acc     <= nx2_acc;
+        nxt_range   <= nx2_range;
+        nxt_zero    <= nx2_zero;
+        nxt_state_r <= nx2_state;
+        nxt_last_r  <= nx2_last;
+        nxt_altk    <= nx2_altk;
+        nx2_ok      <= '0';
+        alt_ok_r    <= '0';
+        alt_go      <= '0';
+        first_pend  <= '0';
+        if (pc_state = C_PC_ALT_WAIT or pc_state = C_PC_ALT_ADD) then
+          nd_flush <= '1';
+          req_r    <= '0';
+          pc_state <= C_PC_IDLE;
+          v_pcs    := C_PC_IDLE;
+        end if;
+      end if;
+      -- No service starts at an edge whose strobes restart the precompute.
+      v_idle := v_pcs = C_PC_IDLE and take_alt = '0' and take = '0' and begin_move = '0' and finish = '0';
+
       -- Precompute of interval pc_j. Its last step (C_PC_ADD) is the only wide adder of the engine, and it is off
       -- the countdown path: the pulse edge only copies its results.
-      case pc_state is
+      case v_pcs is
 
         when C_PC_IDLE =>
 
-          null;
+          -- The next service: the armed request's alternative (slot A holds interval c + 1 and v_r its value D), or
+          -- the next interval into a free slot. Slot B waits while a request is armed (its alternative needs slot A's
+          -- D), and a segment's first IDX waits for its first pulse (the latency budget counts from there).
+          if (v_idle) then
+            if (stop_armed = '1' and v_a_ok = '1' and v_b_ok = '0' and v_alt_go = '0' and
+                alt_kind_r = C_ALT_LOAD) then
+              begin_alternative;
+            elsif (pc_more = '1' and v_b_ok = '0' and (v_a_ok = '0' or stop_armed = '0') and
+                   (first_pend = '0' or advance = '1')) then
+              v_idx := true;
+            end if;
+          end if;
 
         when C_PC_TAKE =>
 
@@ -525,13 +710,14 @@ begin
 
         when C_PC_DECIDE =>
 
-          -- What that soft stop does: ignored in DECEL, after a stop, and when c + m >= L (pc_m = L - c - 1 here:
-          -- IDX has moved it on); m = 0 ends the move with pulse c, m >= 1 loads the alternative. (Repeated
-          -- unchanged while DECIDE waits.)
+          -- What a soft stop decided at pulse c = pc_j - 1 does: ignored in DECEL, after a stop, and when c + m >= L
+          -- (pc_m = L - c - 1 here: IDX has moved it on); m = 0 ends the move with pulse c, m >= 1 loads the
+          -- alternative. (Repeated unchanged while DECIDE waits.)
           alt_kind_r <= C_ALT_IGNORE;
-          -- (In a down head, whose phase is DECEL, cur_head lets it act.)
-          alt_cont <= head_down and cur_head;
-          if (stop_mode_r = '0' and (state_r = C_ST_ACCEL or state_r = C_ST_RUN or (head_down and cur_head) = '1')) then
+          -- (In a down head, whose phase is DECEL, prev_head lets it act.)
+          alt_cont <= head_down and prev_head;
+          if (stop_mode_r = '0' and
+              (prev_state = C_ST_ACCEL or prev_state = C_ST_RUN or (head_down and prev_head) = '1')) then
             if (stop_big = '1' or stop_m > pc_m) then
               alt_kind_r <= C_ALT_IGNORE;
             elsif (stop_m = 0) then
@@ -552,18 +738,19 @@ begin
             -- DECEL if j >= sd (sa <= sd); all intervals of a soft stop are DECEL.
             nxt_head_r <= lt_sa and not stop_mode_r;
             if (stop_mode_r = '1') then
-              nxt_state_r <= C_ST_DECEL;
+              pd_state <= C_ST_DECEL;
             elsif (lt_sa = '1' and head_down = '1') then
-              nxt_state_r <= C_ST_DECEL;
+              pd_state <= C_ST_DECEL;
             elsif (lt_sa = '1') then
-              nxt_state_r <= C_ST_ACCEL;
+              pd_state <= C_ST_ACCEL;
             elsif (lt_sd = '1') then
-              nxt_state_r <= C_ST_RUN;
+              pd_state <= C_ST_RUN;
             else
-              nxt_state_r <= C_ST_DECEL;
+              pd_state <= C_ST_DECEL;
             end if;
 
-            nxt_last_r <= pc_m_zero;
+            pd_last <= pc_m_zero;
+            pc_more <= not pc_m_zero;
 
             v_range   <= '0';
             req_alt_r <= '0';
@@ -623,39 +810,15 @@ begin
           -- The fractional-carry accumulator: s = acc + v, the interval lasts s >> 32 ticks.
           -- The error it would cause, as two flags (nxt_code below): out of range, or 0 ticks (two pulses on one
           -- tick cannot be emitted; only a recurrence value can get here). One LUT after the carry.
-          keep_interval(nxt_d_r, nxt_acc, nxt_range, nxt_zero, nxt_ok_r);
+          keep_prepared;
           pc_state <= C_PC_IDLE;
 
-          -- Then the soft-stop alternative of the same interval (the next-delay unit is free now). Its D is the
-          -- value just added: the plan's interval c + 1 (A_c, c_sa or cruise), Q32.16.
+          -- A request armed while this interval, c + 1, was still being prepared for slot A: its alternative follows
+          -- at once (the next-delay unit is free now). Its D is the value just added: the plan's interval c + 1
+          -- (A_c, c_sa or cruise), Q32.16.
           v_range <= '0';
-          if (alt_kind_r = C_ALT_LOAD and stop_armed = '1') then
-            if (G_RAMP = 1 and state_r = C_ST_RUN) then
-              -- Exact ramp, a stop in the cruise: the motion's own decel from sd - 1 moves to pulse c, so interval
-              -- c + 1 is c_sd (also when m = 1), and the stop's ramp goes on from C_DEC.
-              v_r      <= p_c_sd & C_Q16_PAD;
-              pc_state <= C_PC_ALT_ADD;
-            elsif (alt_one_r = '1') then
-              v_r      <= p_c_last & C_Q16_PAD;
-              pc_state <= C_PC_ALT_ADD;
-            elsif (alt_cont = '1' and eq_sa = '0') then
-              -- A down head goes on: its next value (in v_r) is the stop's too.
-              pc_state <= C_PC_ALT_ADD;
-            elsif (alt_cont = '1' and head_started = '0' and G_RAMP = 0) then
-              -- ... where it gave way to c_sa at interval 2 (sa = 2), its own value there: the seed D_(K-2), which
-              -- is also still the unit's last answer (the seed load) for take_alt.
-              v_r      <= rec_val & C_Q16_PAD;
-              pc_state <= C_PC_ALT_ADD;
-            elsif (alt_cont = '1') then
-              -- ... and where it gave way to c_sa, its own value D_(K-sa).
-              request('0', '1', head_ctr);
-              pc_state <= C_PC_ALT_WAIT;
-            else
-              -- D_(m-1) = D + (2 D) div (4 m - 1): the unit's decel step at index m - 1.
-              request('0', '1', stop_mm1);
-              req_alt_r <= '1';
-              pc_state  <= C_PC_ALT_WAIT;
-            end if;
+          if (v_a_ok = '0' and stop_armed = '1' and v_alt_go = '0' and alt_kind_r = C_ALT_LOAD) then
+            begin_alternative;
           end if;
 
         when C_PC_ALT_WAIT =>
@@ -667,7 +830,7 @@ begin
 
         when C_PC_ALT_ADD =>
 
-          keep_interval(alt_d_r, alt_acc, alt_range, alt_zero, alt_ok_r);
+          keep_interval(v_acc_cur, alt_d_r, alt_acc, alt_range, alt_zero, alt_ok_r);
           pc_state <= C_PC_IDLE;
 
         when others =>
@@ -696,10 +859,12 @@ begin
         req_r       <= '0';
         seed_wait   <= '0';
         nxt_ok_r    <= '0';
+        nx2_ok      <= '0';
+        pc_more     <= '0';
         stop_mode_r <= '0';
         alt_kind_r  <= C_ALT_IGNORE;
         alt_ok_r    <= '0';
-        cur_head    <= '0';
+        alt_go      <= '0';
       end if;
 
       if (setup = '1') then
@@ -717,57 +882,46 @@ begin
         begin_segment;
       end if;
 
-      -- Pulse edge: the next interval starts; an alternative still being prepared is dropped (the unit is flushed
-      -- before the next request).
-      if (advance = '1' or take_alt = '1') then
-        nxt_ok_r   <= '0';
-        alt_ok_r   <= '0';
-        alt_kind_r <= C_ALT_IGNORE;
-        if (pc_state /= C_PC_IDLE) then
-          nd_flush <= '1';
-          req_r    <= '0';
-        end if;
-      end if;
-
-      if (advance = '1') then
-        acc      <= nxt_acc;
-        cur_head <= nxt_head_r;
-        -- The interval loaded is pc_j (<= sa: the running product follows it). pc_j is 1 at pulse 0 (sa >= 1 there,
-        -- the parameter check has passed: first_pend); any later pulse loads an interval whose DECIDE set prod_step.
-        if (first_pend = '1' or prod_step = '1') then
-          v_cur_prod := to_unsigned(prod_next_hi, 23) & to_unsigned(prod_next_lo, 24);
-          v_prod_big := prod_next_big;
-        end if;
-        cur_prod   <= v_cur_prod;
-        prod_big   <= v_prod_big;
-        first_pend <= '0';
-        prepare_unless_last(nxt_last_r);
-      end if;
-
-      -- Soft stop takes effect: interval p + 1 is the alternative, L' = p + m; the precompute continues the stop's
-      -- ramp from D_(m-1) (pc_m = L' - (p + 1) = m - 1).
+      -- Soft stop takes effect: interval p + 1 is the alternative, L' = p + m; what the slots hold is dropped, and the
+      -- precompute continues the stop's ramp from D_(m-1) (pc_m = L' - (p + 1) = m - 1). (It was idle: the
+      -- alternative was ready, and slot B waited.)
       if (take_alt = '1') then
+        nxt_ok_r    <= '0';
+        nx2_ok      <= '0';
+        alt_ok_r    <= '0';
+        alt_go      <= '0';
+        alt_kind_r  <= C_ALT_IGNORE;
+        pc_more     <= not alt_one_r;
         acc         <= alt_acc;
         stop_mode_r <= '1';
         -- D_(m-1) and its remainder, the stop's recurrence state: still the unit's last answer (ALT_WAIT took it,
         -- ALT_ADD set alt_ok, and nothing asks the unit between then and this edge).
         -- (A down head going on: the unit's last answer is the head's own value of interval p + 1, or its seed.)
-        rec_val  <= unsigned(nd_value);
-        rec_rem  <= unsigned(nd_rem);
-        cur_head <= '0';
-        v_pcm    := stop_mm1;
-        pc_m     <= stop_mm1;
+        rec_val <= unsigned(nd_value);
+        rec_rem <= unsigned(nd_rem);
+        v_pcm   := stop_mm1;
+        pc_m    <= stop_mm1;
         prepare_unless_last(alt_one_r);
       end if;
 
-      -- The index step, at the pulse edge's strobe itself (advance and take_alt are registered by the sequencer, so
-      -- this is one clock after the pulse edge): pc_j moves on to the interval after the one that starts.
+      -- The index step (IDX), when a slot is free (at the pulse edge's strobe itself, one clock after the pulse
+      -- edge, where the precompute was idle; or after the ADD of slot A), and at take_alt: pc_j moves on.
       if (v_idx) then
         -- The index of an accel step for interval pc_j + 1 (A_(pc_j) from A_(pc_j - 1)); DECIDE replaces it for
-        -- any other request. The unit is idle here (flushed at the pulse edge), and latches the index it takes.
+        -- any other request. The unit is idle here, and latches the index it takes.
         -- (n0 + pc_j: head_ctr in an up head).
         req_index_r <= head_ctr;
         head_ctr    <= step_head(head_ctr, head_down);
+        -- The running product follows interval pc_j while it is <= sa (prod_step, from its DECIDE or from
+        -- begin_segment for interval 1); interval pc_j's phase and head flag become the previous interval's.
+        if (prod_step = '1') then
+          v_cur_prod := to_unsigned(prod_next_hi, 23) & to_unsigned(prod_next_lo, 24);
+          v_prod_big := prod_next_big;
+        end if;
+        cur_prod   <= v_cur_prod;
+        prod_big   <= v_prod_big;
+        prev_state <= pd_state;
+        prev_head  <= nxt_head_r;
         -- The equalities of the new pc_j, registered here so that DECIDE starts from flip-flops (sa only while pc_j
         -- is below it, and sd never in an endless move: pc_j may wrap there).
         eq_sa <= '0';
@@ -788,14 +942,14 @@ begin
         end if;
         pc_state <= C_PC_DECIDE;
 
-        -- The m of a soft stop decided at pulse c = pc_j (the end of the interval now counting):
+        -- The m of a soft stop decided at pulse c = pc_j (before this step; pd_state is interval c's phase):
         -- floor(c * stop_ratio / 2^16) in ACCEL, L - sd + 1 in RUN. DECIDE compares it with L - c.
         -- In a down head (interval c is one: nxt_head_r still tells it here) m = K - c, head_ctr before its step;
         -- in the cruise of an endless move, run_stop.
-        if (state_r = C_ST_RUN and endless = '1') then
+        if (pd_state = C_ST_RUN and endless = '1') then
           stop_m   <= unsigned(run_stop);
           stop_big <= '0';
-        elsif (state_r = C_ST_RUN) then
+        elsif (pd_state = C_ST_RUN) then
           stop_m   <= run_m;
           stop_big <= '0';
         elsif (head_down = '1' and nxt_head_r = '1') then
@@ -815,8 +969,10 @@ begin
         req_r      <= '0';
         seed_wait  <= '0';
         nxt_ok_r   <= '0';
+        nx2_ok     <= '0';
         alt_kind_r <= C_ALT_IGNORE;
         alt_ok_r   <= '0';
+        alt_go     <= '0';
         pc_state   <= C_PC_TAKE;
       end if;
 
@@ -825,6 +981,7 @@ begin
         req_r       <= '0';
         seed_wait   <= '0';
         stop_mode_r <= '0';
+        pc_more     <= '0';
       end if;
 
       if (rst = '1') then
@@ -833,8 +990,11 @@ begin
         req_r       <= '0';
         seed_wait   <= '0';
         nxt_ok_r    <= '0';
+        nx2_ok      <= '0';
+        pc_more     <= '0';
         stop_mode_r <= '0';
         alt_ok_r    <= '0';
+        alt_go      <= '0';
         alt_kind_r  <= C_ALT_IGNORE;
       end if;
     end if;
@@ -849,7 +1009,9 @@ begin
                C_ERR_ZERO_TICKS when nxt_zero = '1' else
                C_ERR_NONE;
   alt_ok    <= alt_ok_r;
-  alt_kind  <= alt_kind_r;
+  -- (What a soft stop decided at the next pulse does: slot A's judgement, once slot A is ready.)
+  alt_kind  <= nxt_altk when nxt_ok_r = '1' else
+               C_ALT_IGNORE;
   alt_d     <= std_logic_vector(alt_d_r);
   alt_one   <= alt_one_r;
   alt_code  <= C_ERR_RANGE when alt_range = '1' else

@@ -592,9 +592,11 @@ def check_error_cases() -> list[tuple[str, Plan, int]]:
 def runtime_error_cases() -> list[tuple[str, Plan, Stop | None, int, int]]:
     """(label, plan, soft stop or None, code, k): the move ends with `code` at pulse k, pulses 0 .. k emitted (for
     ZERO_TICKS k is the model's; -1 here)."""
-    # LATE: c_last is ready 4 clocks after the pulse edge that starts the interval before it (budget below)
+    # LATE: c_last is ready 4 clocks after the pulse edge that starts the interval before it (budget below).
+    # Later: interval 1 of 4 clocks (interval 2, the cruise, just in time), then cruises of 2 clocks: interval 3 is
+    # prepared after interval 2 (a register value every 3 clocks: IDX, DECIDE, ADD), ready 3 clocks after pulse 1.
     late_first = hand_plan(3, c_first=2 * Q16)
-    late_later = hand_plan(6, direction=1, cruise=2 * Q32)  # the cruise after a cruise of 2 clocks
+    late_later = hand_plan(6, direction=1, c_first=4 * Q16, cruise=2 * Q32)
     # ZERO_TICKS: A_1 = A_0 - 2 A_0 div 5 is 0.6 tick from a seed of 1 tick, after a c_first without fraction
     zero_first = hand_plan(4, prescale=8, sa=3, sd=3, accel_seed=Q16)
     zero_later = hand_plan(6, prescale=64, direction=1, sa=5, sd=5, accel_seed=2 * Q16)
@@ -726,15 +728,17 @@ def budget_cases() -> list[tuple[str, Plan, Stop | None, int | None]]:
             lambda c1, a0=a0: hand_plan(4, sa=3, sd=3, c_first=c1, accel_seed=a0),
             "hard",
         )
-    # a decel step D_1 from D_2 (den 7) while the decel seed's interval (D_2 ticks) counts: late at pulse 2
-    for ticks in (18, 19):
-        need = 8 + recurrence_iterations(2 * ticks * Q16)
-        assert need == 19
+    # a decel step D_1 from D_2 (den 7), prepared for slot B right after the decel seed (interval 2): with interval 1
+    # at the seed's budget (6 clocks), the seed's ADD is at E + 5 and the step's IDX at E + 6, one clock after
+    # it, so the step is ready for a pulse at E + 5 + 8 + k; interval 2 (D_2 ticks) must last 7 + k: late at pulse 2
+    for ticks in (17, 18):
+        need = 7 + recurrence_iterations(2 * ticks * Q16)
+        assert need == 18
         late = 2 if ticks < need else None
         cases.append(
             (
-                f"decel step D_1 from D_2: {ticks} clocks, need {need}",
-                hand_plan(5, sa=1, sd=1, decel_seed=ticks * Q16),
+                f"decel step D_1 from D_2 after the seed: interval 1 of 6 clocks, {ticks} clocks, need {need}",
+                hand_plan(5, sa=1, sd=1, c_first=6 * Q16, decel_seed=ticks * Q16),
                 None,
                 late,
             )

@@ -6,9 +6,7 @@ The sequencer's side, with the timing of docs/stepramp_engine.md ("Timing", "The
 (l = N - 1, sa, ... stop_ratio from a Plan) are held from before edge 0; begin_move and latch at edge 0, setup at
 edge 1, pulse 0 at edge 2 and pulse k at every following pulse edge E: advance at E + 1 (the sequencer registers
 it; take_alt when a soft stop is taken there; finish at E itself at the last pulse, or at a pulse whose soft stop
-ends the move), cur_state set with the edge E to the
-phase of the interval that starts (what the engine's state register then holds: nxt_state, DECEL after take_alt,
-STOP after finish). Pulse edges are min(max(P * ticks, 64), 80) clocks apart: the engine's own distance P * ticks (a
+ends the move). Pulse edges are min(max(P * ticks, 64), 80) clocks apart: the engine's own distance P * ticks (a
 plan's interval lasts at least MIN_INTERVAL_CLKS = 64 clocks), capped at 80 clocks, more than any budget of "Latency
 budget" needs for the plans used here (a recurrence step 8 + k <= 56, the alternative at most 45 + 2 log2(ticks) <
 80 below 2^17 ticks), so that a move of a few hundred intervals simulates in a few tens of thousands of clocks.
@@ -92,7 +90,6 @@ GAP_MAX = 80
 MAX_FAILURES_PER_MOVE = 6
 
 STATE = {ACCEL: 0b01, RUN: 0b10, DECEL: 0b11}
-STOP_STATE = 0b00
 ALT_IGNORE, ALT_END, ALT_LOAD = 0b00, 0b01, 0b10
 ERR_NONE = ERROR_CODES["NONE"][0]
 ERR_ZERO_TICKS = ERROR_CODES["ZERO_TICKS"][0]
@@ -253,6 +250,8 @@ class Move:
     armed: stop_armed is '1' through the move, as if a soft stop request were armed at every pulse, so every pulse's
     alternative is prepared; False: '0' through the move, and no alternative may be prepared (alt_ok stays '0',
     alt_kind still as the model says).
+    arm_late: as the engine arms a request (armed False until then): stop_armed rises with the strobe of pulse
+    soft_at - 1 (the pulse after the request) and falls with the strobe of pulse soft_at, which decides it.
     """
 
     name: str
@@ -262,6 +261,7 @@ class Move:
     idle: int = 0
     early: bool = False
     armed: bool = True
+    arm_late: bool = False
 
 
 def designed(name: str, steps: int, period: float, n_a: float, n_d: float, prescale: int = 1) -> Profile:
@@ -369,23 +369,20 @@ class Sequencer:
         dut = self.dut
         for port in ("latch", "begin_move", "setup", "take", "advance", "take_alt", "finish"):
             getattr(dut, port).value = 0
-        dut.cur_state.value = STOP_STATE
         dut.stop_armed.value = 1
         drive_move(dut, plan_move(**PROFILES_BY_NAME["steps_0"].args()))
         await start_clock_and_reset(dut.clk, dut.rst)
         await FallingEdge(dut.clk)
 
-    async def strobe(self, port: str, state: int | None = None, also: str | None = None) -> None:
+    async def strobe(self, port: str, also: str | None = None) -> None:
         """port (and also) '1' at the next rising edge (called at a falling edge; returns at the falling edge after
-        it), and cur_state changed with that edge."""
+        it)."""
         ports = (port,) if also is None else (port, also)
         for name in ports:
             getattr(self.dut, name).value = 1
         await FallingEdge(self.dut.clk)
         for name in ports:
             getattr(self.dut, name).value = 0
-        if state is not None:
-            self.dut.cur_state.value = state
 
     def expect(self, where: str, got: dict[str, int | None], want: dict[str, int]) -> bool:
         wrong = {k: (got[k], v) for k, v in want.items() if got[k] != v}
@@ -406,11 +403,13 @@ class Sequencer:
         stop_mode: bool,
         early: bool = False,
         armed: bool = True,
+        after: Interval | None = None,
     ) -> bool:
         """The outputs just before a pulse edge (and the internal accumulator fractions nxt_acc, alt_acc: a value one
         LSB off shows there at once, in the ticks only when it crosses a tick). early: the edge comes right after
         nxt_ok rose, so an alternative may still be in the making (alt_ok = '0': then only alt_kind is checked).
-        armed False: no request is armed, so no alternative may be ready (alt_ok = '0')."""
+        armed False: no request is armed, so no alternative may be ready (alt_ok = '0'). after: the interval after
+        nxt, which the second slot must hold by now (nx2_*, white box: two intervals ahead)."""
         ports = ("nxt_ok", "nxt_d", "nxt_state", "nxt_last", "nxt_code", "nxt_acc")
         ports += ("alt_ok", "alt_kind", "alt_d", "alt_one", "alt_code", "alt_acc", "stop_mode")
         got = {p: read(self.dut, p) for p in ports}
@@ -419,6 +418,12 @@ class Sequencer:
             want.update(nxt_ok=1, nxt_d=nxt.ticks, nxt_state=nxt.state, nxt_last=int(nxt.last), nxt_code=nxt.code)
             want.update(nxt_acc=nxt.frac)
             self.stats["intervals"] += 1
+        if after is not None:
+            slot_b = ("nx2_ok", "nx2_d", "nx2_state", "nx2_last", "nx2_acc")
+            got.update({p: read(self.dut, p) for p in slot_b})
+            want.update(nx2_ok=1, nx2_d=after.ticks, nx2_state=after.state, nx2_last=int(after.last))
+            want.update(nx2_acc=after.frac)
+            self.stats["two ahead"] += 1
         if alt.kind == ALT_LOAD and not armed:
             want.update(alt_ok=0)
             self.stats["alt not armed"] += 1
@@ -455,7 +460,7 @@ class Sequencer:
         await self.strobe("setup")  # edge 1
         self.stats["moves"] += 1
         if plan.steps <= 1:  # the sequencer ends the move at edge 2, with pulse 0 (N = 1) or without
-            await self.strobe("finish", STOP_STATE)
+            await self.strobe("finish")
             self.expect(f"{move.name}: after finish", {"stop_mode": read(dut, "stop_mode")}, {"stop_mode": 0})
             return
 
@@ -467,17 +472,20 @@ class Sequencer:
             where = f"{move.name} (N = {plan.steps}, sa = {plan.sa}, sd = {plan.sd}): pulse {k}"
             last = k == len(seq)
             alt = exp.alternative(k) if k >= 1 and not stopped else Alternative(ALT_IGNORE)
-            ok = self.check_pulse(where, None if last else seq[k], alt, stopped, early, move.armed)
+            armed = move.armed or (move.arm_late and k == move.soft_at)
+            # two ahead: from pulse 1 on (the second slot fills after pulse 0), where no request is armed
+            after = seq[k + 1] if not armed and not stopped and k >= 1 and k + 1 < len(seq) else None
+            ok = self.check_pulse(where, None if last else seq[k], alt, stopped, early, armed, after)
             abort = move.abort if move.abort is not None and move.abort[1] == k else None
             if len(self.failures) - failures_before >= MAX_FAILURES_PER_MOVE:
                 self.failures.append(f"{move.name}: more failures not reported")
                 abort = ("finish", k, 0)
             if last or seq[k].code != ERR_NONE:
                 self.stats["ends" if last else "ends with an error code"] += 1
-                await self.strobe("finish", STOP_STATE)
+                await self.strobe("finish")
                 break
             if abort is not None and abort[2] == 0:
-                await self.strobe(abort[0], STOP_STATE)
+                await self.strobe(abort[0])
                 self.stats[f"abort {abort[0]}"] += 1
                 self.stats[f"abort {abort[0]} during a soft stop"] += stopped
                 break
@@ -485,28 +493,29 @@ class Sequencer:
                 assert alt.kind in (ALT_END, ALT_LOAD) and alt.m is not None
                 if alt.kind == ALT_END:
                     self.stats["soft stop m = 0 (finish)"] += 1
-                    await self.strobe("finish", STOP_STATE)
+                    await self.strobe("finish")
                     break
                 phase = phase_of(plan, k)
                 self.stats[f"soft stop {phase} m {'= 1' if alt.one else '>= 2'}"] += 1
                 seq, stopped = exp.stop_intervals(k), True
                 assert len(seq) == k + alt.m
-                port, state = "take_alt", STATE[DECEL]
+                port = "take_alt"
             else:
-                port, state = "advance", seq[k].state
+                port = "advance"
             gap = gap_after(plan, seq[k])
             offset = None if abort is None else min(abort[2], gap - 1)
-            # the pulse edge E sets cur_state; the sequencer's registered strobe follows at E + 1 (with an abort
-            # one clock after the pulse edge)
+            # the pulse edge E; the sequencer's registered strobe follows at E + 1 (with an abort one clock after
+            # the pulse edge), and so does its armed request
             await FallingEdge(dut.clk)
-            dut.cur_state.value = state
-            await self.strobe(port, STOP_STATE if offset == 1 else None, also=abort[0] if offset == 1 else None)
+            if move.arm_late and move.soft_at is not None and k in (move.soft_at - 1, move.soft_at):
+                dut.stop_armed.value = int(k == move.soft_at - 1)
+            await self.strobe(port, also=abort[0] if offset == 1 else None)
             if abort is not None:
                 assert offset is not None
                 if offset > 1:
                     if offset > 2:
                         await ClockCycles(dut.clk, offset - 2, rising=False)
-                    await self.strobe(abort[0], STOP_STATE)
+                    await self.strobe(abort[0])
                 self.stats[f"abort {abort[0]}"] += 1
                 self.stats[f"abort {abort[0]} during a soft stop"] += stopped
                 break
@@ -570,7 +579,7 @@ async def plan_intervals(dut) -> None:
     await seq.run(moves)
     s = seq.stats
     assert s["alt_kind 01"] > 0 and s["alt m = 1"] > 0 and s["alt m >= 2"] > 100, s
-    assert s["alt not armed"] > 50, s
+    assert s["alt not armed"] > 50 and s["two ahead"] > 100, s
 
 
 @cocotb.test(timeout_time=4, timeout_unit="ms")
@@ -646,11 +655,15 @@ async def soft_stops(dut) -> None:
     trap = plans["trap_asym"]
     p = rng.choice([p for p in range(1, 80) if soft_stop_length(trap, p) is not None])
     moves.append(Move(f"trap_asym soft@{p} (random)", trap, soft_at=p, idle=rng.randint(0, 4)))
+    # armed as the engine arms them (one pulse before the deciding pulse): the second slot is full at the arming
+    # pulse, so the alternative is prepared from it (from pulse 1 on; at p = 1 slot A is still being prepared)
+    late = [m for m in moves[:9] if m.plan is not trap]
+    moves += [dataclasses.replace(m, name=m.name + " armed late", armed=False, arm_late=True) for m in late]
     seq = Sequencer(dut, seed)
     await seq.run(moves)
     s = seq.stats
-    assert s["soft stop m = 0 (finish)"] == 1 and s["soft stop ACCEL m = 1"] == 1 and s["soft stop RUN m = 1"] == 1, s
-    assert s["soft stop ACCEL m >= 2"] >= 4 and s["soft stop RUN m >= 2"] >= 2, s
+    assert s["soft stop m = 0 (finish)"] == 2 and s["soft stop ACCEL m = 1"] == 2 and s["soft stop RUN m = 1"] == 2, s
+    assert s["soft stop ACCEL m >= 2"] >= 8 and s["soft stop RUN m >= 2"] >= 4, s
 
 
 @cocotb.test(timeout_time=4, timeout_unit="ms")

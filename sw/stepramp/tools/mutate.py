@@ -148,12 +148,6 @@ EQUIVALENT: dict[str, str] = {
         )
         for w in (2, 22, 23, 24, *range(38, 43))
     },
-    "precompute: cur_head <= '0'; @12 bit -> '1'": (
-        "cur_head at take_alt (a soft stop takes effect): stop_mode_r is set at the same edge, and until the move "
-        "ends (begin_move clears cur_head) DECIDE ignores every stop (stop_mode_r = '1'), so alt_kind stays IGNORE "
-        "and alt_cont, the only other reader of cur_head, is read only for alt_kind LOAD; the next advance loads "
-        "nxt_head_r, which is '0' in stop mode"
-    ),
     "prio_enc: if (n < width) then @6 rel -> <=": (
         "n <= width also fills slot n = width of the level, from slots 2 width and 2 width + 1; the next level reads "
         "slots 2 n and 2 n + 1 with n < width / 2, so at most slot width - 1, and the result is slot 0: the extra "
