@@ -89,6 +89,7 @@ SUITES: dict[str, list[str]] = {
     "stepramp_prio_enc.vhd": ["tb/test_prio_enc.py", "tb/test_divider.py", *_ENGINE[:3]],
     "stepramp_divider.vhd": ["tb/test_divider.py", "tb/test_next_delay.py", *_ENGINE[:3]],
     "stepramp_timer.vhd": ["tb/test_timer.py", *_ENGINE[:3]],
+    "stepramp_sched.vhd": ["tb/test_sched.py"],
     "stepramp_next_delay.vhd": ["tb/test_next_delay.py", *_ENGINE[:6]],
     "stepramp_isqrt.vhd": ["tb/test_isqrt.py", "tb/test_next_delay_exact.py"],
     "stepramp_next_delay_exact.vhd": ["tb/test_next_delay_exact.py"],
